@@ -1,0 +1,168 @@
+//! Pinhole cameras: intrinsics, poses, and the distributions views are drawn from.
+//!
+//! Owns: K, the camera-to-world pose in OpenCV axes (x right, y down, z forward), the
+//! conversions users need (world-to-camera, OpenGL/nerfstudio axes), ray directions through
+//! pixel centres (pixel (i, j) has its centre at (j + 0.5, i + 0.5)), and sampling poses on a
+//! sphere or band around a target. Must not touch: meshes, tracing or files.
+
+mod rig;
+
+pub use rig::{CameraRig, Distance, ViewDraw};
+
+use glam::{DMat3, DMat4, DVec3, DVec4};
+
+/// Pinhole intrinsics in pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Intrinsics {
+    pub width: u32,
+    pub height: u32,
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+}
+
+impl Intrinsics {
+    /// Square pixels, centred principal point, vertical field of view `fov_y` (radians).
+    pub fn from_fov_y(width: u32, height: u32, fov_y: f64) -> Self {
+        let f = 0.5 * f64::from(height) / (0.5 * fov_y).tan();
+        Intrinsics { width, height, fx: f, fy: f, cx: 0.5 * f64::from(width), cy: 0.5 * f64::from(height) }
+    }
+
+    pub fn matrix(&self) -> [[f64; 3]; 3] {
+        [[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]]
+    }
+
+    /// The smaller of the horizontal and vertical half fields of view.
+    pub fn min_half_fov(&self) -> f64 {
+        let half_x = (0.5 * f64::from(self.width) / self.fx).atan();
+        let half_y = (0.5 * f64::from(self.height) / self.fy).atan();
+        half_x.min(half_y)
+    }
+
+    /// Direction in camera axes through pixel (row, col) scaled to unit z, so that the ray
+    /// parameter at a hit is the planar depth.
+    pub fn ray_through_pixel(&self, row: u32, col: u32) -> DVec3 {
+        DVec3::new(
+            (f64::from(col) + 0.5 - self.cx) / self.fx,
+            (f64::from(row) + 0.5 - self.cy) / self.fy,
+            1.0,
+        )
+    }
+
+    /// Pixel coordinates (u, v) of a point in camera axes (z > 0).
+    pub fn project(&self, p: DVec3) -> (f64, f64) {
+        (self.fx * p.x / p.z + self.cx, self.fy * p.y / p.z + self.cy)
+    }
+}
+
+/// A posed pinhole camera. `rotation` holds the camera axes (OpenCV) as columns in world
+/// coordinates; `position` is the centre of projection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub intrinsics: Intrinsics,
+    pub rotation: DMat3,
+    pub position: DVec3,
+}
+
+impl Camera {
+    /// Camera at `eye` looking at `target`, with `up` as the preferred image-up direction.
+    /// When the view direction is (nearly) parallel to `up` the basis falls back to another
+    /// axis instead of producing NaN.
+    pub fn look_at(intrinsics: Intrinsics, eye: DVec3, target: DVec3, up: DVec3) -> Self {
+        let forward = (target - eye).normalize();
+        let helper = if forward.cross(up).length_squared() > 1e-12 { up } else { forward.any_orthonormal_vector() };
+        let right = forward.cross(helper).normalize();
+        let down = forward.cross(right);
+        Camera { intrinsics, rotation: DMat3::from_cols(right, down, forward), position: eye }
+    }
+
+    /// Camera-to-world, OpenCV axes.
+    pub fn c2w_cv(&self) -> DMat4 {
+        DMat4::from_cols(
+            self.rotation.x_axis.extend(0.0),
+            self.rotation.y_axis.extend(0.0),
+            self.rotation.z_axis.extend(0.0),
+            self.position.extend(1.0),
+        )
+    }
+
+    /// World-to-camera, OpenCV axes: x_cam = Rᵀ(x_w − C).
+    pub fn w2c_cv(&self) -> DMat4 {
+        let rt = self.rotation.transpose();
+        let t = -(rt * self.position);
+        DMat4::from_cols(rt.x_axis.extend(0.0), rt.y_axis.extend(0.0), rt.z_axis.extend(0.0), t.extend(1.0))
+    }
+
+    /// Camera-to-world in OpenGL/nerfstudio axes: c2w_gl = c2w_cv · diag(1, −1, −1, 1).
+    pub fn c2w_gl(&self) -> DMat4 {
+        self.c2w_cv() * DMat4::from_diagonal(DVec4::new(1.0, -1.0, -1.0, 1.0))
+    }
+
+    pub fn world_to_camera(&self, p: DVec3) -> DVec3 {
+        self.rotation.transpose() * (p - self.position)
+    }
+
+    pub fn forward(&self) -> DVec3 {
+        self.rotation.z_axis
+    }
+}
+
+/// Row-major nested arrays, the layout every reader of the JSON expects.
+pub fn rows4(m: DMat4) -> [[f64; 4]; 4] {
+    m.transpose().to_cols_array_2d()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn k() -> Intrinsics {
+        Intrinsics::from_fov_y(960, 960, std::f64::consts::FRAC_PI_3)
+    }
+
+    #[test]
+    fn paper_intrinsics() {
+        let k = k();
+        assert_eq!((k.cx, k.cy), (480.0, 480.0));
+        // f = (H/2)/tan(π/6) = 480·√3.
+        assert!((k.fx - 480.0 * 3f64.sqrt()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn projection_inverts_the_pixel_ray() {
+        let k = Intrinsics::from_fov_y(640, 480, 0.9);
+        for (row, col) in [(0, 0), (479, 639), (240, 320), (13, 601)] {
+            let (u, v) = k.project(k.ray_through_pixel(row, col) * 7.5);
+            assert!((u - (f64::from(col) + 0.5)).abs() < 1e-9 && (v - (f64::from(row) + 0.5)).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn matrices_are_consistent() {
+        let cam = Camera::look_at(k(), DVec3::new(3.0, -4.0, 2.0), DVec3::new(0.5, 0.2, 0.1), DVec3::Z);
+        let p = DVec3::new(0.3, 0.7, -0.4);
+        let via_w2c = cam.w2c_cv().transform_point3(p);
+        assert!((via_w2c - cam.world_to_camera(p)).length() < 1e-12);
+        assert!((cam.c2w_cv() * cam.w2c_cv() - DMat4::IDENTITY).abs_diff_eq(DMat4::ZERO, 1e-12));
+        // Target is straight ahead; image "down" has a negative world-z component.
+        let t = cam.world_to_camera(DVec3::new(0.5, 0.2, 0.1));
+        assert!(t.x.abs() < 1e-12 && t.y.abs() < 1e-12 && t.z > 0.0);
+        assert!(cam.rotation.y_axis.z < 0.0);
+        // OpenGL axes: looks along −z, y up.
+        let gl = cam.c2w_gl();
+        assert!((gl.z_axis.truncate() + cam.forward()).length() < 1e-12);
+        assert!(gl.y_axis.z > 0.0);
+        assert!((cam.rotation.determinant() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn look_at_along_up_is_finite() {
+        for eye in [DVec3::new(0.0, 0.0, 10.0), DVec3::new(0.0, 0.0, -10.0), DVec3::new(1e-9, 0.0, 5.0)] {
+            let cam = Camera::look_at(k(), eye, DVec3::ZERO, DVec3::Z);
+            assert!(cam.c2w_cv().is_finite(), "{eye}");
+            assert!((cam.rotation.determinant() - 1.0).abs() < 1e-9);
+            assert!((cam.forward() - (-eye).normalize()).length() < 1e-9);
+        }
+    }
+}

@@ -1,0 +1,146 @@
+//! Camera distributions: positions on a sphere (or a band of it) around a target.
+
+use super::{Camera, Intrinsics};
+use crate::seeds::Stream;
+use glam::{DMat3, DVec3};
+use serde::Serialize;
+
+/// How far the camera is from the target.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Distance {
+    /// Fixed distance in metres (drawn uniformly from the range).
+    Range { min: f64, max: f64 },
+    /// The distance at which the structure's bounding sphere just fits the narrower field of
+    /// view, times `margin` (≥ 1 keeps the whole structure in frame from every direction).
+    Frame { margin: f64 },
+}
+
+/// Where views are drawn from: yaw (azimuth from +x towards +y), pitch (elevation above the
+/// horizontal plane through the target; +π/2 looks straight down) and roll about the view
+/// axis, each uniform in its range; pitch is drawn uniform in area on the sphere.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CameraRig {
+    pub width: u32,
+    pub height: u32,
+    pub fov_y: f64,
+    pub yaw: [f64; 2],
+    pub pitch: [f64; 2],
+    pub roll: [f64; 2],
+    pub distance: Distance,
+}
+
+impl Default for CameraRig {
+    fn default() -> Self {
+        CameraRig {
+            width: 960,
+            height: 960,
+            fov_y: std::f64::consts::FRAC_PI_3,
+            yaw: [0.0, std::f64::consts::TAU],
+            pitch: [-std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2],
+            roll: [0.0, 0.0],
+            distance: Distance::Frame { margin: 1.05 },
+        }
+    }
+}
+
+/// The values actually drawn for one view, recorded in its JSON.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ViewDraw {
+    pub yaw: f64,
+    pub pitch: f64,
+    pub roll: f64,
+    pub distance: f64,
+}
+
+impl CameraRig {
+    pub fn intrinsics(&self) -> Intrinsics {
+        Intrinsics::from_fov_y(self.width, self.height, self.fov_y)
+    }
+
+    /// Draws one view of a structure whose bounding sphere is (`centre`, `radius`).
+    pub fn draw(&self, stream: &mut Stream, centre: DVec3, radius: f64) -> (Camera, ViewDraw) {
+        let yaw = stream.uniform(self.yaw[0], self.yaw[1]);
+        let (s0, s1) = (self.pitch[0].sin(), self.pitch[1].sin());
+        let pitch = stream.uniform(s0, s1).clamp(-1.0, 1.0).asin();
+        let roll = stream.uniform(self.roll[0], self.roll[1]);
+        let intrinsics = self.intrinsics();
+        let distance = match self.distance {
+            Distance::Range { min, max } => stream.uniform(min, max),
+            Distance::Frame { margin } => margin * radius / intrinsics.min_half_fov().sin(),
+        };
+        let draw = ViewDraw { yaw, pitch, roll, distance };
+        (orbit_camera(intrinsics, centre, &draw), draw)
+    }
+}
+
+/// Camera on the sphere around `target`, looking at it. The image x axis is the direction of
+/// increasing yaw, which depends on yaw alone: well defined at the poles, where a look-at with
+/// a fixed up vector has no answer.
+pub fn orbit_camera(intrinsics: Intrinsics, target: DVec3, d: &ViewDraw) -> Camera {
+    let (sy, cy) = d.yaw.sin_cos();
+    let (sp, cp) = d.pitch.sin_cos();
+    let outward = DVec3::new(cp * cy, cp * sy, sp);
+    let forward = -outward;
+    let right = DVec3::new(-sy, cy, 0.0);
+    let down = forward.cross(right);
+    let (sr, cr) = d.roll.sin_cos();
+    // Roll turns the image clockwise as seen by the viewer (x towards y).
+    let (right, down) = (cr * right + sr * down, cr * down - sr * right);
+    Camera { intrinsics, rotation: DMat3::from_cols(right, down, forward), position: target + d.distance * outward }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::seeds::{Scope, Stream};
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    #[test]
+    fn poles_give_finite_orthonormal_cameras_looking_at_the_target() {
+        let k = CameraRig::default().intrinsics();
+        let target = DVec3::new(1.0, 2.0, 3.0);
+        for pitch in [FRAC_PI_2, -FRAC_PI_2, FRAC_PI_2 - 1e-12, 0.0] {
+            for yaw in [0.0, 1.0, PI] {
+                let d = ViewDraw { yaw, pitch, roll: 0.3, distance: 5.0 };
+                let cam = orbit_camera(k, target, &d);
+                let r = cam.rotation;
+                assert!(r.is_finite());
+                assert!((r.transpose() * r - DMat3::IDENTITY).abs_diff_eq(DMat3::ZERO, 1e-12));
+                assert!((r.determinant() - 1.0).abs() < 1e-12);
+                let t = cam.world_to_camera(target);
+                assert!(t.x.abs() < 1e-12 && t.y.abs() < 1e-12 && (t.z - 5.0).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn unrolled_side_view_has_world_up_as_image_up() {
+        let k = CameraRig::default().intrinsics();
+        let cam = orbit_camera(k, DVec3::ZERO, &ViewDraw { yaw: 0.7, pitch: 0.2, roll: 0.0, distance: 3.0 });
+        assert!(cam.rotation.y_axis.z < 0.0, "image down must point to world −z");
+        assert_eq!(cam.rotation.x_axis.z, 0.0, "no roll: horizon is level");
+    }
+
+    #[test]
+    fn framing_distance_keeps_the_bounding_sphere_in_view() {
+        let rig = CameraRig { width: 960, height: 540, ..CameraRig::default() };
+        let mut s = Stream::new(3, Scope::View(0, 0), "camera");
+        let (cam, d) = rig.draw(&mut s, DVec3::ZERO, 2.0);
+        // The sphere's tangent cone half-angle equals the narrower half FOV / margin.
+        let half = (2.0 / d.distance).asin();
+        assert!(half < rig.intrinsics().min_half_fov());
+        assert!((d.distance - 1.05 * 2.0 / rig.intrinsics().min_half_fov().sin()).abs() < 1e-12);
+        assert!((cam.position.length() - d.distance).abs() < 1e-12);
+    }
+
+    #[test]
+    fn band_draws_stay_in_their_ranges() {
+        let rig = CameraRig { pitch: [0.2, 0.6], yaw: [1.0, 2.0], roll: [-0.1, 0.1], ..CameraRig::default() };
+        for v in 0..500 {
+            let mut s = Stream::new(1, Scope::View(7, v), "camera");
+            let (_, d) = rig.draw(&mut s, DVec3::ZERO, 1.0);
+            assert!((0.2..=0.6).contains(&d.pitch) && (1.0..2.0).contains(&d.yaw) && (-0.1..0.1).contains(&d.roll));
+        }
+    }
+}

@@ -1,0 +1,29 @@
+//! Writing datasets: file encodings, the folder layout, run.json, manifest.jsonl, and the
+//! atomic, resumable commit of each sample.
+//!
+//! Owns: bytes on disk. Must not touch: recipes, mechanics or tracing; it receives finished
+//! buffers and plain metadata. Every file is written under a temporary name and renamed into
+//! place, so a killed run never leaves a truncated file under a final name, and a sample
+//! appears in the manifest only after all of its files are complete.
+
+mod encode;
+mod folder;
+
+pub use encode::{depth_exr, mask_png, rgb_png, DEPTH_CHANNEL};
+pub use folder::{DatasetFolder, SampleStage};
+
+/// Relative path of one view's file of the given kind (`rgb.png`, `depth.exr`, ...):
+/// samples are grouped a thousand to a folder so no folder grows unboundedly.
+pub fn view_file(sample: u64, view: u32, kind: &str) -> String {
+    format!("samples/{:04}/{sample:06}_{view:02}.{kind}", sample / 1000)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn layout_keys_have_no_dots_before_the_kind() {
+        // WebDataset splits the key at the first dot of the file name.
+        let f = super::view_file(1234, 7, "depth.exr");
+        assert_eq!(f, "samples/0001/001234_07.depth.exr");
+    }
+}

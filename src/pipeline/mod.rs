@@ -1,0 +1,163 @@
+//! Running a recipe into a dataset folder: validation, sharding, threads, resume, progress.
+//!
+//! Owns: the order of work and its bookkeeping. Must not touch: how scenes are described,
+//! meshed, traced or encoded (it calls those modules). The result never depends on the thread
+//! count, the shard split or interruptions: every sample is a pure function of
+//! (recipe, seed, sample index) and is committed atomically.
+
+mod progress;
+mod sample;
+
+pub use sample::{prepare, render, view_camera, PreparedSample, VIEW_SCHEMA};
+
+use crate::output::DatasetFolder;
+use crate::recipe::Recipe;
+use anyhow::{bail, Context, Result};
+use progress::Progress;
+use rayon::prelude::*;
+use serde_json::json;
+use std::path::PathBuf;
+use std::str::FromStr;
+use std::time::Instant;
+
+/// Identifies run.json's layout.
+pub const RUN_SCHEMA: &str = "shmgen.run/1";
+
+/// This process renders the samples whose index ≡ `index` (mod `count`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    pub index: u64,
+    pub count: u64,
+}
+
+impl Shard {
+    pub const WHOLE: Shard = Shard { index: 0, count: 1 };
+
+    pub fn owns(&self, sample: u64) -> bool {
+        sample % self.count == self.index
+    }
+}
+
+impl FromStr for Shard {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("--shard {s}: expected K/N with 0 ≤ K < N, e.g. 0/4");
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, count) = (k.trim().parse::<u64>().map_err(|_| bad())?, n.trim().parse::<u64>().map_err(|_| bad())?);
+        if count == 0 || index >= count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+pub struct RunOptions {
+    pub out: PathBuf,
+    /// Worker threads; None uses every core.
+    pub threads: Option<usize>,
+    pub shard: Shard,
+    pub force: bool,
+    pub quiet: bool,
+}
+
+#[derive(Debug, Default)]
+pub struct RunSummary {
+    pub rendered: u64,
+    pub skipped: u64,
+    pub pairs: u64,
+    pub bytes: u64,
+    pub seconds: f64,
+    pub complete: bool,
+}
+
+/// Everything that identifies a dataset, and nothing about how it was run (threads, shard,
+/// output path), so every shard and every resumed run agrees on it byte for byte.
+pub fn run_json(recipe: &Recipe) -> Result<Vec<u8>> {
+    let file = recipe.path.file_name().map(|f| f.to_string_lossy().to_string()).unwrap_or_default();
+    let value = json!({
+        "schema": RUN_SCHEMA,
+        "tool": { "name": "shmgen", "version": env!("CARGO_PKG_VERSION") },
+        "recipe": { "file": file, "hash": recipe.hash },
+        "params": recipe.params,
+        "dataset": recipe.dataset,
+        "view_schema": VIEW_SCHEMA,
+        "layout": "samples/{sample/1000:04}/{sample:06}_{view:02}.{rgb.png,depth.exr,mask.png,json}",
+        "manifest": "manifest.jsonl: one line per finished sample, in sample order once the dataset is complete",
+    });
+    let mut bytes = serde_json::to_vec_pretty(&value)?;
+    bytes.push(b'\n');
+    Ok(bytes)
+}
+
+/// Renders this shard's unfinished samples of `recipe` into `options.out`.
+pub fn run(recipe: &Recipe, options: &RunOptions) -> Result<RunSummary> {
+    let start = Instant::now();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(options.threads.unwrap_or(0)).build()?;
+    pool.install(|| run_in_pool(recipe, options, start))
+}
+
+fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<RunSummary> {
+    let total = recipe.dataset.samples;
+    let mine: Vec<u64> = (0..total).filter(|&s| options.shard.owns(s)).collect();
+    validate(recipe, &mine)?;
+
+    let folder = DatasetFolder::open(&options.out, &run_json(recipe)?, options.force)?;
+    let done = folder.completed()?;
+    let todo: Vec<u64> = mine.iter().copied().filter(|s| !done.contains(s)).collect();
+    let progress = Progress::new(todo.len() as u64, options.quiet);
+    let bytes: u64 = todo
+        .par_iter()
+        .map(|&index| -> Result<u64> {
+            let sample = prepare(recipe, index)?;
+            let mut stage = folder.stage(index)?;
+            let views = render(recipe, &sample, &mut stage)?;
+            let bytes = stage.bytes;
+            folder.commit(stage, views).with_context(|| format!("committing sample {index}"))?;
+            progress.sample_done();
+            Ok(bytes)
+        })
+        .try_reduce(|| 0, |a, b| Ok(a + b))?;
+    progress.finish();
+    let complete = folder.finalize(total)?;
+    let rendered = todo.len() as u64;
+    Ok(RunSummary {
+        rendered,
+        skipped: mine.len() as u64 - rendered,
+        pairs: rendered * u64::from(recipe.dataset.views),
+        bytes,
+        seconds: start.elapsed().as_secs_f64(),
+        complete,
+    })
+}
+
+/// Draws and meshes every sample of the shard before anything is written, so a recipe that
+/// fails for some sample fails before it leaves partial files. Reports the lowest failing
+/// sample, whatever the thread scheduling.
+fn validate(recipe: &Recipe, samples: &[u64]) -> Result<()> {
+    let results: Vec<Result<()>> = samples.par_iter().map(|&s| prepare(recipe, s).map(drop)).collect();
+    if let Some(Err(e)) = results.into_iter().find(Result::is_err) {
+        return Err(e);
+    }
+    if samples.is_empty() {
+        bail!("this shard has no samples (the dataset has {} samples)", recipe.dataset.samples);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shard_parsing_and_ownership() {
+        assert_eq!("1/3".parse::<Shard>(), Ok(Shard { index: 1, count: 3 }));
+        for bad in ["3/3", "1", "a/2", "0/0", "-1/2"] {
+            assert!(bad.parse::<Shard>().is_err(), "{bad}");
+        }
+        let shards: Vec<Shard> = (0..3).map(|k| Shard { index: k, count: 3 }).collect();
+        for s in 0..30 {
+            assert_eq!(shards.iter().filter(|sh| sh.owns(s)).count(), 1);
+        }
+    }
+}

@@ -1,0 +1,153 @@
+//! One sample, end to end: scene → deformed mesh → BVH → views → encoded files + JSON.
+
+use crate::cameras::{rows4, Camera, ViewDraw};
+use crate::geometry::Mesh;
+use crate::output::{depth_exr, mask_png, rgb_png, view_file, SampleStage};
+use crate::recipe::Recipe;
+use crate::render::{shade, GBuffer, Lighting, TraceMesh, NO_HIT};
+use crate::scene::{DatasetSpec, SceneSpec};
+use crate::seeds::{Scope, Stream};
+use anyhow::{bail, Result};
+use glam::DVec3;
+use serde_json::{json, Value};
+
+/// Identifies the per-view JSON layout; bump when fields change meaning.
+pub const VIEW_SCHEMA: &str = "shmgen.view/1";
+
+/// The deformed scene of one sample, ready to be viewed.
+pub struct PreparedSample {
+    pub index: u64,
+    pub scene: SceneSpec,
+    pub mesh: Mesh,
+    /// Structure index of every triangle.
+    pub owner: Vec<u32>,
+    pub centre: DVec3,
+    pub radius: f64,
+}
+
+/// Draws the scene and builds its deformed mesh; fails on anything that would make
+/// non-finite output.
+pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
+    let scene = recipe.scene(index)?;
+    let mut mesh = Mesh::default();
+    let mut owner = Vec::new();
+    for (i, beam) in scene.structures.iter().enumerate() {
+        let part = beam.mesh();
+        owner.extend(std::iter::repeat_n(i as u32, part.triangles.len()));
+        mesh.append(&part);
+    }
+    if !mesh.is_finite() {
+        bail!("sample {index}: the deformed mesh has non-finite vertices (check the structure's dimensions and loads)");
+    }
+    let (lo, hi) = mesh.bounds().expect("a scene has at least one structure");
+    let centre = 0.5 * (lo + hi);
+    let radius = mesh.positions.iter().map(|p| p.distance(centre)).fold(0.0, f64::max);
+    if !(radius > 0.0 && radius.is_finite()) {
+        bail!("sample {index}: the scene has no extent (radius {radius})");
+    }
+    Ok(PreparedSample { index, scene, mesh, owner, centre, radius })
+}
+
+/// The camera of view `view` of a prepared sample.
+pub fn view_camera(dataset: &DatasetSpec, sample: &PreparedSample, view: u32) -> (Camera, ViewDraw) {
+    let mut stream = Stream::new(dataset.seed, Scope::View(sample.index, view), "camera");
+    dataset.camera.draw(&mut stream, sample.centre, sample.radius)
+}
+
+/// Renders and stages every view of the sample. Returns the number of views written.
+pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage) -> Result<u32> {
+    let dataset = &recipe.dataset;
+    let trace_mesh = TraceMesh::build(&sample.mesh);
+    let albedo: Vec<[f64; 3]> = sample.scene.structures.iter().map(|s| s.material.albedo()).collect();
+    let background = dataset.background.map(|c| (c * 255.0).round() as u8);
+    let lighting = Lighting::default();
+    for view in 0..dataset.views {
+        let (camera, draw) = view_camera(dataset, sample, view);
+        let g = trace_mesh.trace(&camera);
+        let (w, h) = (g.width, g.height);
+        let mut files = serde_json::Map::new();
+        let mut put = |stage: &mut SampleStage, kind: &str, ext: &str, bytes: Vec<u8>| -> Result<()> {
+            let path = view_file(sample.index, view, &format!("{kind}.{ext}"));
+            files.insert(kind.to_string(), json!(path));
+            stage.write(path, &bytes)
+        };
+        if dataset.outputs.rgb {
+            let rgb = shade(&g, &trace_mesh, &camera, &lighting, |t| albedo[sample.owner[t as usize] as usize], background);
+            put(stage, "rgb", "png", rgb_png(w, h, &rgb))?;
+        }
+        if dataset.outputs.depth {
+            put(stage, "depth", "exr", depth_exr(w, h, &g.depth))?;
+        }
+        if dataset.outputs.mask {
+            put(stage, "mask", "png", mask_png(w, h, &mask(&g)))?;
+        }
+        let meta = view_json(recipe, sample, view, &camera, &draw, &g, files);
+        let path = view_file(sample.index, view, "json");
+        let mut bytes = serde_json::to_vec_pretty(&meta)?;
+        bytes.push(b'\n');
+        stage.write(path, &bytes)?;
+    }
+    Ok(dataset.views)
+}
+
+fn mask(g: &GBuffer) -> Vec<u8> {
+    g.triangle.iter().map(|&t| if t == NO_HIT { 0 } else { 255 }).collect()
+}
+
+fn view_json(
+    recipe: &Recipe,
+    sample: &PreparedSample,
+    view: u32,
+    camera: &Camera,
+    draw: &ViewDraw,
+    g: &GBuffer,
+    files: serde_json::Map<String, Value>,
+) -> Value {
+    let k = camera.intrinsics;
+    let structures: Vec<Value> = sample
+        .scene
+        .structures
+        .iter()
+        .map(|s| {
+            let mut v = json!(s);
+            v["kind"] = json!("beam");
+            v["section"] = json!({ "shape": "rectangle", "width": s.width, "height": s.height, "second_moment": s.second_moment() });
+            v["labels"] = json!(s.labels());
+            v
+        })
+        .collect();
+    let hits = g.triangle.iter().filter(|&&t| t != NO_HIT).count();
+    json!({
+        "schema": VIEW_SCHEMA,
+        "dataset": recipe.dataset.name,
+        "sample": sample.index,
+        "view": view,
+        "files": files,
+        "seeds": {
+            "run_seed": recipe.dataset.seed,
+            "scene_stream": { "scope": [sample.index], "name": "scene" },
+            "camera_stream": { "scope": [sample.index, view], "name": "camera" },
+        },
+        "params": recipe.params,
+        "camera": {
+            "model": "pinhole",
+            "width": k.width,
+            "height": k.height,
+            "fov_y": recipe.dataset.camera.fov_y,
+            "pixel_center": 0.5,
+            "K": k.matrix(),
+            "w2c_opencv": rows4(camera.w2c_cv()),
+            "c2w_opencv": rows4(camera.c2w_cv()),
+            "c2w_opengl": rows4(camera.c2w_gl()),
+            "position": camera.position.to_array(),
+            "target": sample.centre.to_array(),
+            "drawn": draw,
+        },
+        "depth": { "kind": "planar_z", "unit": "m", "no_surface": 0.0, "channel": crate::output::DEPTH_CHANNEL },
+        "mask": { "structure": 255, "background": 0 },
+        "background": recipe.dataset.background,
+        "scene": { "structures": structures },
+        "mesh": { "vertices": sample.mesh.positions.len(), "triangles": sample.mesh.triangles.len(), "bounding_radius": sample.radius },
+        "coverage": hits as f64 / g.triangle.len() as f64,
+    })
+}

@@ -1,0 +1,268 @@
+//! The functions and types a recipe can call. Each builds or edits plain scene data and
+//! validates what it is given; none does per-vertex or per-pixel work.
+
+use super::options::{self, number, positive, OptResult, Options};
+use crate::cameras::{CameraRig, Distance};
+use crate::mechanics::{Mapping, Support};
+use crate::scene::{BeamSpec, DatasetSpec, Outputs, PointLoad};
+use crate::seeds::Stream;
+use rhai::{Array, Dynamic, Engine, EvalAltResult, FnPtr, ImmutableString, Map};
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
+
+type Fallible<T> = Result<T, Box<EvalAltResult>>;
+
+fn fail<T>(msg: String) -> Fallible<T> {
+    Err(msg.into())
+}
+
+/// What `dataset(#{...})` returns: the dataset settings plus the function that draws a scene.
+#[derive(Clone)]
+pub struct Dataset {
+    pub spec: DatasetSpec,
+    pub scene: FnPtr,
+}
+
+/// Recipe parameters: values from `--set name=value`, and the resolved value of every
+/// `param(...)` the recipe declared (recorded in run.json).
+#[derive(Default)]
+pub struct Params {
+    pub overrides: BTreeMap<String, String>,
+    pub resolved: Mutex<BTreeMap<String, serde_json::Value>>,
+}
+
+/// The random source handed to a recipe's scene function. Clones share one stream, so
+/// passing it to helper functions never repeats values.
+#[derive(Clone)]
+pub struct ScriptRng(Arc<Mutex<Stream>>);
+
+impl ScriptRng {
+    pub fn new(stream: Stream) -> Self {
+        ScriptRng(Arc::new(Mutex::new(stream)))
+    }
+}
+
+pub fn register(engine: &mut Engine, params: Arc<Params>) {
+    engine.register_fn("param", move |name: ImmutableString, default: Dynamic| param(&params, &name, default));
+    engine.register_fn("deg", |x: Dynamic| -> Fallible<f64> { Ok(number(&x, "deg(x)")?.to_radians()) });
+    engine.register_type_with_name::<Dataset>("Dataset");
+    engine.register_fn("dataset", |map: Map| -> Fallible<Dataset> { Ok(dataset(map)?) });
+    register_beam(engine);
+    register_rng(engine);
+}
+
+fn param(params: &Params, name: &str, default: Dynamic) -> Fallible<Dynamic> {
+    let value = match params.overrides.get(name) {
+        None => default.clone(),
+        Some(text) => parse_override(name, text, &default)?,
+    };
+    let json = if let Ok(i) = value.as_int() {
+        serde_json::json!(i)
+    } else if let Ok(f) = value.as_float() {
+        if !f.is_finite() {
+            return fail(format!("param \"{name}\" = {f} is not a finite number"));
+        }
+        serde_json::json!(f)
+    } else if let Ok(b) = value.as_bool() {
+        serde_json::json!(b)
+    } else if value.is_string() {
+        serde_json::json!(value.to_string())
+    } else {
+        return fail(format!("param \"{name}\": the default must be a number, a bool or a string, not {}", default.type_name()));
+    };
+    params.resolved.lock().unwrap().insert(name.to_string(), json);
+    Ok(value)
+}
+
+fn parse_override(name: &str, text: &str, default: &Dynamic) -> Fallible<Dynamic> {
+    let bad = |kind: &str| format!("--set {name}={text}: expected {kind} (the recipe's default is {default})");
+    if default.is_int() {
+        text.trim().parse::<i64>().map(Dynamic::from).map_err(|_| bad("a whole number").into())
+    } else if default.is_float() {
+        match text.trim().parse::<f64>() {
+            Ok(f) if f.is_finite() => Ok(Dynamic::from(f)),
+            _ => fail(bad("a finite number")),
+        }
+    } else if default.is_bool() {
+        text.trim().parse::<bool>().map(Dynamic::from).map_err(|_| bad("true or false").into())
+    } else {
+        Ok(Dynamic::from(text.to_string()))
+    }
+}
+
+fn dataset(map: Map) -> OptResult<Dataset> {
+    let mut o = Options::new(map, "dataset");
+    let name = o.string("name", "dataset")?;
+    let seed = o.integer("seed", 0, 0, i64::MAX)? as u64;
+    let samples = o.integer("samples", 1, 1, 1 << 40)? as u64;
+    let views = o.integer("views", 1, 1, 100_000)? as u32;
+    let background = o.colour("background", [0.0; 3])?;
+    let outputs = outputs(o.take("outputs"))?;
+    let camera = match o.sub("camera")? {
+        Some(c) => camera(c)?,
+        None => CameraRig::default(),
+    };
+    let scene = o.required("scene")?;
+    let scene = scene
+        .try_cast::<FnPtr>()
+        .ok_or("dataset.scene must be a function of the random source, like |rng| { ... }")?;
+    o.finish()?;
+    Ok(Dataset { spec: DatasetSpec { name, seed, samples, views, camera, outputs, background }, scene })
+}
+
+fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {
+    let Some(value) = value else { return Ok(Outputs { rgb: true, depth: true, mask: true }) };
+    let list = value.try_cast::<Array>().ok_or("dataset.outputs must be a list like [\"rgb\", \"depth\", \"mask\"]")?;
+    let mut out = Outputs { rgb: false, depth: false, mask: false };
+    for item in list {
+        let name = item.to_string();
+        match name.as_str() {
+            "rgb" => out.rgb = true,
+            "depth" => out.depth = true,
+            "mask" => out.mask = true,
+            _ => {
+                let hint = options::nearest(&name, &Outputs::NAMES).map(|k| format!("; did you mean \"{k}\"?")).unwrap_or_default();
+                return Err(format!("unknown output \"{name}\" in dataset.outputs{hint} (known: rgb, depth, mask)"));
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn camera(mut o: Options) -> OptResult<CameraRig> {
+    let d = CameraRig::default();
+    let width = o.integer("width", i64::from(d.width), 1, 16_384)? as u32;
+    let height = o.integer("height", i64::from(d.height), 1, 16_384)? as u32;
+    let fov_y = o.number("fov_y", d.fov_y)?;
+    if !(fov_y > 0.0 && fov_y < std::f64::consts::PI) {
+        return Err(format!("dataset.camera.fov_y = {fov_y} must lie strictly between 0 and π radians"));
+    }
+    let yaw = o.range("yaw", d.yaw)?;
+    let pitch = o.range("pitch", d.pitch)?;
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    if pitch[0] < -half_pi - 1e-12 || pitch[1] > half_pi + 1e-12 {
+        return Err(format!("dataset.camera.pitch = [{}, {}] must lie within [-π/2, π/2]", pitch[0], pitch[1]));
+    }
+    let roll = o.range("roll", d.roll)?;
+    let margin = o.number("margin", 1.05)?;
+    let distance = match o.take("distance") {
+        None => Distance::Frame { margin },
+        Some(v) if v.is_string() && v.to_string() == "frame" => Distance::Frame { margin },
+        Some(v) => {
+            let mut wrap = Map::new();
+            wrap.insert("distance".into(), v);
+            let [min, max] = Options::new(wrap, "dataset.camera").range("distance", [0.0, 0.0])?;
+            if min <= 0.0 {
+                return Err(format!("dataset.camera.distance = {min} must be positive (metres) or \"frame\""));
+            }
+            Distance::Range { min, max }
+        }
+    };
+    if margin <= 0.0 {
+        return Err(format!("dataset.camera.margin = {margin} must be positive"));
+    }
+    o.finish()?;
+    Ok(CameraRig { width, height, fov_y, yaw, pitch, roll, distance })
+}
+
+fn beam_from_map(map: Map) -> OptResult<BeamSpec> {
+    let mut o = Options::new(map, "beam");
+    let length = o.positive("length", "metres")?;
+    let width = o.positive("width", "metres")?;
+    let height = o.positive("height", "metres")?;
+    let mut beam = BeamSpec::new(length, width, height);
+    beam.segments = o.integer("segments", i64::from(beam.segments), 1, 100_000)? as u32;
+    o.finish()?;
+    Ok(beam)
+}
+
+fn register_beam(engine: &mut Engine) {
+    engine.register_type_with_name::<BeamSpec>("Beam");
+    engine.register_fn("beam", |map: Map| -> Fallible<BeamSpec> { Ok(beam_from_map(map)?) });
+    engine.register_get("length", |b: &mut BeamSpec| b.length);
+    engine.register_get("width", |b: &mut BeamSpec| b.width);
+    engine.register_get("height", |b: &mut BeamSpec| b.height);
+    engine.register_fn("simply_supported", |b: &mut BeamSpec| {
+        b.support = Support::SimplySupported;
+        b.clone()
+    });
+    engine.register_fn("cantilever", |b: &mut BeamSpec| {
+        b.support = Support::Cantilever;
+        b.clone()
+    });
+    engine.register_fn("point_load", |b: &mut BeamSpec, position: Dynamic, deflection: Dynamic| -> Fallible<BeamSpec> {
+        let position = number(&position, "point_load position")?;
+        let deflection = number(&deflection, "point_load deflection")?;
+        if !(0.0..=b.length).contains(&position) {
+            return fail(format!(
+                "point_load position = {position} m lies outside the span [0, {}] m (measured from the {} end)",
+                b.length,
+                if b.support == Support::Cantilever { "clamped" } else { "pinned" }
+            ));
+        }
+        b.load = PointLoad { position, deflection };
+        Ok(b.clone())
+    });
+    engine.register_fn("segments", |b: &mut BeamSpec, n: i64| -> Fallible<BeamSpec> {
+        if !(1..=100_000).contains(&n) {
+            return fail(format!("segments = {n} must be between 1 and 100000"));
+        }
+        b.segments = n as u32;
+        Ok(b.clone())
+    });
+    engine.register_fn("mapping", |b: &mut BeamSpec, name: ImmutableString| -> Fallible<BeamSpec> {
+        b.mapping = match name.as_str() {
+            "rotate_sections" => Mapping::RotateSections,
+            "add_deflection" | "3dgen" => Mapping::AddDeflection,
+            other => return fail(format!("mapping = \"{other}\" is unknown (known: \"rotate_sections\", \"add_deflection\" alias \"3dgen\")")),
+        };
+        Ok(b.clone())
+    });
+    engine.register_fn("elastic_modulus", |b: &mut BeamSpec, e: Dynamic| -> Fallible<BeamSpec> {
+        b.elastic_modulus = positive(&e, "elastic_modulus", "pascals")?;
+        Ok(b.clone())
+    });
+    engine.register_fn("colour", |b: &mut BeamSpec, rgb: Array| -> Fallible<BeamSpec> {
+        b.material.colour = options::colour(&Dynamic::from(rgb), "colour")?;
+        Ok(b.clone())
+    });
+    engine.register_fn("at", |b: &mut BeamSpec, x: Dynamic, y: Dynamic, z: Dynamic| -> Fallible<BeamSpec> {
+        b.centre = [number(&x, "at x")?, number(&y, "at y")?, number(&z, "at z")?];
+        Ok(b.clone())
+    });
+    engine.register_fn("yaw", |b: &mut BeamSpec, angle: Dynamic| -> Fallible<BeamSpec> {
+        b.yaw = number(&angle, "yaw")?;
+        Ok(b.clone())
+    });
+}
+
+fn register_rng(engine: &mut Engine) {
+    engine.register_type_with_name::<ScriptRng>("Rng");
+    engine.register_fn("uniform", |r: &mut ScriptRng, lo: Dynamic, hi: Dynamic| -> Fallible<f64> {
+        let (lo, hi) = (number(&lo, "uniform low")?, number(&hi, "uniform high")?);
+        if lo > hi {
+            return fail(format!("uniform({lo}, {hi}): the low end exceeds the high end"));
+        }
+        Ok(r.0.lock().unwrap().uniform(lo, hi))
+    });
+    engine.register_fn("integer", |r: &mut ScriptRng, lo: i64, hi: i64| -> Fallible<i64> {
+        if lo > hi {
+            return fail(format!("integer({lo}, {hi}): the low end exceeds the high end"));
+        }
+        Ok(r.0.lock().unwrap().integer(lo, hi))
+    });
+    engine.register_fn("chance", |r: &mut ScriptRng, p: Dynamic| -> Fallible<bool> {
+        let p = number(&p, "chance probability")?;
+        if !(0.0..=1.0).contains(&p) {
+            return fail(format!("chance({p}): the probability must lie in 0..1"));
+        }
+        Ok(r.0.lock().unwrap().unit() < p)
+    });
+    engine.register_fn("choice", |r: &mut ScriptRng, items: Array| -> Fallible<Dynamic> {
+        if items.is_empty() {
+            return fail("choice([]): cannot choose from an empty list".to_string());
+        }
+        let i = r.0.lock().unwrap().integer(0, items.len() as i64 - 1);
+        Ok(items[i as usize].clone())
+    });
+}

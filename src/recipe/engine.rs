@@ -1,0 +1,171 @@
+//! The sandboxed Rhai engine and the module resolver.
+//!
+//! Recipes get no file, process, network or clock access. The only way to reach another file
+//! is `import "name" as alias;`, which finds `name.rhai` in the recipe's own folder or in
+//! `stdlib/` — nowhere else. Limits bound the work any script can do, so an endless loop
+//! becomes an error instead of a hang.
+
+use rhai::{Engine, EvalAltResult, Module, Position, Scope, Shared};
+use std::collections::{BTreeMap, HashSet};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+/// Operations one script evaluation (the recipe, or one sample's scene) may perform.
+pub const MAX_OPERATIONS: u64 = 20_000_000;
+
+/// The standard library shipped inside the binary, used when no `stdlib/` folder is found.
+const EMBEDDED_STDLIB: &[(&str, &str)] = &[("beam", include_str!("../../stdlib/beam.rhai"))];
+
+/// The folder searched for standard-library modules: `$SHMGEN_STDLIB`, else the repository's.
+pub fn stdlib_dir() -> PathBuf {
+    std::env::var_os("SHMGEN_STDLIB")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("stdlib"))
+}
+
+/// Every source file a recipe used, by the label that appears in diagnostics.
+#[derive(Default)]
+pub struct Sources(Mutex<BTreeMap<String, String>>);
+
+impl Sources {
+    pub fn insert(&self, label: &str, text: &str) {
+        self.0.lock().unwrap().insert(label.to_string(), text.to_string());
+    }
+
+    pub fn line(&self, label: &str, line: usize) -> Option<String> {
+        self.0.lock().unwrap().get(label)?.lines().nth(line.checked_sub(1)?).map(str::to_string)
+    }
+
+    /// Content hash over every file, in label order.
+    pub fn hash(&self) -> String {
+        let mut h = blake3::Hasher::new();
+        for (label, text) in self.0.lock().unwrap().iter() {
+            let name = Path::new(label).file_name().map_or(label.as_str(), |n| n.to_str().unwrap_or(label));
+            for part in [name, text] {
+                h.update(&(part.len() as u64).to_le_bytes());
+                h.update(part.as_bytes());
+            }
+        }
+        h.finalize().to_hex().to_string()
+    }
+}
+
+/// A fresh engine with the sandbox limits; `register` adds the shmgen API.
+pub fn sandboxed(resolver: Arc<Resolver>) -> Engine {
+    let mut engine = Engine::new();
+    engine
+        .set_max_operations(MAX_OPERATIONS)
+        .set_max_call_levels(64)
+        .set_max_expr_depths(128, 64)
+        .set_max_string_size(1 << 20)
+        .set_max_array_size(1 << 20)
+        .set_max_map_size(1 << 16)
+        .set_max_modules(64)
+        .set_max_variables(10_000)
+        .set_max_functions(10_000)
+        .set_strict_variables(true)
+        .set_fail_on_invalid_map_property(true)
+        .set_module_resolver(SharedResolver(resolver));
+    // `eval` would compile strings at run time, outside the positions we can report.
+    engine.disable_symbol("eval");
+    engine.on_print(|s| eprintln!("recipe: {s}"));
+    engine.on_debug(|s, src, pos| eprintln!("recipe debug {}:{pos}: {s}", src.unwrap_or("")));
+    engine
+}
+
+/// Finds `import`ed modules in the recipe's folder, then in the standard library.
+pub struct Resolver {
+    folders: Vec<PathBuf>,
+    sources: Arc<Sources>,
+    cache: Mutex<BTreeMap<String, Shared<Module>>>,
+    loading: Mutex<HashSet<(std::thread::ThreadId, String)>>,
+}
+
+impl Resolver {
+    pub fn new(recipe_folder: &Path, sources: Arc<Sources>) -> Self {
+        Resolver {
+            folders: vec![recipe_folder.to_path_buf(), stdlib_dir()],
+            sources,
+            cache: Mutex::default(),
+            loading: Mutex::default(),
+        }
+    }
+
+    pub fn resolve(&self, engine: &Engine, path: &str, pos: Position) -> Result<Shared<Module>, Box<EvalAltResult>> {
+        let runtime = |msg: String| Box::new(EvalAltResult::ErrorRuntime(msg.into(), pos));
+        if !is_module_name(path) {
+            return Err(runtime(format!(
+                "import \"{path}\": a module is named like \"beam\" or \"frames/portal\" (letters, digits, _ and -; no '..', no absolute paths, no extension)"
+            )));
+        }
+        if let Some(m) = self.cache.lock().unwrap().get(path) {
+            return Ok(m.clone());
+        }
+        let (label, text) = self.find(path).ok_or_else(|| {
+            let searched: Vec<String> = self.folders.iter().map(|f| f.display().to_string()).collect();
+            runtime(format!("module \"{path}\" not found: looked for {path}.rhai in {}", searched.join(" and ")))
+        })?;
+        let key = (std::thread::current().id(), path.to_string());
+        if !self.loading.lock().unwrap().insert(key.clone()) {
+            return Err(runtime(format!("module \"{path}\" imports itself (circular import)")));
+        }
+        self.sources.insert(&label, &text);
+        let result = compile_module(engine, &label, &text, pos);
+        self.loading.lock().unwrap().remove(&key);
+        let module = result?;
+        self.cache.lock().unwrap().insert(path.to_string(), module.clone());
+        Ok(module)
+    }
+
+    fn find(&self, path: &str) -> Option<(String, String)> {
+        for folder in &self.folders {
+            let file = folder.join(format!("{path}.rhai"));
+            if let Ok(text) = std::fs::read_to_string(&file) {
+                return Some((file.display().to_string(), text));
+            }
+        }
+        EMBEDDED_STDLIB
+            .iter()
+            .find(|(name, _)| *name == path)
+            .map(|(name, text)| (format!("<built-in stdlib>/{name}.rhai"), text.to_string()))
+    }
+}
+
+fn compile_module(engine: &Engine, label: &str, text: &str, pos: Position) -> Result<Shared<Module>, Box<EvalAltResult>> {
+    let in_module = |inner: Box<EvalAltResult>| Box::new(EvalAltResult::ErrorInModule(label.into(), inner, pos));
+    let mut ast = engine.compile(text).map_err(|e| in_module(e.into()))?;
+    ast.set_source(label);
+    let mut module = Module::eval_ast_as_new(Scope::new(), &ast, engine).map_err(in_module)?;
+    module.set_id(label);
+    Ok(module.into())
+}
+
+fn is_module_name(path: &str) -> bool {
+    !path.is_empty()
+        && path.split('/').all(|seg| {
+            !seg.is_empty() && seg != "." && seg != ".." && seg.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+        })
+}
+
+struct SharedResolver(Arc<Resolver>);
+
+impl rhai::ModuleResolver for SharedResolver {
+    fn resolve(&self, engine: &Engine, _source: Option<&str>, path: &str, pos: Position) -> Result<Shared<Module>, Box<EvalAltResult>> {
+        self.0.resolve(engine, path, pos)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn module_names_cannot_escape_the_search_folders() {
+        for bad in ["../secret", "/etc/passwd", "a/../../b", "", "beam.rhai", "a//b", "C:\\x"] {
+            assert!(!is_module_name(bad), "{bad}");
+        }
+        for good in ["beam", "frames/portal", "my-silo_2"] {
+            assert!(is_module_name(good), "{good}");
+        }
+    }
+}

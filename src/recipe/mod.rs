@@ -1,0 +1,148 @@
+//! The recipe runtime: runs a Rhai recipe and turns it into plain scene descriptions.
+//!
+//! Owns: the sandboxed engine, module imports, recipe parameters (`param` and `--set`),
+//! the recipe API and error reporting with file:line:col. Must not touch: meshes, rendering
+//! or files other than the recipe and the modules it imports. A recipe is evaluated once to
+//! get the dataset settings; its scene function is then called once per sample with a random
+//! source derived from (seed, sample, "scene"), so samples can be drawn in any order, on any
+//! thread, with the same result.
+
+mod api;
+mod diagnostics;
+mod engine;
+mod options;
+
+pub use diagnostics::RecipeError;
+pub use engine::stdlib_dir;
+
+use crate::scene::{BeamSpec, DatasetSpec, SceneSpec};
+use crate::seeds::{Scope as StreamScope, Stream};
+use api::{Dataset, Params, ScriptRng};
+use engine::{Resolver, Sources};
+use rhai::{ASTNode, Array, Dynamic, Engine, FnPtr, Position, Scope, Stmt, AST};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// A loaded recipe, ready to draw samples from.
+pub struct Recipe {
+    pub path: PathBuf,
+    pub dataset: DatasetSpec,
+    /// Resolved value of every declared parameter.
+    pub params: BTreeMap<String, serde_json::Value>,
+    /// Content hash of the recipe and of every module it imports.
+    pub hash: String,
+    label: String,
+    engine: Engine,
+    ast: AST,
+    scene: FnPtr,
+    sources: Arc<Sources>,
+}
+
+impl Recipe {
+    /// Compiles and evaluates the recipe at `path` with `--set` overrides.
+    pub fn load(path: &Path, overrides: &[(String, String)]) -> Result<Recipe, RecipeError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| RecipeError::plain(format!("cannot read recipe {}: {e}", path.display())))?;
+        let label = path.display().to_string();
+        let sources = Arc::new(Sources::default());
+        sources.insert(&label, &text);
+        let folder = path.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+        let folder = if folder.as_os_str().is_empty() { PathBuf::from(".") } else { folder };
+        let resolver = Arc::new(Resolver::new(&folder, sources.clone()));
+        let params = Arc::new(Params { overrides: overrides.iter().cloned().collect(), ..Params::default() });
+
+        let mut engine = engine::sandboxed(resolver.clone());
+        api::register(&mut engine, params.clone());
+        let mut ast = engine.compile(&text).map_err(|e| RecipeError::parse(&e, &label, &sources))?;
+        ast.set_source(label.as_str());
+        let result: Dynamic = engine
+            .eval_ast_with_scope(&mut Scope::new(), &ast)
+            .map_err(|e| RecipeError::eval(&e, &label, &sources, None))?;
+        let type_name = result.type_name().to_string();
+        let Some(Dataset { spec, scene }) = result.try_cast::<Dataset>() else {
+            return Err(RecipeError::plain(format!(
+                "{label}: the recipe must end with `dataset(#{{ ... }})` as its last expression (it produced {type_name})"
+            )));
+        };
+        let params = resolved_params(&params, overrides)?;
+
+        // Closures called later no longer see the recipe's imports: give them the imported
+        // modules as static modules under the same aliases.
+        let mut sample_engine = engine::sandboxed(resolver.clone());
+        api::register(&mut sample_engine, Arc::new(Params::default()));
+        for (module, alias) in imports(&ast) {
+            let m = resolver
+                .resolve(&engine, &module, Position::NONE)
+                .map_err(|e| RecipeError::eval(&e, &label, &sources, None))?;
+            sample_engine.register_static_module(alias, m);
+        }
+        Ok(Recipe { path: path.to_path_buf(), dataset: spec, params, hash: sources.hash(), label, engine: sample_engine, ast, scene, sources })
+    }
+
+    /// Draws the scene of one sample.
+    pub fn scene(&self, sample: u64) -> Result<SceneSpec, RecipeError> {
+        let context = format!("while drawing the scene of sample {sample}");
+        let rng = ScriptRng::new(Stream::new(self.dataset.seed, StreamScope::Sample(sample), "scene"));
+        // Captured variables are shared cells; give each call private copies so that a scene
+        // function that mutates them cannot make one sample depend on another.
+        let mut scene = self.scene.clone();
+        let private: Vec<Dynamic> = scene.curry().iter().map(Dynamic::flatten_clone).collect();
+        scene.set_curry(private);
+        let value: Dynamic = scene
+            .call(&self.engine, &self.ast, (rng,))
+            .map_err(|e| RecipeError::eval(&e, &self.label, &self.sources, Some(&context)))?;
+        let structures = structures(value).map_err(|m| RecipeError::plain(format!("{}: {m} ({context})", self.label)))?;
+        Ok(SceneSpec { structures })
+    }
+}
+
+/// The structures a scene function returned: one beam, or a list of them.
+fn structures(value: Dynamic) -> Result<Vec<BeamSpec>, String> {
+    let type_name = value.type_name().to_string();
+    let list = if value.is_array() { value.cast::<Array>() } else { vec![value] };
+    if list.is_empty() {
+        return Err("the scene function returned an empty list; it must return a structure or a list of them".into());
+    }
+    list.into_iter()
+        .map(|item| {
+            let t = item.type_name().to_string();
+            item.try_cast::<BeamSpec>().ok_or(format!(
+                "the scene function must return a structure or a list of structures, not {}",
+                if t == type_name { t } else { format!("a list containing {t}") }
+            ))
+        })
+        .collect()
+}
+
+fn resolved_params(params: &Params, overrides: &[(String, String)]) -> Result<BTreeMap<String, serde_json::Value>, RecipeError> {
+    let resolved = params.resolved.lock().unwrap().clone();
+    for (name, value) in overrides {
+        if !resolved.contains_key(name) {
+            let known: Vec<&str> = resolved.keys().map(String::as_str).collect();
+            let hint = options::nearest(name, &known).map(|k| format!("; did you mean `{k}`?")).unwrap_or_default();
+            return Err(RecipeError::plain(format!(
+                "--set {name}={value}: the recipe declares no parameter `{name}`{hint} (it declares: {})",
+                if known.is_empty() { "none".to_string() } else { known.join(", ") }
+            )));
+        }
+    }
+    Ok(resolved)
+}
+
+/// (module path, alias) of every `import` in the recipe's top level.
+fn imports(ast: &AST) -> Vec<(String, String)> {
+    let mut found = Vec::new();
+    ast.walk(&mut |path: &[ASTNode]| {
+        if let [ASTNode::Stmt(Stmt::Import(x, _))] = path {
+            let module = x.0.get_literal_value(None).and_then(|v| v.into_immutable_string().ok());
+            if let (Some(module), alias) = (module, &x.1.name) {
+                if !alias.is_empty() {
+                    found.push((module.to_string(), alias.to_string()));
+                }
+            }
+        }
+        true
+    });
+    found
+}

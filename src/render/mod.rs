@@ -1,0 +1,13 @@
+//! Ray tracing of one deformed mesh into per-pixel buffers.
+//!
+//! Owns: the BVH over a scene mesh (built once, reused for all its views), the watertight
+//! ray–triangle test, screen-space culling, the per-pixel geometric buffers (planar depth,
+//! hit triangle) and Lambert shading into RGB. Must not touch: recipes, mechanics or files.
+//! One centre ray per pixel for every geometric label; nothing here is random.
+
+mod shade;
+mod trace;
+mod watertight;
+
+pub use shade::{shade, srgb_to_linear, Lighting};
+pub use trace::{GBuffer, TraceMesh, NO_HIT};

@@ -1,0 +1,149 @@
+//! BVH construction and primary-ray tracing into a geometric buffer.
+
+use super::watertight::ShearedRay;
+use crate::cameras::Camera;
+use crate::geometry::Mesh;
+use glam::{DVec3, Vec3A};
+use obvhs::bvh2::{builder::build_bvh2_from_tris, Bvh2};
+use obvhs::ray::{Ray, RayHit};
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+use rayon::prelude::*;
+use std::time::Duration;
+
+/// Triangle id of a pixel that saw no surface.
+pub const NO_HIT: u32 = u32::MAX;
+
+/// A mesh ready for tracing. Vertices are stored in f32 relative to `anchor` (the centre of
+/// the mesh bounds), so geometry far from the world origin keeps its precision.
+pub struct TraceMesh {
+    bvh: Bvh2,
+    /// Triangles in BVH leaf order.
+    triangles: Vec<[Vec3A; 3]>,
+    /// Original triangle index of each BVH-ordered triangle.
+    original: Vec<u32>,
+    /// Outward unit normals, indexed by original triangle.
+    normals: Vec<DVec3>,
+    anchor: DVec3,
+    local_bounds: (DVec3, DVec3),
+}
+
+/// Per-pixel geometric labels of one view: planar depth (0 = no surface) and the original
+/// index of the triangle hit (`NO_HIT` = none). Row-major, `width` × `height`.
+pub struct GBuffer {
+    pub width: u32,
+    pub height: u32,
+    pub depth: Vec<f32>,
+    pub triangle: Vec<u32>,
+}
+
+impl TraceMesh {
+    /// Builds the BVH. The mesh must be non-empty with finite vertices (checked upstream).
+    pub fn build(mesh: &Mesh) -> Self {
+        let (lo, hi) = mesh.bounds().expect("scene mesh is non-empty");
+        let anchor = 0.5 * (lo + hi);
+        let local = |i: u32| (mesh.positions[i as usize] - anchor).as_vec3a();
+        let tris: Vec<Triangle> = mesh
+            .triangles
+            .iter()
+            .map(|t| Triangle { v0: local(t[0]), v1: local(t[1]), v2: local(t[2]) })
+            .collect();
+        let bvh = build_bvh2_from_tris(&tris, BvhBuildParams::medium_build(), &mut Duration::default());
+        let triangles = bvh.primitive_indices.iter().map(|&i| {
+            let t = &tris[i as usize];
+            [t.v0, t.v1, t.v2]
+        });
+        let normals = (0..mesh.triangles.len())
+            .map(|t| {
+                let [a, b, c] = mesh.triangle(t);
+                (b - a).cross(c - a).normalize_or_zero()
+            })
+            .collect();
+        TraceMesh {
+            triangles: triangles.collect(),
+            original: bvh.primitive_indices.clone(),
+            bvh,
+            normals,
+            anchor,
+            local_bounds: (lo - anchor, hi - anchor),
+        }
+    }
+
+    pub fn normal(&self, original_triangle: u32) -> DVec3 {
+        self.normals[original_triangle as usize]
+    }
+
+    /// Traces one centre ray per pixel, inside the projected bounds only.
+    pub fn trace(&self, camera: &Camera) -> GBuffer {
+        let k = camera.intrinsics;
+        let (w, h) = (k.width as usize, k.height as usize);
+        let mut depth = vec![0.0f32; w * h];
+        let mut triangle = vec![NO_HIT; w * h];
+        let (rows, cols) = self.screen_bounds(camera);
+        let origin = camera.position - self.anchor;
+        let origin32 = origin.as_vec3a();
+        depth
+            .par_chunks_mut(w)
+            .zip(triangle.par_chunks_mut(w))
+            .enumerate()
+            .filter(|(row, _)| rows.contains(row))
+            .for_each(|(row, (depth_row, tri_row))| {
+                for col in cols.clone() {
+                    let dir = camera.rotation * k.ray_through_pixel(row as u32, col as u32);
+                    if let Some((t, tri)) = self.closest_hit(origin, origin32, dir) {
+                        depth_row[col] = t;
+                        tri_row[col] = tri;
+                    }
+                }
+            });
+        GBuffer { width: k.width, height: k.height, depth, triangle }
+    }
+
+    /// Planar depth and original triangle of the first surface along `dir` (unit camera z).
+    fn closest_hit(&self, origin: DVec3, origin32: Vec3A, dir: DVec3) -> Option<(f32, u32)> {
+        let dir32 = dir.as_vec3a();
+        let sheared = ShearedRay::new(origin32, dir32);
+        let ray = Ray::new(origin32, dir32, 0.0, f32::INFINITY);
+        let mut hit = RayHit::none();
+        let found = self.bvh.ray_traverse(ray, &mut hit, |r, id| {
+            let [a, b, c] = self.triangles[id];
+            sheared.intersect(a, b, c, r.tmax)
+        });
+        if !found {
+            return None;
+        }
+        let tri = self.original[hit.primitive_id as usize];
+        // Refine the ray parameter against the triangle's plane in f64: the f32 sheared
+        // estimate decides coverage, the plane gives the depth label its precision.
+        let [a, ..] = self.triangles[hit.primitive_id as usize];
+        let n = self.normals[tri as usize];
+        let denom = n.dot(dir);
+        let refined = n.dot(a.as_dvec3() - origin) / denom;
+        let t = if refined.is_finite() && refined > 0.0 { refined as f32 } else { hit.t };
+        (t > 0.0 && t.is_finite()).then_some((t, tri))
+    }
+
+    /// Pixel rows and columns that can see the mesh: the projection of the bounding box,
+    /// widened by a pixel; the whole frame when a corner is at or behind the camera.
+    fn screen_bounds(&self, camera: &Camera) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+        let k = camera.intrinsics;
+        let full = (0..k.height as usize, 0..k.width as usize);
+        let (lo, hi) = self.local_bounds;
+        let (mut u0, mut v0, mut u1, mut v1) = (f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for i in 0..8 {
+            let corner = DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
+            let p = camera.world_to_camera(corner + self.anchor);
+            if p.z <= 1e-9 {
+                return full;
+            }
+            let (u, v) = k.project(p);
+            (u0, v0, u1, v1) = (u0.min(u), v0.min(v), u1.max(u), v1.max(v));
+        }
+        let clamp = |x: f64, n: u32| x.clamp(0.0, f64::from(n)) as usize;
+        (clamp(v0.floor() - 1.0, k.height)..clamp(v1.ceil() + 1.0, k.height), clamp(u0.floor() - 1.0, k.width)..clamp(u1.ceil() + 1.0, k.width))
+    }
+}

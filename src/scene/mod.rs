@@ -1,0 +1,44 @@
+//! Scene descriptions: plain data produced by recipes and consumed by everything downstream.
+//!
+//! Owns: what a dataset and one of its samples *are* (structures, supports, loads,
+//! materials, camera distribution, outputs), with every value resolved and validated, and the
+//! derived mechanical labels. Must not touch: Rhai (recipes build these), tracing or files.
+//! Everything here serialises into the per-view JSON.
+
+mod beam;
+
+pub use beam::{BeamLabels, BeamSpec, PointLoad};
+
+use crate::cameras::CameraRig;
+use serde::Serialize;
+
+/// Dataset-wide settings declared by a recipe.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DatasetSpec {
+    pub name: String,
+    pub seed: u64,
+    pub samples: u64,
+    pub views: u32,
+    pub camera: CameraRig,
+    pub outputs: Outputs,
+    /// Background colour, sRGB in [0, 1]; black as in the paper.
+    pub background: [f64; 3],
+}
+
+/// Which per-view files are written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Outputs {
+    pub rgb: bool,
+    pub depth: bool,
+    pub mask: bool,
+}
+
+impl Outputs {
+    pub const NAMES: [&'static str; 3] = ["rgb", "depth", "mask"];
+}
+
+/// One sample: the structures in the scene, already deformed by their loads.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SceneSpec {
+    pub structures: Vec<BeamSpec>,
+}

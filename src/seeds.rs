@@ -1,0 +1,128 @@
+//! Deterministic random streams.
+//!
+//! Owns: deriving every random stream from (run seed, sample index, view index, stream name)
+//! and the few samplers built on top of it. Must not touch: global state, thread identity,
+//! call order or the clock. Each purpose draws from its own named stream, so adding a draw
+//! for one purpose never shifts the values of another.
+
+use rand_chacha::ChaCha8Rng;
+use rand_core::{Rng, SeedableRng};
+
+/// Where a stream belongs: a whole sample, or one view of it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scope {
+    Sample(u64),
+    View(u64, u32),
+}
+
+/// A reproducible random stream (ChaCha8, value-stable across rand_chacha 0.3–0.10).
+#[derive(Clone, Debug)]
+pub struct Stream(ChaCha8Rng);
+
+impl Stream {
+    pub fn new(run_seed: u64, scope: Scope, name: &str) -> Self {
+        let (sample, view) = match scope {
+            Scope::Sample(sample) => (sample, u64::MAX),
+            Scope::View(sample, view) => (sample, u64::from(view)),
+        };
+        let mut hasher = blake3::Hasher::new_derive_key("shmgen 2026-11 random stream v1");
+        hasher.update(&run_seed.to_le_bytes());
+        hasher.update(&sample.to_le_bytes());
+        hasher.update(&view.to_le_bytes());
+        hasher.update(&(name.len() as u64).to_le_bytes());
+        hasher.update(name.as_bytes());
+        Stream(ChaCha8Rng::from_seed(*hasher.finalize().as_bytes()))
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0.next_u64()
+    }
+
+    /// Uniform in [0, 1), 53 random bits.
+    pub fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// Uniform in [lo, hi); exactly `lo` when the range is empty.
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+
+    /// Uniform integer in [lo, hi] (inclusive), without modulo bias.
+    pub fn integer(&mut self, lo: i64, hi: i64) -> i64 {
+        let span = hi.wrapping_sub(lo) as u64;
+        if span == u64::MAX {
+            return self.next_u64() as i64;
+        }
+        let n = span + 1;
+        let zone = u64::MAX - (u64::MAX % n + 1) % n;
+        loop {
+            let x = self.next_u64();
+            if x <= zone {
+                return lo.wrapping_add((x % n) as i64);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The generator itself against the ChaCha8 value measured identical across rand_chacha
+    /// 0.3, 0.9, 0.10 and the chacha20 crate (shared/research/crates.md §5.2).
+    #[test]
+    fn chacha8_matches_the_reference_stream() {
+        let mut r = ChaCha8Rng::seed_from_u64(42);
+        assert_eq!(r.next_u64(), 0xae90_bfb5_395d_5ba1);
+        assert_eq!(r.next_u64(), 0xf345_3fc6_2579_9188);
+    }
+
+    // Regression pin: a dependency bump or a change of derivation that alters any drawn value
+    // must fail here, because it silently changes every dataset built so far.
+    #[test]
+    fn golden_values_are_stable() {
+        let mut s = Stream::new(0, Scope::Sample(0), "scene");
+        let first: Vec<u64> = (0..3).map(|_| s.next_u64()).collect();
+        let mut again = Stream::new(0, Scope::Sample(0), "scene");
+        assert_eq!(first, (0..3).map(|_| again.next_u64()).collect::<Vec<_>>());
+        assert_eq!(first, GOLDEN.to_vec(), "stream values changed: {first:x?}");
+    }
+    const GOLDEN: [u64; 3] = [0x073244a2e59fd228, 0x52fca575bb032ff5, 0x125664ddc6548775];
+
+    #[test]
+    fn streams_differ_by_every_key_part() {
+        let draw = |seed, scope, name| Stream::new(seed, scope, name).next_u64();
+        let base = draw(1, Scope::View(2, 3), "camera");
+        assert_ne!(base, draw(0, Scope::View(2, 3), "camera"));
+        assert_ne!(base, draw(1, Scope::View(1, 3), "camera"));
+        assert_ne!(base, draw(1, Scope::View(2, 4), "camera"));
+        assert_ne!(base, draw(1, Scope::Sample(2), "camera"));
+        assert_ne!(base, draw(1, Scope::View(2, 3), "camerb"));
+    }
+
+    #[test]
+    fn samplers_stay_in_range() {
+        let mut s = Stream::new(9, Scope::Sample(0), "t");
+        for _ in 0..10_000 {
+            let u = s.unit();
+            assert!((0.0..1.0).contains(&u));
+            let k = s.integer(-2, 2);
+            assert!((-2..=2).contains(&k));
+        }
+        assert_eq!(s.uniform(3.0, 3.0), 3.0);
+        assert_eq!(s.integer(5, 5), 5);
+    }
+
+    #[test]
+    fn integer_is_unbiased_enough() {
+        let mut s = Stream::new(4, Scope::Sample(1), "hist");
+        let mut counts = [0u32; 3];
+        for _ in 0..30_000 {
+            counts[s.integer(0, 2) as usize] += 1;
+        }
+        for c in counts {
+            assert!((9_500..10_500).contains(&c), "{counts:?}");
+        }
+    }
+}
