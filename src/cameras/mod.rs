@@ -7,7 +7,7 @@
 
 mod rig;
 
-pub use rig::{CameraRig, Distance, ViewDraw};
+pub use rig::{orbit_camera, CameraRig, Distance, ViewDraw};
 
 use glam::{DMat3, DMat4, DVec3, DVec4};
 

@@ -1,0 +1,308 @@
+//! The `shmgen run` command end to end: determinism across threads, shards and kill -9,
+//! the files read back through other readers, and every kind of bad input.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_shmgen");
+
+/// A small recipe (low resolution so the suite stays fast) importing the stdlib beam module.
+const SMALL: &str = r#"
+import "beam" as beam;
+let samples = param("samples", 8);
+dataset(#{
+    name: "small",
+    seed: param("seed", 0),
+    samples: samples,
+    views: param("views", 3),
+    camera: #{ width: param("width", 96), height: param("height", 72), pitch: [deg(-60), deg(90)] },
+    scene: |rng| {
+        let length = rng.uniform(1.0, 4.0);
+        let b = beam::paper_cuboid(length, rng.uniform(0.02, 0.25), rng.uniform(0.05, 1.5));
+        if rng.chance(0.5) { b.cantilever(); }
+        b.point_load(rng.uniform(0.0, 1.0) * length, rng.uniform(0.0, 0.08) * length);
+        b
+    },
+});
+"#;
+
+fn write_recipe(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn run(recipe: &Path, out: &Path, extra: &[&str]) -> Output {
+    Command::new(BIN).arg("run").arg(recipe).arg("--out").arg(out).args(extra).output().unwrap()
+}
+
+fn ok(output: Output) -> Output {
+    assert!(output.status.success(), "shmgen failed:\n{}", String::from_utf8_lossy(&output.stderr));
+    output
+}
+
+/// blake3 of every file under `root`, by relative path.
+fn hashes(root: &Path) -> BTreeMap<String, String> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![root.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                let rel = path.strip_prefix(root).unwrap().to_string_lossy().to_string();
+                out.insert(rel, blake3::hash(&std::fs::read(&path).unwrap()).to_hex().to_string());
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn same_bytes_with_one_or_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write_recipe(dir.path(), "small.rhai", SMALL);
+    ok(run(&recipe, &dir.path().join("t1"), &["--threads", "1"]));
+    ok(run(&recipe, &dir.path().join("t2"), &["--threads", "2"]));
+    let (a, b) = (hashes(&dir.path().join("t1")), hashes(&dir.path().join("t2")));
+    assert_eq!(a.len(), 2 + 8 * 3 * 4, "run.json, manifest and 4 files per view");
+    assert_eq!(a, b);
+}
+
+#[test]
+fn shards_merge_into_the_same_bytes_as_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write_recipe(dir.path(), "small.rhai", SMALL);
+    ok(run(&recipe, &dir.path().join("whole"), &[]));
+    let sharded = dir.path().join("sharded");
+    let first = ok(run(&recipe, &sharded, &["--shard", "1/2"]));
+    assert!(String::from_utf8_lossy(&first.stdout).contains("incomplete"));
+    ok(run(&recipe, &sharded, &["--shard", "0/2", "--threads", "1"]));
+    assert_eq!(hashes(&dir.path().join("whole")), hashes(&sharded));
+}
+
+#[test]
+fn killed_run_resumes_to_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write_recipe(dir.path(), "small.rhai", SMALL);
+    let args = ["--set", "samples=40", "--set", "width=320", "--set", "height=240", "--threads", "1"];
+    ok(run(&recipe, &dir.path().join("clean"), &args));
+    let out = dir.path().join("killed");
+    let mut child = Command::new(BIN)
+        .arg("run")
+        .arg(&recipe)
+        .arg("--out")
+        .arg(&out)
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let manifest = out.join("manifest.jsonl");
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let lines = |p: &Path| std::fs::read_to_string(p).map(|t| t.lines().count()).unwrap_or(0);
+    while lines(&manifest) < 3 && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    let done_at_kill = lines(&manifest);
+    assert!((3..40).contains(&done_at_kill), "kill must land mid-run ({done_at_kill} samples done)");
+    let resumed = ok(run(&recipe, &out, &args));
+    let text = String::from_utf8_lossy(&resumed.stdout);
+    assert!(text.contains("already present"), "{text}");
+    assert_eq!(hashes(&dir.path().join("clean")), hashes(&out));
+}
+
+/// The files of a dataset read back through independent readers: EXR via the exr crate,
+/// PNG via the png crate, cameras via the JSON. An unloaded beam is an exact box, so every
+/// back-projected depth pixel must lie on the box surface.
+#[test]
+fn written_files_round_trip_through_other_readers() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write_recipe(
+        dir.path(),
+        "box.rhai",
+        r#"dataset(#{
+            seed: 3, samples: 1, views: 3,
+            camera: #{ width: 200, height: 150, distance: [6.0, 9.0] },
+            scene: |rng| beam(#{ length: 3.0, width: 0.4, height: 0.8 }).at(10.0, -20.0, 5.0),
+        })"#,
+    );
+    let out = dir.path().join("ds");
+    ok(run(&recipe, &out, &[]));
+    for view in 0..3 {
+        let meta: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(format!("samples/0000/000000_{view:02}.json"))).unwrap()).unwrap();
+        let m = |key: &str| -> Vec<Vec<f64>> { serde_json::from_value(meta["camera"][key].clone()).unwrap() };
+        let (k, c2w, w2c, gl) = (m("K"), m("c2w_opencv"), m("w2c_opencv"), m("c2w_opengl"));
+        assert_eq!(meta["camera"]["pixel_center"], 0.5);
+        assert_eq!((k[0][2], k[1][2]), (100.0, 75.0));
+        // OpenGL axes: the same pose with y and z columns negated.
+        for r in 0..3 {
+            assert_eq!(gl[r][0], c2w[r][0]);
+            assert_eq!((gl[r][1], gl[r][2], gl[r][3]), (-c2w[r][1], -c2w[r][2], c2w[r][3]));
+        }
+        // w2c · c2w = I.
+        for r in 0..4 {
+            for c in 0..4 {
+                let v: f64 = (0..4).map(|i| w2c[r][i] * c2w[i][c]).sum();
+                assert!((v - f64::from(u8::from(r == c))).abs() < 1e-9);
+            }
+        }
+        let depth = read_exr(&out.join(format!("samples/0000/000000_{view:02}.depth.exr")));
+        let mask = read_png(&out.join(format!("samples/0000/000000_{view:02}.mask.png")));
+        assert_eq!(depth.len(), 200 * 150);
+        let mut hits = 0;
+        for (i, &z) in depth.iter().enumerate() {
+            assert!(z.is_finite() && z >= 0.0);
+            assert_eq!(mask[i] == 255, z > 0.0, "mask and depth agree");
+            if z == 0.0 {
+                continue;
+            }
+            hits += 1;
+            let (row, col) = ((i / 200) as f64, (i % 200) as f64);
+            let z = f64::from(z);
+            let cam = [(col + 0.5 - k[0][2]) * z / k[0][0], (row + 0.5 - k[1][2]) * z / k[1][1], z];
+            let p: Vec<f64> = (0..3).map(|r| c2w[r][0] * cam[0] + c2w[r][1] * cam[1] + c2w[r][2] * cam[2] + c2w[r][3]).collect();
+            let local = [p[0] - 10.0, p[1] + 20.0, p[2] - 5.0];
+            let half = [1.5, 0.2, 0.4];
+            // Distance to the box surface for a point near it.
+            let outside: f64 = (0..3).map(|a| (local[a].abs() - half[a]).max(0.0).powi(2)).sum::<f64>().sqrt();
+            let inside = (0..3).map(|a| half[a] - local[a].abs()).fold(f64::INFINITY, f64::min).max(0.0);
+            assert!(outside.max(inside) < 1e-5 * 3.2, "pixel {i}: {} m off the box", outside.max(inside));
+        }
+        assert!(hits > 100, "{hits} hits");
+    }
+}
+
+fn read_exr(path: &Path) -> Vec<f32> {
+    use exr::prelude::*;
+    let image = read_first_flat_layer_from_file(path).unwrap();
+    let channels = &image.layer_data.channel_data.list;
+    assert_eq!(channels.len(), 1);
+    assert_eq!(channels[0].name, Text::from("Z"));
+    channels[0].sample_data.values_as_f32().collect()
+}
+
+fn read_png(path: &Path) -> Vec<u8> {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf.truncate(info.buffer_size());
+    buf
+}
+
+/// Runs a bad recipe; it must fail with a message containing every `expected` fragment and
+/// leave no output folder behind.
+fn rejects(recipe_text: &str, extra: &[&str], expected: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write_recipe(dir.path(), "bad.rhai", recipe_text);
+    let out = dir.path().join("out");
+    let output = run(&recipe, &out, extra);
+    let stderr = String::from_utf8_lossy(&output.stderr).replace(&dir.path().display().to_string(), "<dir>");
+    assert!(!output.status.success(), "must fail:\n{stderr}");
+    for fragment in expected {
+        assert!(stderr.contains(fragment), "expected `{fragment}` in:\n{stderr}");
+    }
+    assert!(!out.exists(), "no partial files may be written");
+}
+
+fn with_scene(scene_body: &str) -> String {
+    format!("dataset(#{{\n    samples: 20,\n    scene: |rng| {{\n{scene_body}\n    }},\n}})\n")
+}
+
+#[test]
+fn syntax_error_points_at_file_line_column() {
+    rejects("let x = 3;\nlet y = (x + ;\n", &[], &["<dir>/bad.rhai:2:", "let y = (x + ;", "^"]);
+}
+
+#[test]
+fn runtime_error_inside_the_scene_points_at_its_line() {
+    rejects(&with_scene("        let a = [1, 2];\n        a[7]"), &[], &["Array index 7 out of bounds", "<dir>/bad.rhai:5:11", "sample 0"]);
+}
+
+#[test]
+fn endless_loop_is_stopped() {
+    rejects("let i = 0;\nloop { i += 1; }\n", &[], &["endless loop", "<dir>/bad.rhai:2:"]);
+}
+
+#[test]
+fn negative_width_is_named_with_its_value() {
+    rejects(&with_scene("        beam(#{ length: 2.0, width: -0.1, height: 0.3 })"), &[], &["beam.width = -0.1 must be positive", "<dir>/bad.rhai:4:"]);
+}
+
+#[test]
+fn load_outside_the_span_is_refused() {
+    rejects(
+        &with_scene("        beam(#{ length: 2.0, width: 0.1, height: 0.3 }).cantilever().point_load(2.5, 0.01)"),
+        &[],
+        &["point_load position = 2.5 m lies outside the span [0, 2] m", "<dir>/bad.rhai:4:"],
+    );
+}
+
+#[test]
+fn nan_is_refused() {
+    rejects(
+        &with_scene("        beam(#{ length: 2.0, width: 0.1, height: (-1.0).sqrt() })"),
+        &[],
+        &["beam.height = NaN is not a finite number", "<dir>/bad.rhai:4:"],
+    );
+}
+
+#[test]
+fn unknown_options_are_refused_with_a_suggestion() {
+    rejects(SMALL, &["--set", "sampels=3"], &["--set sampels=3", "did you mean `samples`?"]);
+    rejects(
+        "dataset(#{ camera: #{ pich: 0.3 }, scene: |rng| beam(#{ length: 1.0, width: 0.1, height: 0.1 }) })",
+        &[],
+        &["unknown option `dataset.camera.pich`; did you mean `pitch`?", "<dir>/bad.rhai:1:"],
+    );
+    rejects(SMALL, &["--set", "samples=many"], &["--set samples=many: expected a whole number"]);
+}
+
+#[test]
+fn a_failure_in_a_later_sample_writes_nothing() {
+    // Most samples are fine; some draw an impossible load position.
+    rejects(
+        &with_scene("        let b = beam(#{ length: 2.0, width: 0.1, height: 0.3 });\n        b.point_load(rng.uniform(0.0, 2.6), 0.01)"),
+        &[],
+        &["outside the span", "while drawing the scene of sample"],
+    );
+}
+
+#[test]
+fn errors_inside_imported_modules_point_into_the_module() {
+    let dir = tempfile::tempdir().unwrap();
+    write_recipe(dir.path(), "frames.rhai", "fn portal(span) {\n    beam(#{ length: span, width: 0.0, height: 0.3 })\n}\n");
+    let recipe = write_recipe(dir.path(), "bad.rhai", "import \"frames\" as frames;\ndataset(#{ scene: |rng| frames::portal(3.0) })\n");
+    let output = run(&recipe, &dir.path().join("out"), &[]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(stderr.contains("frames.rhai:2:"), "{stderr}");
+    assert!(stderr.contains("beam.width = 0 must be positive"), "{stderr}");
+}
+
+#[test]
+fn imports_cannot_leave_the_recipe_and_stdlib_folders() {
+    rejects("import \"../secret\" as s;\ndataset(#{ scene: |rng| () })\n", &[], &["no '..'", "<dir>/bad.rhai:1:"]);
+}
+
+#[test]
+fn a_folder_holding_another_dataset_is_refused_unless_forced() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write_recipe(dir.path(), "small.rhai", SMALL);
+    let out = dir.path().join("ds");
+    ok(run(&recipe, &out, &["--set", "samples=2"]));
+    let before = hashes(&out);
+    let refused = run(&recipe, &out, &["--set", "samples=3"]);
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("different dataset"));
+    assert_eq!(before, hashes(&out), "a refused run touches nothing");
+    ok(run(&recipe, &out, &["--set", "samples=3", "--force"]));
+    assert_eq!(hashes(&out).len(), 2 + 3 * 3 * 4);
+}
