@@ -217,6 +217,21 @@ fn with_scene(scene_body: &str) -> String {
 }
 
 #[test]
+fn parameters_read_inside_the_scene_follow_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write_recipe(
+        dir.path(),
+        "p.rhai",
+        r#"dataset(#{ samples: 1, camera: #{ width: 32, height: 24 },
+            scene: |rng| beam(#{ length: param("span", 2.0), width: 0.1, height: 0.2 }) })"#,
+    );
+    let out = dir.path().join("ds");
+    ok(run(&recipe, &out, &["--set", "span=3.5"]));
+    let meta: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("samples/0000/000000_00.json")).unwrap()).unwrap();
+    assert_eq!(meta["scene"]["structures"][0]["length"], 3.5);
+}
+
+#[test]
 fn syntax_error_points_at_file_line_column() {
     rejects("let x = 3;\nlet y = (x + ;\n", &[], &["<dir>/bad.rhai:2:", "let y = (x + ;", "^"]);
 }

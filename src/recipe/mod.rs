@@ -65,19 +65,34 @@ impl Recipe {
                 "{label}: the recipe must end with `dataset(#{{ ... }})` as its last expression (it produced {type_name})"
             )));
         };
-        let params = resolved_params(&params, overrides)?;
 
         // Closures called later no longer see the recipe's imports: give them the imported
         // modules as static modules under the same aliases.
         let mut sample_engine = engine::sandboxed(resolver.clone());
-        api::register(&mut sample_engine, Arc::new(Params::default()));
+        api::register(&mut sample_engine, params.clone());
         for (module, alias) in imports(&ast) {
             let m = resolver
                 .resolve(&engine, &module, Position::NONE)
                 .map_err(|e| RecipeError::eval(&e, &label, &sources, None))?;
             sample_engine.register_static_module(alias, m);
         }
-        Ok(Recipe { path: path.to_path_buf(), dataset: spec, params, hash: sources.hash(), label, engine: sample_engine, ast, scene, sources })
+        let mut recipe = Recipe {
+            path: path.to_path_buf(),
+            dataset: spec,
+            params: BTreeMap::new(),
+            hash: String::new(),
+            label,
+            engine: sample_engine,
+            ast,
+            scene,
+            sources: sources.clone(),
+        };
+        // Parameters may also be declared inside the scene function: draw one scene before
+        // deciding which `--set` names are unknown.
+        recipe.scene(0)?;
+        recipe.params = resolved_params(&params, overrides)?;
+        recipe.hash = sources.hash();
+        Ok(recipe)
     }
 
     /// Draws the scene of one sample.
