@@ -4,19 +4,19 @@
 use glam::{DMat3, DVec2, DVec3};
 use shmgen::cameras::{CameraRig, Camera, Distance, Intrinsics, ViewDraw};
 use shmgen::geometry::Mesh;
-use shmgen::mechanics::Support;
 use shmgen::render::{TraceMesh, NO_HIT};
-use shmgen::scene::{BeamSpec, PointLoad};
+use shmgen::mechanics::{Load, Section, Support, Target};
+use shmgen::scene::{BeamSpec, Tessellation};
 use shmgen::seeds::{Scope, Stream};
 
 const HALF: DVec3 = DVec3::new(2.0, 0.3, 0.45);
 
 /// The undeformed beam is exactly the box [−HALF, HALF] moved to `centre`.
 fn box_mesh(centre: DVec3) -> Mesh {
-    let mut b = BeamSpec::new(2.0 * HALF.x, 2.0 * HALF.y, 2.0 * HALF.z);
-    b.segments = 7;
+    let mut b = BeamSpec::rectangular(2.0 * HALF.x, 2.0 * HALF.y, 2.0 * HALF.z);
+    b.tessellation = Tessellation::Segments(7);
     b.centre = centre.to_array();
-    b.mesh()
+    b.build(1e-3).unwrap().mesh
 }
 
 /// Planar depth of the first intersection of the pixel ray with the box (slab method, f64).
@@ -126,17 +126,29 @@ fn grazing_view_along_a_face_has_no_nan_and_matches_the_box() {
 }
 
 fn deformed_beams() -> Vec<BeamSpec> {
-    let mut cantilever = BeamSpec::new(3.0, 0.2, 0.35);
+    let target = |b: &mut BeamSpec, at: f64, deflection: f64| {
+        b.loads = vec![Load::Point { at, force: 1.0 }];
+        b.target = Target::Peak { deflection };
+    };
+    let mut cantilever = BeamSpec::rectangular(3.0, 0.2, 0.35);
     cantilever.support = Support::Cantilever;
-    cantilever.load = PointLoad { position: 2.0, deflection: 0.6 };
-    cantilever.segments = 40;
-    let mut ss = BeamSpec::new(5.0, 0.5, 0.12);
-    ss.load = PointLoad { position: 0.0, deflection: 0.25 }; // load on the pin: the limit shape
+    target(&mut cantilever, 2.0, 0.6);
+    let mut ss = BeamSpec::new(5.0, Section::ISection { width: 0.3, height: 0.5, flange: 0.03, web: 0.02 });
+    target(&mut ss, 1e-9, 0.25); // load next to the pin
     ss.yaw = 0.7;
     ss.centre = [0.3, -0.2, 1.0];
-    let mut stocky = BeamSpec::new(1.0, 0.6, 1.2);
-    stocky.load = PointLoad { position: 0.5, deflection: 0.05 };
-    vec![cantilever, ss, stocky]
+    let mut stocky = BeamSpec::new(1.0, Section::HollowBox { width: 0.6, height: 1.2, wall: 0.08 });
+    stocky.support = Support::FixedFixed;
+    target(&mut stocky, 0.5, 0.05);
+    let mut tube = BeamSpec::new(4.0, Section::CircularHollow { diameter: 0.4, wall: 0.05 });
+    tube.support = Support::ProppedCantilever;
+    tube.loads = vec![Load::Distributed { from: 0.0, to: 4.0, intensity: 1.0 }];
+    tube.target = Target::Peak { deflection: 0.3 };
+    vec![cantilever, ss, stocky, tube]
+}
+
+fn built(beam: &BeamSpec) -> Mesh {
+    beam.build(2e-3).unwrap().mesh
 }
 
 /// Pixel centres strictly inside a projected triangle (more than 1e-3 px from its edges) must
@@ -176,7 +188,7 @@ fn holes(mesh: &Mesh, trace: &TraceMesh, cam: &Camera) -> usize {
 fn closed_meshes_have_no_holes_from_200_cameras_including_the_poles() {
     let rig = CameraRig { width: 160, height: 120, distance: Distance::Frame { margin: 1.1 }, ..CameraRig::default() };
     for (b, beam) in deformed_beams().iter().enumerate() {
-        let mesh = beam.mesh();
+        let mesh = built(beam);
         let trace = TraceMesh::build(&mesh);
         let (lo, hi) = mesh.bounds().unwrap();
         let centre = 0.5 * (lo + hi);
@@ -215,7 +227,7 @@ fn point_triangle_distance(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
 fn back_projected_depth_lies_on_the_mesh() {
     let rig = CameraRig { width: 240, height: 180, ..CameraRig::default() };
     for (b, beam) in deformed_beams().iter().enumerate() {
-        let mesh = beam.mesh();
+        let mesh = built(beam);
         let trace = TraceMesh::build(&mesh);
         let (lo, hi) = mesh.bounds().unwrap();
         let centre = 0.5 * (lo + hi);

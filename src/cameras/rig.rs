@@ -58,6 +58,17 @@ impl CameraRig {
         Intrinsics::from_fov_y(self.width, self.height, self.fov_y)
     }
 
+    /// Size of a pixel (metres) at the nearest distance this rig can place a camera from the
+    /// surface of a structure with bounding radius `radius`; tessellation aims below it.
+    pub fn nearest_pixel_footprint(&self, radius: f64) -> f64 {
+        let k = self.intrinsics();
+        let centre_distance = match self.distance {
+            Distance::Range { min, .. } => min,
+            Distance::Frame { margin } => margin * radius / k.min_half_fov().sin(),
+        };
+        (centre_distance - radius).max(1e-3 * radius) / k.fx.max(k.fy)
+    }
+
     /// Draws one view of a structure whose bounding sphere is (`centre`, `radius`).
     pub fn draw(&self, stream: &mut Stream, centre: DVec3, radius: f64) -> (Camera, ViewDraw) {
         let yaw = stream.uniform(self.yaw[0], self.yaw[1]);

@@ -6,7 +6,7 @@
 
 mod beam;
 
-pub use beam::{beam_mesh, BeamGeometry};
+pub use beam::beam_mesh;
 
 use glam::DVec3;
 

@@ -1,132 +1,101 @@
 //! Moving section points with the deflected axis.
 
-use super::PointLoadShape;
 use serde::Serialize;
+
+/// The deflected axis at one station: deflection (down), slope dv/dx, and the tangent of the
+/// section rotation ψ (equal to the slope without shear deformation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisPoint {
+    pub v: f64,
+    pub slope: f64,
+    pub rotation: f64,
+}
 
 /// How a point of the undeformed cross-section follows the deflected axis.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Mapping {
-    /// Plane sections stay plane and normal to the axis; the axis shortens by ½∫v′².
+    /// Plane sections stay plane and turn with the bending rotation; the axis shortens by ½∫v′².
     #[default]
     RotateSections,
     /// 3DGEN's mapping, kept for parity with the paper: add v(x) to the vertical coordinate.
     AddDeflection,
 }
 
-impl Mapping {
-    pub fn name(self) -> &'static str {
-        match self {
-            Mapping::RotateSections => "rotate_sections",
-            Mapping::AddDeflection => "add_deflection",
+/// Where a section lands: its axis point (x, −v) and its rotation (cos, sin).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SectionFrame {
+    pub x: f64,
+    pub v: f64,
+    pub cos: f64,
+    pub sin: f64,
+}
+
+impl SectionFrame {
+    /// Deformed (X, Z) of the section point at height z (y is unchanged).
+    pub fn place(&self, z: f64) -> (f64, f64) {
+        (self.x + z * self.sin, z * self.cos - self.v)
+    }
+}
+
+/// Section frames at the given stations (which must include 0 and every kink). The axial
+/// shortening u(x) = ½∫₀ˣ v′² is integrated with 3-point Gauss–Legendre per interval, exact
+/// for the piecewise-quartic integrand of a piecewise-cubic deflection.
+pub fn section_frames(stations: &[f64], mapping: Mapping, axis: impl Fn(f64) -> AxisPoint) -> Vec<SectionFrame> {
+    const GAUSS: [(f64, f64); 3] = [(-0.774_596_669_241_483_4, 5.0 / 9.0), (0.0, 8.0 / 9.0), (0.774_596_669_241_483_4, 5.0 / 9.0)];
+    let mut shortening = 0.0;
+    let mut frames = Vec::with_capacity(stations.len());
+    for (i, &x) in stations.iter().enumerate() {
+        if i > 0 && mapping == Mapping::RotateSections {
+            let (mid, half) = (0.5 * (stations[i - 1] + x), 0.5 * (x - stations[i - 1]));
+            shortening += 0.5 * half * GAUSS.iter().map(|&(t, w)| w * axis(mid + half * t).slope.powi(2)).sum::<f64>();
         }
-    }
-}
-
-/// Maps (x, z) of the undeformed beam (x along the axis from the axially fixed end, z upward
-/// from the neutral axis) to the deformed (X, Z). The y coordinate is unchanged.
-///
-/// The axial shortening u(x) = ½∫₀ˣ v′² is integrated exactly over the given stations
-/// (v′² is a polynomial of degree ≤ 4 between kinks, and every kink is a station), so it is
-/// only available at those stations.
-pub struct SectionMapper<'a> {
-    shape: &'a PointLoadShape,
-    mapping: Mapping,
-    stations: &'a [f64],
-    shortening: Vec<f64>,
-}
-
-impl<'a> SectionMapper<'a> {
-    pub fn new(shape: &'a PointLoadShape, mapping: Mapping, stations: &'a [f64]) -> Self {
-        let shortening = match mapping {
-            Mapping::RotateSections => cumulative_shortening(shape, stations),
-            Mapping::AddDeflection => vec![0.0; stations.len()],
-        };
-        SectionMapper { shape, mapping, stations, shortening }
-    }
-
-    /// Deformed (X, Z) of the point at height `z` in the section at station `i`.
-    pub fn map(&self, i: usize, z: f64) -> (f64, f64) {
-        let x = self.stations[i];
-        let d = self.shape.at(x);
-        match self.mapping {
-            Mapping::AddDeflection => (x, z - d.v),
+        let p = axis(x);
+        frames.push(match mapping {
+            Mapping::AddDeflection => SectionFrame { x, v: p.v, cos: 1.0, sin: 0.0 },
             Mapping::RotateSections => {
-                // Unit normal of the deflected axis (pointing up): (v′, 1)/√(1 + v′²).
-                let inv = 1.0 / d.slope.hypot(1.0);
-                (x - self.shortening[i] + z * d.slope * inv, z * inv - d.v)
+                let inv = 1.0 / p.rotation.hypot(1.0);
+                SectionFrame { x: x - shortening, v: p.v, cos: inv, sin: p.rotation * inv }
             }
-        }
+        });
     }
-
-    pub fn shortening_at_end(&self) -> f64 {
-        self.shortening.last().copied().unwrap_or(0.0)
-    }
-}
-
-/// ½∫₀^{x_i} v′² at every station, with 3-point Gauss–Legendre per interval (exact for the
-/// degree-4 integrand of a piecewise-cubic deflection).
-fn cumulative_shortening(shape: &PointLoadShape, stations: &[f64]) -> Vec<f64> {
-    const NODES: [(f64, f64); 3] = [(-0.774_596_669_241_483_4, 5.0 / 9.0), (0.0, 8.0 / 9.0), (0.774_596_669_241_483_4, 5.0 / 9.0)];
-    let mut out = Vec::with_capacity(stations.len());
-    let mut total = 0.0;
-    out.push(0.0);
-    for w in stations.windows(2) {
-        let (mid, half) = (0.5 * (w[0] + w[1]), 0.5 * (w[1] - w[0]));
-        let integral: f64 = NODES.iter().map(|&(t, wt)| wt * shape.at(mid + half * t).slope.powi(2)).sum();
-        total += 0.5 * half * integral;
-        out.push(total);
-    }
-    out
+    frames
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mechanics::Support;
 
-    fn stations(l: f64, a: f64, n: usize) -> Vec<f64> {
-        let mut s: Vec<f64> = (0..=n).map(|i| l * i as f64 / n as f64).collect();
-        s.push(a);
-        s.sort_by(f64::total_cmp);
-        s.dedup();
-        s
-    }
-
-    #[test]
-    fn shortening_matches_closed_form() {
-        // SS, centre load: ½∫v′² = 2.4 δ²/L (mechanics.md §3); cantilever tip load: 0.6 δ²/L.
-        for (support, a, k) in [(Support::SimplySupported, 1.0, 2.4), (Support::Cantilever, 2.0, 0.6)] {
-            let shape = PointLoadShape::new(support, 2.0, a, 0.1);
-            let st = stations(2.0, a, 7);
-            let m = SectionMapper::new(&shape, Mapping::RotateSections, &st);
-            let want = k * 0.1 * 0.1 / 2.0;
-            assert!((m.shortening_at_end() / want - 1.0).abs() < 1e-12, "{support:?}: {} vs {want}", m.shortening_at_end());
+    /// SS beam, centre load, unit span: v = δ(3ξ − 4ξ³) for ξ ≤ ½, mirrored.
+    fn ss_centre(delta: f64) -> impl Fn(f64) -> AxisPoint {
+        move |x: f64| {
+            let (xi, sign) = if x <= 0.5 { (x, 1.0) } else { (1.0 - x, -1.0) };
+            AxisPoint { v: delta * (3.0 * xi - 4.0 * xi.powi(3)), slope: sign * delta * (3.0 - 12.0 * xi * xi), rotation: sign * delta * (3.0 - 12.0 * xi * xi) }
         }
     }
 
     #[test]
+    fn shortening_matches_closed_form() {
+        // ½∫v′² = 2.4 δ²/L for the SS centre load (mechanics.md §3).
+        let stations: Vec<f64> = (0..=6).map(|i| f64::from(i) / 6.0).collect();
+        let frames = section_frames(&stations, Mapping::RotateSections, ss_centre(0.1));
+        assert!((1.0 - frames[6].x - 2.4 * 0.01).abs() < 1e-14);
+    }
+
+    #[test]
     fn sections_stay_plane_and_normal_to_the_axis() {
-        let shape = PointLoadShape::new(Support::SimplySupported, 3.0, 0.8, 0.15);
-        let st = stations(3.0, 0.8, 11);
-        let m = SectionMapper::new(&shape, Mapping::RotateSections, &st);
-        for i in 0..st.len() {
-            let (x0, z0) = m.map(i, -0.2);
-            let (x1, z1) = m.map(i, 0.3);
-            // Section keeps its depth …
+        let stations: Vec<f64> = (0..=10).map(|i| f64::from(i) / 10.0).collect();
+        let axis = ss_centre(0.15);
+        for (f, &x) in section_frames(&stations, Mapping::RotateSections, &axis).iter().zip(&stations) {
+            let ((x0, z0), (x1, z1)) = (f.place(-0.2), f.place(0.3));
             assert!(((x1 - x0).hypot(z1 - z0) - 0.5).abs() < 1e-12);
-            // … and is perpendicular to the axis tangent (1, −v′).
-            let slope = shape.at(st[i]).slope;
-            assert!(((x1 - x0) - slope * (z1 - z0)).abs() < 1e-12);
+            assert!(((x1 - x0) - axis(x).slope * (z1 - z0)).abs() < 1e-12);
         }
     }
 
     #[test]
     fn parity_mapping_adds_the_deflection() {
-        let shape = PointLoadShape::new(Support::Cantilever, 3.0, 3.0, 0.2);
-        let st = stations(3.0, 3.0, 5);
-        let m = SectionMapper::new(&shape, Mapping::AddDeflection, &st);
-        let (x, z) = m.map(st.len() - 1, 0.1);
-        assert_eq!((x, z), (3.0, 0.1 - 0.2));
+        let f = section_frames(&[0.0, 0.5], Mapping::AddDeflection, ss_centre(0.2))[1];
+        assert_eq!(f.place(0.1), (0.5, 0.1 - 0.2));
     }
 }

@@ -1,21 +1,40 @@
-//! Beam mechanics: deflected shapes of a straight beam and how they move the material.
+//! Beam mechanics: how a straight beam deflects, and how its material moves with it.
 //!
-//! Owns: the Euler–Bernoulli closed forms for a point load, parametrised by shape
-//! (v = δ·φ(x), φ normalised to max |φ| = 1, so no load is ever inverted from a displacement),
-//! the derived labels (load, moment, stress) and the mapping of section points onto the
-//! deformed axis. Must not touch: meshes, cameras or files; it works on plain numbers in the
-//! beam's own frame (axis along x from 0 to L, deflection v positive downward).
+//! Owns: the linear theories (Euler–Bernoulli, Timoshenko) for four support cases and any mix
+//! of loads, the choice of theory by estimated error, the derived labels (load, moment,
+//! stress, plausibility) and the mapping of section points onto the deformed axis. Must not
+//! touch: meshes, cameras or files; it works on plain numbers in the beam's own frame (axis
+//! along x from 0 to L, deflection v positive downward).
 //!
-//! Formulas: `shared/research/mechanics.md` §1.2, §1.3 and §3, written in their safe forms
-//! (every bracket a sum of positive terms, the small factor divided out analytically).
+//! Formulas, reference values and traps: `shared/research/mechanics.md`.
 
+mod linear;
 mod mapping;
-mod point_load;
+mod model;
+mod section;
 
-pub use mapping::{Mapping, SectionMapper};
-pub use point_load::{Deflection, PointLoadShape, Support};
+pub use linear::{Load, LinearBeam, Station};
+pub use mapping::{section_frames, AxisPoint, Mapping, SectionFrame};
+pub use model::{BeamProblem, Deformation, Labels, Target, Theory};
+pub use section::{Section, SectionOutline, SectionProperties, PAPER_DIVISIONS};
 
-/// Young's modulus and yield strength of the structural steel used for plausibility labels
-/// (EN 1993-1-1, S355).
+use serde::Serialize;
+
+/// Young's modulus, Poisson's ratio and yield strength of structural steel S355
+/// (EN 1993-1-1), the defaults for labels and shear flexibility.
 pub const STEEL_E: f64 = 210e9;
+pub const STEEL_NU: f64 = 0.3;
 pub const STEEL_FY: f64 = 355e6;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Support {
+    /// Pin at x = 0, roller at x = L.
+    SimplySupported,
+    /// Clamped at x = 0, free at x = L.
+    Cantilever,
+    /// Clamped at both ends.
+    FixedFixed,
+    /// Clamped at x = 0, pinned (on a roller) at x = L.
+    ProppedCantilever,
+}

@@ -2,6 +2,7 @@
 
 use crate::cameras::{rows4, Camera, ViewDraw};
 use crate::geometry::Mesh;
+use crate::mechanics::Labels;
 use crate::output::{depth_exr, mask_png, rgb_png, view_file, SampleStage};
 use crate::recipe::Recipe;
 use crate::render::{shade, GBuffer, Lighting, TraceMesh, NO_HIT};
@@ -18,6 +19,8 @@ pub const VIEW_SCHEMA: &str = "shmgen.view/1";
 pub struct PreparedSample {
     pub index: u64,
     pub scene: SceneSpec,
+    /// Mechanics labels and segment count of each structure.
+    pub labels: Vec<(Labels, usize)>,
     pub mesh: Mesh,
     /// Structure index of every triangle.
     pub owner: Vec<u32>,
@@ -31,10 +34,13 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
     let scene = recipe.scene(index)?;
     let mut mesh = Mesh::default();
     let mut owner = Vec::new();
+    let mut labels = Vec::new();
     for (i, beam) in scene.structures.iter().enumerate() {
-        let part = beam.mesh();
-        owner.extend(std::iter::repeat_n(i as u32, part.triangles.len()));
-        mesh.append(&part);
+        let footprint = recipe.dataset.camera.nearest_pixel_footprint(beam.radius());
+        let built = beam.build(footprint).map_err(|m| anyhow::anyhow!("sample {index}, structure {i}: {m}"))?;
+        owner.extend(std::iter::repeat_n(i as u32, built.mesh.triangles.len()));
+        mesh.append(&built.mesh);
+        labels.push((built.deformation.labels, built.segments));
     }
     if !mesh.is_finite() {
         bail!("sample {index}: the deformed mesh has non-finite vertices (check the structure's dimensions and loads)");
@@ -45,7 +51,7 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
     if !(radius > 0.0 && radius.is_finite()) {
         bail!("sample {index}: the scene has no extent (radius {radius})");
     }
-    Ok(PreparedSample { index, scene, mesh, owner, centre, radius })
+    Ok(PreparedSample { index, scene, labels, mesh, owner, centre, radius })
 }
 
 /// The camera of view `view` of a prepared sample.
@@ -108,11 +114,13 @@ fn view_json(
         .scene
         .structures
         .iter()
-        .map(|s| {
+        .zip(&sample.labels)
+        .map(|(s, (labels, segments))| {
             let mut v = json!(s);
             v["kind"] = json!("beam");
-            v["section"] = json!({ "shape": "rectangle", "width": s.width, "height": s.height, "second_moment": s.second_moment() });
-            v["labels"] = json!(s.labels());
+            v["section_properties"] = json!(s.section.properties(s.poisson));
+            v["segments"] = json!(segments);
+            v["labels"] = json!(labels);
             v
         })
         .collect();

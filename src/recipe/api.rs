@@ -1,18 +1,17 @@
 //! The functions and types a recipe can call. Each builds or edits plain scene data and
 //! validates what it is given; none does per-vertex or per-pixel work.
 
-use super::options::{self, number, positive, OptResult, Options};
+use super::options::{self, number, OptResult, Options};
 use crate::cameras::{CameraRig, Distance};
-use crate::mechanics::{Mapping, Support};
-use crate::scene::{BeamSpec, DatasetSpec, Outputs, PointLoad};
+use crate::scene::{DatasetSpec, Outputs};
 use crate::seeds::Stream;
 use rhai::{Array, Dynamic, Engine, EvalAltResult, FnPtr, ImmutableString, Map};
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 
-type Fallible<T> = Result<T, Box<EvalAltResult>>;
+pub type Fallible<T> = Result<T, Box<EvalAltResult>>;
 
-fn fail<T>(msg: String) -> Fallible<T> {
+pub fn fail<T>(msg: String) -> Fallible<T> {
     Err(msg.into())
 }
 
@@ -47,7 +46,7 @@ pub fn register(engine: &mut Engine, params: Arc<Params>) {
     engine.register_fn("deg", |x: Dynamic| -> Fallible<f64> { Ok(number(&x, "deg(x)")?.to_radians()) });
     engine.register_type_with_name::<Dataset>("Dataset");
     engine.register_fn("dataset", |map: Map| -> Fallible<Dataset> { Ok(dataset(map)?) });
-    register_beam(engine);
+    super::beam_api::register(engine);
     register_rng(engine);
 }
 
@@ -163,77 +162,6 @@ fn camera(mut o: Options) -> OptResult<CameraRig> {
     }
     o.finish()?;
     Ok(CameraRig { width, height, fov_y, yaw, pitch, roll, distance })
-}
-
-fn beam_from_map(map: Map) -> OptResult<BeamSpec> {
-    let mut o = Options::new(map, "beam");
-    let length = o.positive("length", "metres")?;
-    let width = o.positive("width", "metres")?;
-    let height = o.positive("height", "metres")?;
-    let mut beam = BeamSpec::new(length, width, height);
-    beam.segments = o.integer("segments", i64::from(beam.segments), 1, 100_000)? as u32;
-    o.finish()?;
-    Ok(beam)
-}
-
-fn register_beam(engine: &mut Engine) {
-    engine.register_type_with_name::<BeamSpec>("Beam");
-    engine.register_fn("beam", |map: Map| -> Fallible<BeamSpec> { Ok(beam_from_map(map)?) });
-    engine.register_get("length", |b: &mut BeamSpec| b.length);
-    engine.register_get("width", |b: &mut BeamSpec| b.width);
-    engine.register_get("height", |b: &mut BeamSpec| b.height);
-    engine.register_fn("simply_supported", |b: &mut BeamSpec| {
-        b.support = Support::SimplySupported;
-        b.clone()
-    });
-    engine.register_fn("cantilever", |b: &mut BeamSpec| {
-        b.support = Support::Cantilever;
-        b.clone()
-    });
-    engine.register_fn("point_load", |b: &mut BeamSpec, position: Dynamic, deflection: Dynamic| -> Fallible<BeamSpec> {
-        let position = number(&position, "point_load position")?;
-        let deflection = number(&deflection, "point_load deflection")?;
-        if !(0.0..=b.length).contains(&position) {
-            return fail(format!(
-                "point_load position = {position} m lies outside the span [0, {}] m (measured from the {} end)",
-                b.length,
-                if b.support == Support::Cantilever { "clamped" } else { "pinned" }
-            ));
-        }
-        b.load = PointLoad { position, deflection };
-        Ok(b.clone())
-    });
-    engine.register_fn("segments", |b: &mut BeamSpec, n: i64| -> Fallible<BeamSpec> {
-        if !(1..=100_000).contains(&n) {
-            return fail(format!("segments = {n} must be between 1 and 100000"));
-        }
-        b.segments = n as u32;
-        Ok(b.clone())
-    });
-    engine.register_fn("mapping", |b: &mut BeamSpec, name: ImmutableString| -> Fallible<BeamSpec> {
-        b.mapping = match name.as_str() {
-            "rotate_sections" => Mapping::RotateSections,
-            "add_deflection" | "3dgen" => Mapping::AddDeflection,
-            other => return fail(format!("mapping = \"{other}\" is unknown (known: \"rotate_sections\", \"add_deflection\" alias \"3dgen\")")),
-        };
-        Ok(b.clone())
-    });
-    engine.register_fn("elastic_modulus", |b: &mut BeamSpec, e: Dynamic| -> Fallible<BeamSpec> {
-        b.elastic_modulus = positive(&e, "elastic_modulus", "pascals")?;
-        Ok(b.clone())
-    });
-    engine.register_fn("colour", |b: &mut BeamSpec, rgb: Array| -> Fallible<BeamSpec> {
-        b.material.colour = options::colour(&Dynamic::from(rgb), "colour")?;
-        Ok(b.clone())
-    });
-    engine.register_fn("at", |b: &mut BeamSpec, x: Dynamic, y: Dynamic, z: Dynamic| -> Fallible<BeamSpec> {
-        b.centre = [number(&x, "at x")?, number(&y, "at y")?, number(&z, "at z")?];
-        Ok(b.clone())
-    });
-    engine.register_fn("yaw", |b: &mut BeamSpec, angle: Dynamic| -> Fallible<BeamSpec> {
-        b.yaw = number(&angle, "yaw")?;
-        Ok(b.clone())
-    });
 }
 
 fn register_rng(engine: &mut Engine) {

@@ -8,6 +8,7 @@
 //! thread, with the same result.
 
 mod api;
+mod beam_api;
 mod diagnostics;
 mod engine;
 mod options;

@@ -1,32 +1,43 @@
-//! The rectangular beam: dimensions, support, load and placement, plus derived labels.
+//! A straight beam: section, supports, loads, theory, tessellation and placement.
 
-use crate::geometry::{beam_mesh, BeamGeometry, Mesh};
+use crate::geometry::{beam_mesh, Mesh};
 use crate::materials::Material;
-use crate::mechanics::{Mapping, PointLoadShape, Support, STEEL_FY};
+use crate::mechanics::{
+    section_frames, BeamProblem, Deformation, Load, Mapping, Section, Support, Target, Theory, STEEL_E, STEEL_FY, STEEL_NU,
+};
 use glam::{DMat3, DVec3};
 use serde::Serialize;
 
-/// A point load given by the deflection it causes: the beam's largest deflection is
-/// `deflection` metres (positive downward), the load acting at `position` metres from the
-/// axially fixed end (the pin, or the clamp).
+/// How finely the beam is meshed along its length (sections get exactly the vertices their
+/// shape needs, circles to the same chord tolerance).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct PointLoad {
-    pub position: f64,
-    pub deflection: f64,
+#[serde(tag = "kind", content = "value", rename_all = "snake_case")]
+pub enum Tessellation {
+    /// Equal intervals along the length.
+    Segments(u32),
+    /// Chord (sagitta) error of the deformed surface at most this many metres.
+    Chord(f64),
+    /// Chord error at most this fraction of a pixel at the nearest camera the rig can place.
+    Pixels(f64),
+    /// The 3DGEN mesh: every face of the cuboid split into a 32 × 32 grid (12,288 triangles).
+    Paper,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct BeamSpec {
     pub length: f64,
-    pub width: f64,
-    pub height: f64,
-    /// Equal intervals along the length (the load point and the peak are added as stations).
-    pub segments: u32,
+    pub section: Section,
     pub support: Support,
-    pub load: PointLoad,
+    pub loads: Vec<Load>,
+    pub target: Target,
+    pub theory: Theory,
+    /// Largest acceptable model error, as a fraction of the peak deflection.
+    pub model_tolerance: f64,
     pub mapping: Mapping,
-    /// Young's modulus (Pa) used for the derived load and stress labels only.
+    pub tessellation: Tessellation,
     pub elastic_modulus: f64,
+    pub poisson: f64,
+    pub yield_strength: f64,
     pub material: Material,
     /// World position of the centre of the undeformed beam.
     pub centre: [f64; 3],
@@ -34,75 +45,134 @@ pub struct BeamSpec {
     pub yaw: f64,
 }
 
+/// A beam's mesh and the mechanics behind it.
+pub struct BuiltBeam {
+    pub mesh: Mesh,
+    pub deformation: Deformation,
+    pub segments: usize,
+}
+
 impl BeamSpec {
-    pub fn new(length: f64, width: f64, height: f64) -> Self {
+    pub fn new(length: f64, section: Section) -> Self {
         BeamSpec {
             length,
-            width,
-            height,
-            segments: 32,
+            section,
             support: Support::SimplySupported,
-            load: PointLoad { position: 0.5 * length, deflection: 0.0 },
+            loads: Vec::new(),
+            target: Target::Physical,
+            theory: Theory::Auto,
+            model_tolerance: 0.01,
             mapping: Mapping::default(),
-            elastic_modulus: crate::mechanics::STEEL_E,
+            tessellation: Tessellation::Pixels(0.25),
+            elastic_modulus: STEEL_E,
+            poisson: STEEL_NU,
+            yield_strength: STEEL_FY,
             material: Material::default(),
             centre: [0.0; 3],
             yaw: 0.0,
         }
     }
 
-    pub fn shape(&self) -> PointLoadShape {
-        PointLoadShape::new(self.support, self.length, self.load.position, self.load.deflection)
+    pub fn rectangular(length: f64, width: f64, height: f64) -> Self {
+        Self::new(length, Section::Rectangle { width, height })
     }
 
-    pub fn mesh(&self) -> Mesh {
-        let shape = self.shape();
-        beam_mesh(&BeamGeometry {
+    pub fn problem(&self) -> BeamProblem {
+        BeamProblem {
+            support: self.support,
             length: self.length,
-            width: self.width,
-            height: self.height,
-            segments: self.segments,
-            shape: &shape,
-            mapping: self.mapping,
-            rotation: DMat3::from_rotation_z(self.yaw),
-            centre: DVec3::from_array(self.centre),
-        })
-    }
-
-    /// Second moment of area of the rectangle about the bending axis (m⁴).
-    pub fn second_moment(&self) -> f64 {
-        self.width * self.height.powi(3) / 12.0
-    }
-
-    pub fn labels(&self) -> BeamLabels {
-        let shape = self.shape();
-        let loads = shape.labels(self.elastic_modulus * self.second_moment());
-        let stress = loads.max_moment.map(|m| m.abs() * 0.5 * self.height / self.second_moment());
-        BeamLabels {
-            model: "euler_bernoulli_point_load",
-            max_deflection: self.load.deflection,
-            max_deflection_at: shape.peak_at(),
-            load: loads.load,
-            max_moment: loads.max_moment,
-            max_bending_stress: stress,
-            yield_strength: STEEL_FY,
-            physically_plausible: stress.is_some_and(|s| s <= STEEL_FY),
+            loads: self.loads.clone(),
+            target: self.target,
+            section: self.section.properties(self.poisson),
+            elastic_modulus: self.elastic_modulus,
+            poisson: self.poisson,
+            yield_strength: self.yield_strength,
+            theory: self.theory,
+            tolerance: self.model_tolerance,
         }
+    }
+
+    /// Radius of the undeformed beam's bounding sphere.
+    pub fn radius(&self) -> f64 {
+        0.5 * (self.length.powi(2) + self.section.width().powi(2) + self.section.height().powi(2)).sqrt()
+    }
+
+    /// Solves the mechanics and meshes the deformed beam. `pixel_footprint` is the size of a
+    /// pixel (metres) at the nearest distance a camera can be from this beam.
+    pub fn build(&self, pixel_footprint: f64) -> Result<BuiltBeam, String> {
+        let deformation = Deformation::solve(&self.problem())?;
+        let tolerance = match self.tessellation {
+            Tessellation::Chord(metres) => metres,
+            Tessellation::Pixels(fraction) => fraction * pixel_footprint,
+            Tessellation::Segments(_) | Tessellation::Paper => 0.25 * pixel_footprint,
+        };
+        let segments = match self.tessellation {
+            Tessellation::Segments(n) => n as usize,
+            Tessellation::Paper => crate::mechanics::PAPER_DIVISIONS,
+            Tessellation::Chord(_) | Tessellation::Pixels(_) => segments_for_chord(self.length, deformation.max_curvature(self.length), tolerance),
+        };
+        let outline = match self.tessellation {
+            Tessellation::Paper => self.section.paper_outline().ok_or("the paper's mesh exists only for the rectangular section")?,
+            _ => self.section.outline(tolerance),
+        };
+        let stations = stations(self.length, segments, &self.kinks(&deformation));
+        let frames = section_frames(&stations, self.mapping, |x| deformation.at(x));
+        let mesh = beam_mesh(self.length, &frames, &outline, DMat3::from_rotation_z(self.yaw), DVec3::from_array(self.centre));
+        Ok(BuiltBeam { mesh, deformation, segments })
+    }
+
+    /// Where the deflected shape has kinks or its peak: these become stations.
+    fn kinks(&self, d: &Deformation) -> Vec<f64> {
+        let mut k = vec![d.labels.max_deflection_at];
+        for load in &self.loads {
+            match *load {
+                Load::Point { at, .. } => k.push(at),
+                Load::Distributed { from, to, .. } => k.extend([from, to]),
+                Load::EndMoments { .. } => {}
+            }
+        }
+        k
     }
 }
 
-/// Derived labels written next to each sample. `load`, `max_moment` and `max_bending_stress`
-/// are null when the load sits on a support (no finite load gives a deflection there).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct BeamLabels {
-    pub model: &'static str,
-    pub max_deflection: f64,
-    pub max_deflection_at: f64,
-    pub load: Option<f64>,
-    pub max_moment: Option<f64>,
-    pub max_bending_stress: Option<f64>,
-    pub yield_strength: f64,
-    /// Whether an elastic S355 steel beam of this section could take the load; otherwise the
-    /// deflection is a visual exaggeration.
-    pub physically_plausible: bool,
+/// Uniform intervals whose chord error h²κ/8 stays below `tolerance`.
+pub fn segments_for_chord(length: f64, curvature: f64, tolerance: f64) -> usize {
+    let n = (length * (curvature / (8.0 * tolerance)).sqrt()).ceil();
+    if n.is_finite() { (n as usize).clamp(1, 100_000) } else { 100_000 }
+}
+
+/// `segments` equal intervals plus the kinks, without slivers closer than 1e-9 L.
+pub fn stations(length: f64, segments: usize, kinks: &[f64]) -> Vec<f64> {
+    let n = segments.max(1);
+    let mut s: Vec<f64> = (0..=n).map(|i| length * i as f64 / n as f64).collect();
+    s.extend(kinks.iter().copied().filter(|k| *k > 0.0 && *k < length));
+    s.sort_by(f64::total_cmp);
+    let min_gap = length * 1e-9;
+    let mut out: Vec<f64> = Vec::with_capacity(s.len());
+    for x in s {
+        match out.last() {
+            Some(&prev) if x - prev <= min_gap => {}
+            _ => out.push(x),
+        }
+    }
+    *out.last_mut().expect("at least two stations") = length;
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stations_include_kinks_and_both_ends() {
+        assert_eq!(stations(2.0, 4, &[0.3, 1.0, 2.0, 0.0]), vec![0.0, 0.3, 0.5, 1.0, 1.5, 2.0]);
+    }
+
+    #[test]
+    fn chord_rule_gives_the_error_it_promises() {
+        // SS centre load: κ_max = 12δ/L², e_N = 1.5 δ/N² (mechanics.md §8.1).
+        let (l, delta, tol) = (4.0, 0.2, 1e-3);
+        let n = segments_for_chord(l, 12.0 * delta / (l * l), tol);
+        assert!(1.5 * delta / (n * n) as f64 <= tol && 1.5 * delta / ((n - 1) * (n - 1)) as f64 > tol, "n = {n}");
+    }
 }

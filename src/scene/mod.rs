@@ -7,7 +7,7 @@
 
 mod beam;
 
-pub use beam::{BeamLabels, BeamSpec, PointLoad};
+pub use beam::{segments_for_chord, stations, BeamSpec, BuiltBeam, Tessellation};
 
 use crate::cameras::CameraRig;
 use serde::Serialize;

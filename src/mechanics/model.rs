@@ -1,0 +1,300 @@
+//! Choosing and running the theory a beam needs, and deriving its labels.
+//!
+//! Both linear theories are cheap, so both are solved: their difference is the estimated
+//! error of Euler–Bernoulli, and Timoshenko is used where that error exceeds the tolerance
+//! (unless the recipe pins a theory). Geometric nonlinearity is estimated from the rotation
+//! (mechanics.md §4.3) and reported; loads given as a target deflection only fix the shape,
+//! and the physical load is derived from it.
+
+use super::linear::{LinearBeam, Load};
+use super::{SectionProperties, Support};
+use serde::Serialize;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Theory {
+    #[default]
+    Auto,
+    EulerBernoulli,
+    Timoshenko,
+}
+
+/// What the loads' magnitudes mean.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Target {
+    /// Loads are physical (N, N/m, N·m).
+    Physical,
+    /// Loads give the shape only; they are scaled so the largest deflection is `deflection`.
+    Peak { deflection: f64 },
+    /// Loads are scaled so the deflection at `at` is `deflection`.
+    At { at: f64, deflection: f64 },
+}
+
+#[derive(Clone, Debug)]
+pub struct BeamProblem {
+    pub support: Support,
+    pub length: f64,
+    pub loads: Vec<Load>,
+    pub target: Target,
+    pub section: SectionProperties,
+    pub elastic_modulus: f64,
+    pub poisson: f64,
+    pub yield_strength: f64,
+    pub theory: Theory,
+    /// Largest acceptable model error, as a fraction of the peak deflection.
+    pub tolerance: f64,
+}
+
+/// Labels written next to each sample.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Labels {
+    pub theory: Theory,
+    /// Estimated model error as a fraction of the peak deflection: the larger of the shear
+    /// error (if Euler–Bernoulli ran) and the geometric-nonlinearity error of linear theory.
+    pub estimated_error: f64,
+    pub shear_error: f64,
+    pub nonlinearity_error: f64,
+    pub max_deflection: f64,
+    pub max_deflection_at: f64,
+    /// The physical loads that produce this shape.
+    pub loads: Vec<Load>,
+    pub max_moment: f64,
+    pub max_moment_at: f64,
+    pub max_bending_stress: f64,
+    pub yield_strength: f64,
+    /// Whether an elastic beam of this material could carry the loads (σ ≤ f_y); otherwise the
+    /// deflection is a visual exaggeration.
+    pub physically_plausible: bool,
+}
+
+/// The solved beam: deflection of its axis in metres, and its labels.
+#[derive(Clone, Debug)]
+pub struct Deformation {
+    beam: LinearBeam,
+    /// Multiplies the unit-EI solution: load factor / EI.
+    scale: f64,
+    pub labels: Labels,
+}
+
+/// Stations used to locate extremes (plus every load point).
+const SEARCH_POINTS: usize = 512;
+
+impl Deformation {
+    pub fn solve(p: &BeamProblem) -> Result<Deformation, String> {
+        let ei = p.elastic_modulus * p.section.second_moment;
+        let shear_modulus = p.elastic_modulus / (2.0 * (1.0 + p.poisson));
+        let flexibility = ei / (p.section.shear_coefficient * shear_modulus * p.section.area);
+        let eb = LinearBeam::solve(p.support, p.length, &p.loads, 0.0);
+        let tim = LinearBeam::solve(p.support, p.length, &p.loads, flexibility);
+        let xs = search_points(p);
+        let factor = |beam: &LinearBeam| -> Result<f64, String> {
+            match p.target {
+                Target::Physical => Ok(1.0),
+                Target::Peak { deflection } => {
+                    let (peak, _) = extreme(&xs, p.length, |x| beam.at(x).v);
+                    reach(deflection, peak, beam.natural_deflection(), "anywhere").map(|f| f * ei)
+                }
+                Target::At { at, deflection } => reach(deflection, beam.at(at).v, beam.natural_deflection(), &format!("at x = {at} m")).map(|f| f * ei),
+            }
+        };
+        let (f_eb, f_t) = (factor(&eb)?, factor(&tim)?);
+        let (peak_t, _) = extreme(&xs, p.length, |x| f_t * tim.at(x).v / ei);
+        let shear_error = xs.iter().map(|&x| (f_eb * eb.at(x).v - f_t * tim.at(x).v).abs() / ei).fold(0.0, f64::max) / peak_t.abs().max(f64::MIN_POSITIVE);
+        let nonlinearity_error = nonlinearity(p.support) * (peak_t / p.length).powi(2);
+        let theory = match p.theory {
+            Theory::Auto if shear_error > p.tolerance => Theory::Timoshenko,
+            Theory::Auto => Theory::EulerBernoulli,
+            pinned => pinned,
+        };
+        let (beam, load_factor) = if theory == Theory::Timoshenko { (tim, f_t) } else { (eb, f_eb) };
+        let estimated_error = if theory == Theory::Timoshenko { nonlinearity_error } else { shear_error.max(nonlinearity_error) };
+        let scale = load_factor / ei;
+        let (max_deflection, max_deflection_at) = extreme(&xs, p.length, |x| scale * beam.at(x).v);
+        let (max_moment, max_moment_at) = extreme(&xs, p.length, |x| load_factor * beam.at(x).moment);
+        let max_bending_stress = max_moment.abs() * p.section.extreme_fibre / p.section.second_moment;
+        let labels = Labels {
+            theory,
+            estimated_error,
+            shear_error: if theory == Theory::Timoshenko { 0.0 } else { shear_error },
+            nonlinearity_error,
+            max_deflection,
+            max_deflection_at,
+            loads: p.loads.iter().map(|l| scaled(*l, load_factor)).collect(),
+            max_moment,
+            max_moment_at,
+            max_bending_stress,
+            yield_strength: p.yield_strength,
+            physically_plausible: max_bending_stress <= p.yield_strength,
+        };
+        Ok(Deformation { beam, scale, labels })
+    }
+
+    /// The deflected axis at x, in metres and radians-as-slopes.
+    pub fn at(&self, x: f64) -> super::AxisPoint {
+        let s = self.beam.at(x);
+        super::AxisPoint { v: self.scale * s.v, slope: self.scale * s.slope, rotation: self.scale * s.rotation }
+    }
+
+    /// Largest |dψ/dx| (curvature of the sections' rotation), for tessellation.
+    pub fn max_curvature(&self, length: f64) -> f64 {
+        let n = 256;
+        let h = length / n as f64;
+        (0..n).map(|i| ((self.at((i + 1) as f64 * h).rotation - self.at(i as f64 * h).rotation) / h).abs()).fold(0.0, f64::max)
+    }
+}
+
+/// Linear theory's relative tip error ≈ k (δ/L)²: 1.03 for a cantilever, 4.1 for beams held at
+/// both ends (half-span analogue, mechanics.md §4.3).
+fn nonlinearity(support: Support) -> f64 {
+    if support == Support::Cantilever { 1.03 } else { 4.1 }
+}
+
+/// Load factor per unit EI that turns `unit` into `target`.
+fn reach(target: f64, unit: f64, natural: f64, place: &str) -> Result<f64, String> {
+    if !(unit.abs() > 1e-14 * natural) {
+        return Err(format!(
+            "target deflection {target} m cannot be reached: the loads deflect the beam nowhere {place} (is a load on a support?)"
+        ));
+    }
+    Ok(target / unit)
+}
+
+fn scaled(load: Load, f: f64) -> Load {
+    match load {
+        Load::Point { at, force } => Load::Point { at, force: force * f },
+        Load::Distributed { from, to, intensity } => Load::Distributed { from, to, intensity: intensity * f },
+        Load::EndMoments { start, end } => Load::EndMoments { start: start * f, end: end * f },
+    }
+}
+
+fn search_points(p: &BeamProblem) -> Vec<f64> {
+    let mut xs: Vec<f64> = (0..=SEARCH_POINTS).map(|i| p.length * i as f64 / SEARCH_POINTS as f64).collect();
+    for load in &p.loads {
+        if let Load::Point { at, .. } = load {
+            xs.push(*at);
+        }
+    }
+    xs
+}
+
+/// The value of largest magnitude (signed) and where, refined by golden-section search around
+/// the best sample.
+fn extreme(xs: &[f64], length: f64, f: impl Fn(f64) -> f64) -> (f64, f64) {
+    let (mut best_x, mut best) = (xs[0], f(xs[0]));
+    for &x in xs {
+        let y = f(x);
+        if y.abs() > best.abs() {
+            (best_x, best) = (x, y);
+        }
+    }
+    let step = length / SEARCH_POINTS as f64;
+    let (mut a, mut b) = ((best_x - step).max(0.0), (best_x + step).min(length));
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..60 {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if f(c).abs() >= f(d).abs() { b = d } else { a = c }
+    }
+    let x = 0.5 * (a + b);
+    if f(x).abs() > best.abs() { (f(x), x) } else { (best, best_x) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mechanics::Section;
+
+    fn problem(support: Support, l_over_h: f64, loads: Vec<Load>, target: Target) -> BeamProblem {
+        let h = 0.5;
+        BeamProblem {
+            support,
+            length: l_over_h * h,
+            loads,
+            target,
+            section: Section::Rectangle { width: 0.3, height: h }.properties(0.3),
+            elastic_modulus: 210e9,
+            poisson: 0.3,
+            yield_strength: 355e6,
+            theory: Theory::Auto,
+            tolerance: 0.01,
+        }
+    }
+
+    #[test]
+    fn euler_bernoulli_error_by_slenderness_matches_the_published_table() {
+        // mechanics.md §2.2 (Cowper κ, ν = 0.3): (δ_EB − δ_T)/δ_T for SS centre load is
+        // −25.4 % at L/h = 3, −2.97 % at 10, −0.03 % at 100; cantilever tip −7.83 %, −0.76 %, −0.01 %.
+        for (support, at, table) in [
+            (Support::SimplySupported, 0.5, [(3.0, -25.4), (10.0, -2.97), (100.0, -0.03)]),
+            (Support::Cantilever, 1.0, [(3.0, -7.83), (10.0, -0.76), (100.0, -0.01)]),
+        ] {
+            for (lh, percent) in table {
+                let mut p = problem(support, lh, vec![], Target::Physical);
+                p.loads = vec![Load::Point { at: at * p.length, force: 1e4 }];
+                p.theory = Theory::EulerBernoulli;
+                let eb = Deformation::solve(&p).unwrap().labels.max_deflection;
+                p.theory = Theory::Timoshenko;
+                let t = Deformation::solve(&p).unwrap().labels.max_deflection;
+                let got = 100.0 * (eb - t) / t;
+                assert!((got - percent).abs() < 0.006 + 0.002 * percent.abs(), "{support:?} L/h={lh}: {got:.3} % vs {percent} %");
+            }
+        }
+    }
+
+    #[test]
+    fn auto_picks_timoshenko_for_stocky_beams_only() {
+        let target = Target::Peak { deflection: 0.001 };
+        let load = |p: &BeamProblem| vec![Load::Point { at: 0.5 * p.length, force: 1.0 }];
+        let mut stocky = problem(Support::SimplySupported, 3.0, vec![], target);
+        stocky.loads = load(&stocky);
+        let d = Deformation::solve(&stocky).unwrap();
+        assert_eq!(d.labels.theory, Theory::Timoshenko);
+        assert!((d.labels.max_deflection - 0.001).abs() < 1e-15);
+        let mut slender = problem(Support::SimplySupported, 200.0, vec![], target);
+        slender.loads = load(&slender);
+        let d = Deformation::solve(&slender).unwrap();
+        assert_eq!(d.labels.theory, Theory::EulerBernoulli);
+        assert!(d.labels.estimated_error < 0.01);
+        // Shape difference at L/h = 3 for a target peak: 4.88 % of δ (mechanics.md §2.3).
+        assert!((Deformation::solve(&{ let mut p = stocky.clone(); p.theory = Theory::EulerBernoulli; p }).unwrap().labels.shear_error - 0.0488).abs() < 0.001);
+    }
+
+    #[test]
+    fn targets_and_derived_loads() {
+        // SS centre target δ: P = 48 EI δ/L³, M = PL/4, σ = M c/I.
+        let mut p = problem(Support::SimplySupported, 40.0, vec![], Target::Peak { deflection: 1.0 });
+        p.loads = vec![Load::Point { at: 10.0, force: 1.0 }];
+        p.theory = Theory::EulerBernoulli;
+        let d = Deformation::solve(&p).unwrap();
+        let ei = 210e9 * p.section.second_moment;
+        let want = 48.0 * ei * 1.0 / 20f64.powi(3);
+        let Load::Point { force, .. } = d.labels.loads[0] else { panic!() };
+        assert!((force / want - 1.0).abs() < 1e-12);
+        assert!((d.labels.max_moment / (want * 5.0) - 1.0).abs() < 1e-9);
+        assert!((d.labels.max_deflection_at - 10.0).abs() < 1e-6);
+        assert!(!d.labels.physically_plausible, "0.05 L at L/h = 40 exceeds yield (mechanics.md §4.5)");
+        // Target at a point.
+        p.target = Target::At { at: 5.0, deflection: 0.01 };
+        assert!((Deformation::solve(&p).unwrap().at(5.0).v - 0.01).abs() < 1e-15);
+    }
+
+    #[test]
+    fn loads_at_supports() {
+        // Physical load on a support: no deflection, no NaN. As a target: a clear error.
+        for support in [Support::SimplySupported, Support::Cantilever, Support::FixedFixed, Support::ProppedCantilever] {
+            let mut p = problem(support, 20.0, vec![Load::Point { at: 0.0, force: 1e5 }], Target::Physical);
+            let d = Deformation::solve(&p).unwrap();
+            assert!(d.labels.max_deflection.abs() < 1e-15, "{support:?}: {}", d.labels.max_deflection);
+            p.target = Target::Peak { deflection: 0.01 };
+            assert!(Deformation::solve(&p).unwrap_err().contains("on a support"));
+            // Just inside the span, the shape is finite and reaches the target.
+            p.loads = vec![Load::Point { at: 1e-6 * p.length, force: 1.0 }];
+            let d = Deformation::solve(&p).unwrap();
+            assert!((d.labels.max_deflection - 0.01).abs() < 1e-9, "{support:?}: {}", d.labels.max_deflection);
+        }
+        // The roller end of a simply supported beam.
+        let mut p = problem(Support::SimplySupported, 20.0, vec![Load::Point { at: 10.0, force: 1.0 }], Target::Peak { deflection: 0.02 });
+        p.loads = vec![Load::Point { at: p.length, force: 1.0 }];
+        assert!(Deformation::solve(&p).is_err());
+    }
+}
