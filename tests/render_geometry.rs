@@ -260,3 +260,58 @@ fn rotation_of_the_rig_is_a_proper_rotation() {
     let r: DMat3 = cam.rotation;
     assert!((r.determinant() - 1.0).abs() < 1e-12);
 }
+
+fn sagging(length: f64, width: f64, height: f64, deflection: f64) -> BeamSpec {
+    let mut b = BeamSpec::rectangular(length, width, height);
+    b.loads = vec![Load::Point { at: 0.5 * length, force: 1.0 }];
+    b.target = Target::Peak { deflection };
+    b
+}
+
+/// Depth at the image centre, seen from exactly below the beam centre (a pole of the sphere).
+fn depth_from_below(beam: &BeamSpec, distance: f64) -> f64 {
+    let mesh = built(beam);
+    let k = Intrinsics::from_fov_y(65, 65, 0.2);
+    let centre = DVec3::from_array(beam.centre);
+    let cam = shmgen::cameras::orbit_camera(k, centre, &ViewDraw { yaw: 0.0, pitch: -std::f64::consts::FRAC_PI_2, roll: 0.0, distance });
+    let g = TraceMesh::build(&mesh).trace(&cam);
+    f64::from(g.depth[32 * 65 + 32])
+}
+
+#[test]
+fn a_deflection_of_a_millionth_of_the_span_is_visible_in_depth() {
+    // L/h = 1000, δ = 1e-6 L. The bottom face at mid-span moves towards a camera below by δ.
+    // Vertices are f32 relative to the mesh centre, so positions carry ~3e-8 L of rounding:
+    // the tolerance is 10 % of δ.
+    let (l, delta) = (1.0, 1e-6);
+    let straight = depth_from_below(&sagging(l, 0.01, l / 1000.0, 0.0), 0.3);
+    let bent = depth_from_below(&sagging(l, 0.01, l / 1000.0, delta), 0.3);
+    assert!(straight > 0.0 && bent > 0.0);
+    assert!(((straight - bent) - delta).abs() < 0.1 * delta, "depth moved by {} for δ = {delta}", straight - bent);
+}
+
+#[test]
+fn a_deformed_beam_one_kilometre_away_renders_like_one_at_the_origin() {
+    let near = sagging(6.0, 0.2, 0.4, 0.3);
+    let mut far = near.clone();
+    far.centre = [1000.0, -800.0, 250.0];
+    let rig = CameraRig { width: 200, height: 150, ..CameraRig::default() };
+    let render = |b: &BeamSpec| {
+        let mesh = built(b);
+        let (lo, hi) = mesh.bounds().unwrap();
+        let centre = 0.5 * (lo + hi);
+        let radius = mesh.positions.iter().map(|p| p.distance(centre)).fold(0.0, f64::max);
+        let (cam, _) = rig.draw(&mut Stream::new(2, Scope::View(0, 0), "camera"), centre, radius);
+        TraceMesh::build(&mesh).trace(&cam)
+    };
+    let (a, b) = (render(&near), render(&far));
+    let mut compared = 0;
+    for i in 0..a.depth.len() {
+        if a.depth[i] > 0.0 && b.depth[i] > 0.0 {
+            compared += 1;
+            assert!((a.depth[i] - b.depth[i]).abs() <= 1e-5 * a.depth[i], "pixel {i}: {} vs {}", a.depth[i], b.depth[i]);
+        }
+    }
+    let mismatched = a.depth.iter().zip(&b.depth).filter(|(x, y)| (**x > 0.0) != (**y > 0.0)).count();
+    assert!(compared > 300 && mismatched <= 2, "{compared} compared, {mismatched} silhouette pixels differ");
+}

@@ -11,11 +11,13 @@
 mod linear;
 mod mapping;
 mod model;
+mod modes;
 mod section;
 
 pub use linear::{Load, LinearBeam, Station};
 pub use mapping::{section_frames, AxisPoint, Mapping, SectionFrame};
 pub use model::{BeamProblem, Deformation, Labels, Target, Theory};
+pub use modes::ModeShape;
 pub use section::{Section, SectionOutline, SectionProperties, PAPER_DIVISIONS};
 
 use serde::Serialize;

@@ -7,7 +7,7 @@
 //! and the physical load is derived from it.
 
 use super::linear::{LinearBeam, Load};
-use super::{SectionProperties, Support};
+use super::{ModeShape, SectionProperties, Support};
 use serde::Serialize;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -44,6 +44,8 @@ pub struct BeamProblem {
     pub theory: Theory,
     /// Largest acceptable model error, as a fraction of the peak deflection.
     pub tolerance: f64,
+    /// A vibration snapshot instead of static loads: (mode number, amplitude in metres).
+    pub vibration: Vec<(u32, f64)>,
 }
 
 /// Labels written next to each sample.
@@ -66,14 +68,28 @@ pub struct Labels {
     /// Whether an elastic beam of this material could carry the loads (σ ≤ f_y); otherwise the
     /// deflection is a visual exaggeration.
     pub physically_plausible: bool,
+    /// For a vibration snapshot: each mode's number, β_nL and amplitude (metres).
+    pub modes: Vec<ModeLabel>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ModeLabel {
+    pub mode: u32,
+    pub beta_l: f64,
+    pub amplitude: f64,
+}
+
+/// What the axis follows: a static linear solution, or a sum of mode shapes.
+#[derive(Clone, Debug)]
+enum Axis {
+    Static { beam: LinearBeam, scale: f64 },
+    Modal { modes: Vec<(ModeShape, f64)>, length: f64 },
 }
 
 /// The solved beam: deflection of its axis in metres, and its labels.
 #[derive(Clone, Debug)]
 pub struct Deformation {
-    beam: LinearBeam,
-    /// Multiplies the unit-EI solution: load factor / EI.
-    scale: f64,
+    axis: Axis,
     pub labels: Labels,
 }
 
@@ -82,6 +98,12 @@ const SEARCH_POINTS: usize = 512;
 
 impl Deformation {
     pub fn solve(p: &BeamProblem) -> Result<Deformation, String> {
+        if !p.vibration.is_empty() {
+            if !p.loads.is_empty() {
+                return Err("a beam takes either static loads or a vibration snapshot, not both".into());
+            }
+            return Ok(modal(p));
+        }
         let ei = p.elastic_modulus * p.section.second_moment;
         let shear_modulus = p.elastic_modulus / (2.0 * (1.0 + p.poisson));
         let flexibility = ei / (p.section.shear_coefficient * shear_modulus * p.section.area);
@@ -126,22 +148,75 @@ impl Deformation {
             max_bending_stress,
             yield_strength: p.yield_strength,
             physically_plausible: max_bending_stress <= p.yield_strength,
+            modes: Vec::new(),
         };
-        Ok(Deformation { beam, scale, labels })
+        Ok(Deformation { axis: Axis::Static { beam, scale }, labels })
     }
 
     /// The deflected axis at x, in metres and radians-as-slopes.
     pub fn at(&self, x: f64) -> super::AxisPoint {
-        let s = self.beam.at(x);
-        super::AxisPoint { v: self.scale * s.v, slope: self.scale * s.slope, rotation: self.scale * s.rotation }
+        match &self.axis {
+            Axis::Static { beam, scale } => {
+                let s = beam.at(x);
+                super::AxisPoint { v: scale * s.v, slope: scale * s.slope, rotation: scale * s.rotation }
+            }
+            Axis::Modal { modes, length } => {
+                let (v, slope) = modes.iter().fold((0.0, 0.0), |(v, slope), (mode, amplitude)| {
+                    let (phi, dphi, _) = mode.at(x / length);
+                    (v + amplitude * phi, slope + amplitude * dphi / length)
+                });
+                super::AxisPoint { v, slope, rotation: slope }
+            }
+        }
     }
 
     /// Largest |dψ/dx| (curvature of the sections' rotation), for tessellation.
     pub fn max_curvature(&self, length: f64) -> f64 {
-        let n = 256;
+        let highest_mode = match &self.axis {
+            Axis::Modal { modes, .. } => modes.iter().map(|(m, _)| m.beta_l()).fold(0.0, f64::max) as usize,
+            Axis::Static { .. } => 0,
+        };
+        let n = 256.max(16 * highest_mode);
         let h = length / n as f64;
         (0..n).map(|i| ((self.at((i + 1) as f64 * h).rotation - self.at(i as f64 * h).rotation) / h).abs()).fold(0.0, f64::max)
     }
+}
+
+/// A snapshot of free vibration: v(x) = Σ A_n φ_n(x/L), each φ_n normalised to max |φ_n| = 1.
+fn modal(p: &BeamProblem) -> Deformation {
+    let modes: Vec<(ModeShape, f64)> = p.vibration.iter().map(|&(n, a)| (ModeShape::new(p.support, n), a)).collect();
+    let length = p.length;
+    let highest_mode = p.vibration.iter().map(|m| m.0 as usize).max().unwrap_or(1);
+    let points = SEARCH_POINTS.max(32 * highest_mode);
+    let xs: Vec<f64> = (0..=points).map(|i| length * i as f64 / points as f64).collect();
+    let curvature = |x: f64| modes.iter().map(|(m, a)| a * m.at(x / length).2).sum::<f64>() / (length * length);
+    let deflection = |x: f64| modes.iter().map(|(m, a)| a * m.at(x / length).0).sum::<f64>();
+    let (max_deflection, max_deflection_at) = extreme(&xs, length, deflection);
+    let (max_curvature, max_moment_at) = extreme(&xs, length, curvature);
+    let ei = p.elastic_modulus * p.section.second_moment;
+    let max_bending_stress = p.elastic_modulus * max_curvature.abs() * p.section.extreme_fibre;
+    // Shear deflection relative to bending for a half-wave of length L/n: (nπ)² EI/(κGA L²).
+    let shear_modulus = p.elastic_modulus / (2.0 * (1.0 + p.poisson));
+    let flexibility = ei / (p.section.shear_coefficient * shear_modulus * p.section.area);
+    let highest = modes.iter().map(|(m, _)| m.beta_l()).fold(0.0, f64::max);
+    let shear_error = highest * highest * flexibility / (length * length);
+    let nonlinearity_error = nonlinearity(p.support) * (max_deflection / length).powi(2);
+    let labels = Labels {
+        theory: Theory::EulerBernoulli,
+        estimated_error: shear_error.max(nonlinearity_error),
+        shear_error,
+        nonlinearity_error,
+        max_deflection,
+        max_deflection_at,
+        loads: Vec::new(),
+        max_moment: -ei * max_curvature,
+        max_moment_at,
+        max_bending_stress,
+        yield_strength: p.yield_strength,
+        physically_plausible: max_bending_stress <= p.yield_strength,
+        modes: modes.iter().zip(&p.vibration).map(|((m, a), &(n, _))| ModeLabel { mode: n, beta_l: m.beta_l(), amplitude: *a }).collect(),
+    };
+    Deformation { axis: Axis::Modal { modes, length }, labels }
 }
 
 /// Linear theory's relative tip error ≈ k (δ/L)²: 1.03 for a cantilever, 4.1 for beams held at
@@ -179,7 +254,7 @@ fn search_points(p: &BeamProblem) -> Vec<f64> {
 }
 
 /// The value of largest magnitude (signed) and where, refined by golden-section search around
-/// the best sample.
+/// the best sample. `xs` starts with a uniform grid over [0, length].
 fn extreme(xs: &[f64], length: f64, f: impl Fn(f64) -> f64) -> (f64, f64) {
     let (mut best_x, mut best) = (xs[0], f(xs[0]));
     for &x in xs {
@@ -188,7 +263,7 @@ fn extreme(xs: &[f64], length: f64, f: impl Fn(f64) -> f64) -> (f64, f64) {
             (best_x, best) = (x, y);
         }
     }
-    let step = length / SEARCH_POINTS as f64;
+    let step = xs[1] - xs[0];
     let (mut a, mut b) = ((best_x - step).max(0.0), (best_x + step).min(length));
     let g = 0.5 * (5f64.sqrt() - 1.0);
     for _ in 0..60 {
@@ -217,6 +292,7 @@ mod tests {
             yield_strength: 355e6,
             theory: Theory::Auto,
             tolerance: 0.01,
+            vibration: Vec::new(),
         }
     }
 
@@ -276,6 +352,30 @@ mod tests {
         // Target at a point.
         p.target = Target::At { at: 5.0, deflection: 0.01 };
         assert!((Deformation::solve(&p).unwrap().at(5.0).v - 0.01).abs() < 1e-15);
+    }
+
+    #[test]
+    fn vibration_snapshots_superpose_normalised_modes() {
+        // Mode 1 of a simply supported beam is sin(πx/L); the stress is E c A (π/L)².
+        let mut p = problem(Support::SimplySupported, 20.0, vec![], Target::Physical);
+        p.vibration = vec![(1, 0.02)];
+        let d = Deformation::solve(&p).unwrap();
+        assert!((d.at(2.5).v - 0.02 * (std::f64::consts::PI * 0.25).sin()).abs() < 1e-15);
+        let want = 210e9 * 0.25 * 0.02 * (std::f64::consts::PI / 10.0).powi(2);
+        assert!((d.labels.max_bending_stress / want - 1.0).abs() < 1e-9);
+        // Cantilever mode 100: finite everywhere, peak amplitude as requested, clamp holds.
+        p.support = Support::Cantilever;
+        p.vibration = vec![(100, 0.001), (2, 0.01)];
+        let d = Deformation::solve(&p).unwrap();
+        assert!(d.at(0.0).v.abs() < 1e-16 && d.at(0.0).slope.abs() < 1e-14, "clamp: {:?}", d.at(0.0));
+        for i in 0..=10_000 {
+            let a = d.at(10.0 * f64::from(i) / 10_000.0);
+            assert!(a.v.is_finite() && a.slope.is_finite() && a.v.abs() <= 0.011 + 1e-12);
+        }
+        assert_eq!(d.labels.modes.len(), 2);
+        assert!(d.labels.shear_error > 0.1, "mode 100 on an L/h = 20 beam is far outside Euler–Bernoulli");
+        p.loads = vec![Load::Point { at: 1.0, force: 1.0 }];
+        assert!(Deformation::solve(&p).is_err());
     }
 
     #[test]

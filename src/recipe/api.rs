@@ -30,14 +30,15 @@ pub struct Params {
     pub resolved: Mutex<BTreeMap<String, serde_json::Value>>,
 }
 
-/// The random source handed to a recipe's scene function. Clones share one stream, so
-/// passing it to helper functions never repeats values.
+/// The random source handed to a recipe's scene function, plus the index of the sample being
+/// drawn (`rng.sample`, for recipes that walk a grid). Clones share one stream, so passing it
+/// to helper functions never repeats values.
 #[derive(Clone)]
-pub struct ScriptRng(Arc<Mutex<Stream>>);
+pub struct ScriptRng(Arc<Mutex<Stream>>, u64);
 
 impl ScriptRng {
-    pub fn new(stream: Stream) -> Self {
-        ScriptRng(Arc::new(Mutex::new(stream)))
+    pub fn new(stream: Stream, sample: u64) -> Self {
+        ScriptRng(Arc::new(Mutex::new(stream)), sample)
     }
 }
 
@@ -166,6 +167,7 @@ fn camera(mut o: Options) -> OptResult<CameraRig> {
 
 fn register_rng(engine: &mut Engine) {
     engine.register_type_with_name::<ScriptRng>("Rng");
+    engine.register_get("sample", |r: &mut ScriptRng| r.1 as i64);
     engine.register_fn("uniform", |r: &mut ScriptRng, lo: Dynamic, hi: Dynamic| -> Fallible<f64> {
         let (lo, hi) = (number(&lo, "uniform low")?, number(&hi, "uniform high")?);
         if lo > hi {

@@ -119,6 +119,22 @@ fn register_loads(engine: &mut Engine) {
         b.loads.push(Load::EndMoments { start: number(&start, "end_moments start")?, end: number(&end, "end_moments end")? });
         Ok(b.clone())
     });
+    // A snapshot of free vibration: [[mode, amplitude], ...], amplitudes in metres.
+    engine.register_fn("vibration", |b: &mut BeamSpec, modes: Array| -> Fallible<BeamSpec> {
+        let mut snapshot = Vec::with_capacity(modes.len());
+        for m in &modes {
+            let pair = m.clone().try_cast::<Array>().filter(|p| p.len() == 2);
+            let Some(pair) = pair else { return fail(format!("vibration: {m} must be [mode, amplitude]")) };
+            let mode = pair[0].as_int().ok().filter(|n| (1..=10_000).contains(n));
+            let Some(mode) = mode else { return fail(format!("vibration: mode {} must be a whole number from 1 to 10000", pair[0])) };
+            snapshot.push((mode as u32, number(&pair[1], "vibration amplitude")?));
+        }
+        if snapshot.is_empty() {
+            return fail("vibration([]) needs at least one [mode, amplitude]".to_string());
+        }
+        b.vibration = snapshot;
+        Ok(b.clone())
+    });
     engine.register_fn("target_deflection", |b: &mut BeamSpec, deflection: Dynamic| -> Fallible<BeamSpec> {
         b.target = Target::Peak { deflection: number(&deflection, "target_deflection")? };
         Ok(b.clone())

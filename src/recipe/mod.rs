@@ -99,7 +99,7 @@ impl Recipe {
     /// Draws the scene of one sample.
     pub fn scene(&self, sample: u64) -> Result<SceneSpec, RecipeError> {
         let context = format!("while drawing the scene of sample {sample}");
-        let rng = ScriptRng::new(Stream::new(self.dataset.seed, StreamScope::Sample(sample), "scene"));
+        let rng = ScriptRng::new(Stream::new(self.dataset.seed, StreamScope::Sample(sample), "scene"), sample);
         // Captured variables are shared cells; give each call private copies so that a scene
         // function that mutates them cannot make one sample depend on another.
         let mut scene = self.scene.clone();

@@ -28,6 +28,14 @@ pub struct TraceMesh {
     local_bounds: (DVec3, DVec3),
 }
 
+/// obvhs' slab test replaces direction components below f32::EPSILON by ±1/EPSILON, i.e. it
+/// traverses a slightly tilted ray and can cull the box whose triangle the exact test would
+/// accept (seen for a camera exactly below a beam). Zeroing those components makes traversal
+/// and the watertight test follow the same ray; the tilt dropped is below 1.2e-7 rad.
+fn traversal_direction(d: Vec3A) -> Vec3A {
+    Vec3A::select(d.abs().cmplt(Vec3A::splat(f32::EPSILON)), Vec3A::ZERO, d)
+}
+
 /// Per-pixel geometric labels of one view: planar depth (0 = no surface) and the original
 /// index of the triangle hit (`NO_HIT` = none). Row-major, `width` × `height`.
 pub struct GBuffer {
@@ -101,7 +109,7 @@ impl TraceMesh {
 
     /// Planar depth and original triangle of the first surface along `dir` (unit camera z).
     fn closest_hit(&self, origin: DVec3, origin32: Vec3A, dir: DVec3) -> Option<(f32, u32)> {
-        let dir32 = dir.as_vec3a();
+        let dir32 = traversal_direction(dir.as_vec3a());
         let sheared = ShearedRay::new(origin32, dir32);
         let ray = Ray::new(origin32, dir32, 0.0, f32::INFINITY);
         let mut hit = RayHit::none();

@@ -31,6 +31,8 @@ pub struct BeamSpec {
     pub loads: Vec<Load>,
     pub target: Target,
     pub theory: Theory,
+    /// A vibration snapshot (mode number, amplitude in metres) instead of static loads.
+    pub vibration: Vec<(u32, f64)>,
     /// Largest acceptable model error, as a fraction of the peak deflection.
     pub model_tolerance: f64,
     pub mapping: Mapping,
@@ -61,9 +63,10 @@ impl BeamSpec {
             loads: Vec::new(),
             target: Target::Physical,
             theory: Theory::Auto,
+            vibration: Vec::new(),
             model_tolerance: 0.01,
             mapping: Mapping::default(),
-            tessellation: Tessellation::Pixels(0.25),
+            tessellation: Tessellation::Pixels(0.1),
             elastic_modulus: STEEL_E,
             poisson: STEEL_NU,
             yield_strength: STEEL_FY,
@@ -89,6 +92,7 @@ impl BeamSpec {
             yield_strength: self.yield_strength,
             theory: self.theory,
             tolerance: self.model_tolerance,
+            vibration: self.vibration.clone(),
         }
     }
 
