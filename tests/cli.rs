@@ -231,6 +231,66 @@ fn parameters_read_inside_the_scene_follow_set() {
     assert_eq!(meta["scene"]["structures"][0]["length"], 3.5);
 }
 
+/// Every section, support and load kind through a recipe, read back from the JSON.
+#[test]
+fn beam_api_reaches_the_labels() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write_recipe(
+        dir.path(),
+        "api.rhai",
+        r#"
+        import "beam" as beam;
+        dataset(#{ samples: 4, camera: #{ width: 64, height: 48 }, scene: |rng| {
+            let k = rng.sample;
+            if k == 0 { beam::steel_i(6.0, 0.15, 0.3, 0.0107, 0.0071).fixed_fixed().distributed_load(20000.0) }
+            else if k == 1 { beam::steel_tube(4.0, 0.3, 0.01).propped_cantilever().point_force(2.0, 5000.0).end_moments(0.0, 1000.0) }
+            else if k == 2 { beam(#{ length: 1.0, section: hollow_box(0.4, 0.5, 0.02) }).cantilever().point_force(1.0, 1.0).target_deflection_at(0.5, 0.01).theory("euler_bernoulli") }
+            else { beam(#{ length: 3.0, width: 0.1, height: 0.2 }).cantilever().vibration([[1, 0.05], [4, 0.01]]) }
+        } })"#,
+    );
+    let out = dir.path().join("ds");
+    ok(run(&recipe, &out, &[]));
+    let meta = |s: u64| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(out.join(format!("samples/0000/{s:06}_00.json"))).unwrap()).unwrap()
+    };
+    // Fixed–fixed UDL on an I-beam: Timoshenko, δ = qL⁴/(384 EI)·(1 + 4Φ), Φ = 12EI/(κGAL²)
+    // (mechanics.md §2.1), with E = 210 GPa, ν = 0.3 and the section's A, I, κ from the JSON.
+    let s0 = &meta(0)["scene"]["structures"][0];
+    let p = |k: &str| s0["section_properties"][k].as_f64().unwrap();
+    let (e, g) = (210e9, 210e9 / 2.6);
+    let phi = 12.0 * e * p("second_moment") / (p("shear_coefficient") * g * p("area") * 36.0);
+    let want = 20000.0 * 6f64.powi(4) / (384.0 * e * p("second_moment")) * (1.0 + 4.0 * phi);
+    let got = s0["labels"]["max_deflection"].as_f64().unwrap();
+    assert_eq!(s0["labels"]["theory"], "timoshenko");
+    assert!((got / want - 1.0).abs() < 1e-9, "fixed–fixed UDL {got} vs {want}");
+    assert_eq!(s0["section"]["shape"], "i_section");
+    assert_eq!(meta(1)["scene"]["structures"][0]["support"], "propped_cantilever");
+    let s2 = &meta(2)["scene"]["structures"][0]["labels"];
+    assert_eq!(s2["theory"], "euler_bernoulli");
+    let s3 = &meta(3)["scene"]["structures"][0]["labels"];
+    assert_eq!(s3["modes"].as_array().unwrap().len(), 2);
+    // Cantilever modes peak at the tip with |φ_n(1)| = 1, so the snapshot's peak lies between
+    // |0.05 − 0.01| and 0.05 + 0.01.
+    let peak = s3["max_deflection"].as_f64().unwrap().abs();
+    assert!((0.04 - 1e-12..=0.06 + 1e-12).contains(&peak), "{peak}");
+}
+
+#[test]
+fn bad_sections_and_loads_are_named() {
+    rejects(&with_scene("        beam(#{ length: 2.0, section: tube(0.2, 0.15) })"), &[], &["section wall = 0.15 m must be less than the radius", "<dir>/bad.rhai:4:"]);
+    rejects(
+        &with_scene("        beam(#{ length: 2.0, width: 0.1, height: 0.2 }).distributed_load(1.5, 0.5, 100.0)"),
+        &[],
+        &["distributed_load from = 1.5 m must be less than to = 0.5 m"],
+    );
+    rejects(
+        &with_scene("        beam(#{ length: 2.0, width: 0.1, height: 0.2 }).point_load(0.0, 0.01)"),
+        &[],
+        &["cannot be reached", "on a support"],
+    );
+    rejects(&with_scene("        beam(#{ length: 2.0, width: 0.1, height: 0.2 }).vibration([[0, 0.01]])"), &[], &["mode 0 must be a whole number from 1"]);
+}
+
 #[test]
 fn syntax_error_points_at_file_line_column() {
     rejects("let x = 3;\nlet y = (x + ;\n", &[], &["<dir>/bad.rhai:2:", "let y = (x + ;", "^"]);
