@@ -3,12 +3,15 @@
 use serde::Serialize;
 
 /// The deflected axis at one station: deflection (down), slope dv/dx, and the tangent of the
-/// section rotation ψ (equal to the slope without shear deformation).
+/// section rotation ψ (equal to the slope without shear deformation). `axial` is the exact
+/// deformed axial position where the theory knows it (the elastica); otherwise the mapping
+/// integrates the shortening ½∫v′².
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AxisPoint {
     pub v: f64,
     pub slope: f64,
     pub rotation: f64,
+    pub axial: Option<f64>,
 }
 
 /// How a point of the undeformed cross-section follows the deflected axis.
@@ -55,7 +58,7 @@ pub fn section_frames(stations: &[f64], mapping: Mapping, axis: impl Fn(f64) -> 
             Mapping::AddDeflection => SectionFrame { x, v: p.v, cos: 1.0, sin: 0.0 },
             Mapping::RotateSections => {
                 let inv = 1.0 / p.rotation.hypot(1.0);
-                SectionFrame { x: x - shortening, v: p.v, cos: inv, sin: p.rotation * inv }
+                SectionFrame { x: p.axial.unwrap_or(x - shortening), v: p.v, cos: inv, sin: p.rotation * inv }
             }
         });
     }
@@ -70,7 +73,8 @@ mod tests {
     fn ss_centre(delta: f64) -> impl Fn(f64) -> AxisPoint {
         move |x: f64| {
             let (xi, sign) = if x <= 0.5 { (x, 1.0) } else { (1.0 - x, -1.0) };
-            AxisPoint { v: delta * (3.0 * xi - 4.0 * xi.powi(3)), slope: sign * delta * (3.0 - 12.0 * xi * xi), rotation: sign * delta * (3.0 - 12.0 * xi * xi) }
+            let slope = sign * delta * (3.0 - 12.0 * xi * xi);
+            AxisPoint { v: delta * (3.0 * xi - 4.0 * xi.powi(3)), slope, rotation: slope, axial: None }
         }
     }
 

@@ -8,6 +8,7 @@
 //!
 //! Formulas, reference values and traps: `shared/research/mechanics.md`.
 
+mod elastica;
 mod linear;
 mod mapping;
 mod model;

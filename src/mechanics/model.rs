@@ -6,6 +6,7 @@
 //! (mechanics.md §4.3) and reported; loads given as a target deflection only fix the shape,
 //! and the physical load is derived from it.
 
+use super::elastica::Elastica;
 use super::linear::{LinearBeam, Load};
 use super::{ModeShape, SectionProperties, Support};
 use serde::Serialize;
@@ -17,6 +18,8 @@ pub enum Theory {
     Auto,
     EulerBernoulli,
     Timoshenko,
+    /// Large-deflection cantilever under one point load (inextensible Euler–Bernoulli rod).
+    Elastica,
 }
 
 /// What the loads' magnitudes mean.
@@ -70,6 +73,9 @@ pub struct Labels {
     pub physically_plausible: bool,
     /// For a vibration snapshot: each mode's number, β_nL and amplitude (metres).
     pub modes: Vec<ModeLabel>,
+    /// When the elastica ran: the relative error linear theory would have made in the peak
+    /// deflection under the same load (why it was not used).
+    pub linear_theory_error: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -84,6 +90,10 @@ pub struct ModeLabel {
 enum Axis {
     Static { beam: LinearBeam, scale: f64 },
     Modal { modes: Vec<(ModeShape, f64)>, length: f64 },
+    /// `sign` −1 mirrors an upward load. With `mirrored`, the rod is half of a simply
+    /// supported beam with a centre load: clamped (by symmetry) at mid-span, its free end on
+    /// the support, mirrored onto the other half.
+    Elastica { rod: Elastica, sign: f64, mirrored: Option<f64> },
 }
 
 /// The solved beam: deflection of its axis in metres, and its labels.
@@ -124,6 +134,12 @@ impl Deformation {
         let (peak_t, _) = extreme(&xs, p.length, |x| f_t * tim.at(x).v / ei);
         let shear_error = xs.iter().map(|&x| (f_eb * eb.at(x).v - f_t * tim.at(x).v).abs() / ei).fold(0.0, f64::max) / peak_t.abs().max(f64::MIN_POSITIVE);
         let nonlinearity_error = nonlinearity(p.support) * (peak_t / p.length).powi(2);
+        let wants_elastica = p.theory == Theory::Elastica || (p.theory == Theory::Auto && nonlinearity_error > p.tolerance);
+        if wants_elastica {
+            if let Some(d) = elastica(p, ei, shear_error)? {
+                return Ok(d);
+            }
+        }
         let theory = match p.theory {
             Theory::Auto if shear_error > p.tolerance => Theory::Timoshenko,
             Theory::Auto => Theory::EulerBernoulli,
@@ -149,6 +165,7 @@ impl Deformation {
             yield_strength: p.yield_strength,
             physically_plausible: max_bending_stress <= p.yield_strength,
             modes: Vec::new(),
+            linear_theory_error: None,
         };
         Ok(Deformation { axis: Axis::Static { beam, scale }, labels })
     }
@@ -158,14 +175,25 @@ impl Deformation {
         match &self.axis {
             Axis::Static { beam, scale } => {
                 let s = beam.at(x);
-                super::AxisPoint { v: scale * s.v, slope: scale * s.slope, rotation: scale * s.rotation }
+                super::AxisPoint { v: scale * s.v, slope: scale * s.slope, rotation: scale * s.rotation, axial: None }
             }
             Axis::Modal { modes, length } => {
                 let (v, slope) = modes.iter().fold((0.0, 0.0), |(v, slope), (mode, amplitude)| {
                     let (phi, dphi, _) = mode.at(x / length);
                     (v + amplitude * phi, slope + amplitude * dphi / length)
                 });
-                super::AxisPoint { v, slope, rotation: slope }
+                super::AxisPoint { v, slope, rotation: slope, axial: None }
+            }
+            Axis::Elastica { rod, sign, mirrored: None } => {
+                let c = rod.at(x);
+                let tangent = sign * c.theta.tan();
+                super::AxisPoint { v: sign * c.v, slope: tangent, rotation: tangent, axial: Some(c.x) }
+            }
+            Axis::Elastica { rod, sign, mirrored: Some(half) } => {
+                let (tip, c) = (rod.at(*half), rod.at((half - x).abs()));
+                let side = if x <= *half { 1.0 } else { -1.0 };
+                let tangent = side * sign * c.theta.tan();
+                super::AxisPoint { v: sign * (tip.v - c.v), slope: tangent, rotation: tangent, axial: Some(tip.x - side * c.x) }
             }
         }
     }
@@ -174,12 +202,69 @@ impl Deformation {
     pub fn max_curvature(&self, length: f64) -> f64 {
         let highest_mode = match &self.axis {
             Axis::Modal { modes, .. } => modes.iter().map(|(m, _)| m.beta_l()).fold(0.0, f64::max) as usize,
-            Axis::Static { .. } => 0,
+            Axis::Static { .. } | Axis::Elastica { .. } => 0,
         };
         let n = 256.max(16 * highest_mode);
         let h = length / n as f64;
-        (0..n).map(|i| ((self.at((i + 1) as f64 * h).rotation - self.at(i as f64 * h).rotation) / h).abs()).fold(0.0, f64::max)
+        let angle = |x: f64| self.at(x).rotation.atan();
+        (0..n).map(|i| ((angle((i + 1) as f64 * h) - angle(i as f64 * h)) / h).abs()).fold(0.0, f64::max)
     }
+}
+
+/// The cantilever elastica for one point load, if the problem is one (None: not applicable
+/// under `auto`, so linear theory runs and reports its nonlinearity error).
+fn elastica(p: &BeamProblem, ei: f64, shear_error: f64) -> Result<Option<Deformation>, String> {
+    let l = p.length;
+    // (rod length, load position on the rod, share of the load the rod carries, half span)
+    let case = match (p.support, p.loads.as_slice()) {
+        (Support::Cantilever, [Load::Point { at, force }]) if *at > 0.0 => Some((l, *at, *force, None)),
+        (Support::SimplySupported, [Load::Point { at, force }]) if (at - 0.5 * l).abs() <= 1e-12 * l => Some((0.5 * l, 0.5 * l, 0.5 * force, Some(0.5 * l))),
+        _ => None,
+    };
+    let Some((rod_length, a, force, mirrored)) = case else {
+        return if p.theory == Theory::Elastica {
+            Err("theory \"elastica\" needs a cantilever with one point load, or a simply supported beam with one centre load".into())
+        } else {
+            Ok(None)
+        };
+    };
+    let peak_at = mirrored.unwrap_or(l);
+    let (rod, sign) = match p.target {
+        Target::Physical => (Elastica::from_load_parameter(rod_length, a, force.abs() * a * a / ei), force.signum()),
+        Target::Peak { deflection } => (Elastica::from_tip_deflection(rod_length, a, deflection.abs())?, deflection.signum()),
+        Target::At { at, deflection } if (at - peak_at).abs() <= 1e-12 * l => {
+            (Elastica::from_tip_deflection(rod_length, a, deflection.abs())?, deflection.signum())
+        }
+        Target::At { .. } if p.theory == Theory::Elastica => return Err(format!("theory \"elastica\" takes a target deflection at x = {peak_at} m")),
+        Target::At { .. } => return Ok(None),
+    };
+    let sign = if sign == 0.0 { 1.0 } else { sign };
+    let rod_load = sign * rod.alpha() * ei / (a * a);
+    let tip = rod.at(rod_length);
+    // The rod's clamp moment: its load times the deformed lever arm. For the cantilever it is
+    // hogging at the clamp; for the simply supported beam it is the sagging moment at mid-span.
+    let (load, max_moment, max_moment_at) = match mirrored {
+        None => (rod_load, -rod_load * rod.at(a).x, 0.0),
+        Some(half) => (2.0 * rod_load, rod_load * tip.x, half),
+    };
+    let max_bending_stress = max_moment.abs() * p.section.extreme_fibre / p.section.second_moment;
+    let labels = Labels {
+        theory: Theory::Elastica,
+        estimated_error: shear_error,
+        shear_error,
+        nonlinearity_error: 0.0,
+        max_deflection: sign * tip.v,
+        max_deflection_at: peak_at,
+        loads: vec![Load::Point { at: mirrored.unwrap_or(a), force: load }],
+        max_moment,
+        max_moment_at,
+        max_bending_stress,
+        yield_strength: p.yield_strength,
+        physically_plausible: max_bending_stress <= p.yield_strength,
+        modes: Vec::new(),
+        linear_theory_error: Some(rod.linear_error()),
+    };
+    Ok(Some(Deformation { axis: Axis::Elastica { rod, sign, mirrored }, labels }))
 }
 
 /// A snapshot of free vibration: v(x) = Σ A_n φ_n(x/L), each φ_n normalised to max |φ_n| = 1.
@@ -215,6 +300,7 @@ fn modal(p: &BeamProblem) -> Deformation {
         yield_strength: p.yield_strength,
         physically_plausible: max_bending_stress <= p.yield_strength,
         modes: modes.iter().zip(&p.vibration).map(|((m, a), &(n, _))| ModeLabel { mode: n, beta_l: m.beta_l(), amplitude: *a }).collect(),
+        linear_theory_error: None,
     };
     Deformation { axis: Axis::Modal { modes, length }, labels }
 }
@@ -352,6 +438,45 @@ mod tests {
         // Target at a point.
         p.target = Target::At { at: 5.0, deflection: 0.01 };
         assert!((Deformation::solve(&p).unwrap().at(5.0).v - 0.01).abs() < 1e-15);
+    }
+
+    #[test]
+    fn auto_switches_to_the_elastica_for_large_cantilever_deflections() {
+        // Bisshopp–Drucker, α = PL²/EI = 1: δ/L = 0.30172, shortening u/L = 0.05643 (mechanics.md §4.2).
+        let mut p = problem(Support::Cantilever, 40.0, vec![], Target::Physical);
+        let ei = 210e9 * p.section.second_moment;
+        p.loads = vec![Load::Point { at: p.length, force: ei / (p.length * p.length) }];
+        let d = Deformation::solve(&p).unwrap();
+        assert_eq!(d.labels.theory, Theory::Elastica);
+        assert!((d.labels.max_deflection / p.length - 0.30172).abs() < 1e-5);
+        assert!((d.at(p.length).axial.unwrap() / p.length - (1.0 - 0.05643)).abs() < 1e-5);
+        // Moment at the clamp uses the deformed lever arm (1 − u/L)·L.
+        assert!((d.labels.max_moment / (-(ei / (p.length * p.length)) * p.length * (1.0 - 0.05643)) - 1.0).abs() < 1e-4);
+        // Linear theory would have said α/3 = 0.3333: +10.5 % (mechanics.md §4.2).
+        assert!((d.labels.linear_theory_error.unwrap() - 0.105).abs() < 0.001);
+        // Small deflections stay linear; an upward target mirrors.
+        p.loads = vec![Load::Point { at: p.length, force: 1.0 }];
+        p.target = Target::Peak { deflection: 0.001 * p.length };
+        assert_eq!(Deformation::solve(&p).unwrap().labels.theory, Theory::EulerBernoulli);
+        p.target = Target::Peak { deflection: -0.4 * p.length };
+        let d = Deformation::solve(&p).unwrap();
+        assert_eq!(d.labels.theory, Theory::Elastica);
+        assert!((d.at(p.length).v + 0.4 * p.length).abs() < 1e-9 * p.length);
+        // A simply supported centre load is two half-span cantilevers with P/2: α_half = PL²/(8EI).
+        p.support = Support::SimplySupported;
+        p.loads = vec![Load::Point { at: 0.5 * p.length, force: 8.0 * ei / (p.length * p.length) }];
+        p.target = Target::Physical;
+        let d = Deformation::solve(&p).unwrap();
+        assert_eq!(d.labels.theory, Theory::Elastica);
+        let half = 0.5 * p.length;
+        assert!((d.labels.max_deflection / half - 0.30172).abs() < 1e-5);
+        assert!((d.at(p.length).axial.unwrap() - p.length * (1.0 - 0.05643)).abs() < 1e-5 * p.length, "roller moves in by 2u");
+        assert!(d.at(0.0).v.abs() < 1e-12 && d.at(p.length).v.abs() < 1e-12);
+        assert!((d.at(0.3 * p.length).v - d.at(0.7 * p.length).v).abs() < 1e-12 * p.length, "symmetric");
+        // Pinned, on a case it cannot take: a clear error.
+        p.loads = vec![Load::Point { at: 0.3 * p.length, force: 1.0 }];
+        p.theory = Theory::Elastica;
+        assert!(Deformation::solve(&p).unwrap_err().contains("elastica"));
     }
 
     #[test]

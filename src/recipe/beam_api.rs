@@ -152,7 +152,8 @@ fn register_settings(engine: &mut Engine) {
             "auto" => Theory::Auto,
             "euler_bernoulli" => Theory::EulerBernoulli,
             "timoshenko" => Theory::Timoshenko,
-            other => return fail(format!("theory = \"{other}\" is unknown (known: \"auto\", \"euler_bernoulli\", \"timoshenko\")")),
+            "elastica" => Theory::Elastica,
+            other => return fail(format!("theory = \"{other}\" is unknown (known: \"auto\", \"euler_bernoulli\", \"timoshenko\", \"elastica\")")),
         };
         Ok(b.clone())
     });
