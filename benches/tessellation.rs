@@ -111,19 +111,33 @@ fn main() {
             }
         }
 
-        println!("\nCost per mesh of the mechanics (solve + labels), median of 200:");
-        for theory in [Theory::EulerBernoulli, Theory::Timoshenko, Theory::Auto] {
-            let (_, mut b) = beams().swap_remove(1);
+        println!("\nCost per mesh of each theory (solve + labels, then + mesh at the default tessellation), median of 200:");
+        let (_, stocky) = beams().swap_remove(1);
+        let mut cases: Vec<(&str, BeamSpec)> = Vec::new();
+        for (name, theory) in [("Euler–Bernoulli", Theory::EulerBernoulli), ("Timoshenko", Theory::Timoshenko), ("auto (both solved)", Theory::Auto)] {
+            let mut b = stocky.clone();
             b.theory = theory;
+            cases.push((name, b));
+        }
+        let mut elastica = stocky.clone();
+        elastica.support = Support::Cantilever;
+        elastica.loads = vec![Load::Point { at: 1.0, force: 1.0 }];
+        elastica.target = Target::Peak { deflection: 0.3 };
+        elastica.theory = Theory::Elastica;
+        cases.push(("elastica (cantilever, δ = 0.3 L)", elastica));
+        let mut modal = stocky.clone();
+        modal.loads.clear();
+        modal.target = Target::Physical;
+        modal.vibration = vec![(1, 0.02), (5, 0.002), (100, 0.0001)];
+        cases.push(("vibration, modes 1 + 5 + 100", modal));
+        for (name, b) in cases {
             let problem = b.problem();
-            let times: Vec<f64> = (0..200)
-                .map(|_| {
-                    let t = Instant::now();
-                    std::hint::black_box(Deformation::solve(&problem).unwrap());
-                    t.elapsed().as_secs_f64() * 1e6
-                })
-                .collect();
-            println!("  {theory:?}: {:.1} µs", median(times));
+            let time = |f: &dyn Fn()| {
+                median((0..200).map(|_| { let t = Instant::now(); f(); t.elapsed().as_secs_f64() * 1e6 }).collect())
+            };
+            let solve = time(&|| { std::hint::black_box(Deformation::solve(&problem).unwrap()); });
+            let build = time(&|| { std::hint::black_box(b.build(7e-4).unwrap()); });
+            println!("  {name:<34} solve {solve:>7.1} µs   solve + mesh {build:>8.1} µs");
         }
     });
 }

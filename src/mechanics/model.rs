@@ -85,6 +85,30 @@ pub struct ModeLabel {
     pub amplitude: f64,
 }
 
+impl Labels {
+    /// Labels from the peaks; stress σ = |M| c / I and plausibility follow. Errors, loads and
+    /// modes start empty for the caller to fill.
+    fn new(p: &BeamProblem, theory: Theory, (max_deflection, max_deflection_at): (f64, f64), (max_moment, max_moment_at): (f64, f64)) -> Labels {
+        let max_bending_stress = max_moment.abs() * p.section.extreme_fibre / p.section.second_moment;
+        Labels {
+            theory,
+            estimated_error: 0.0,
+            shear_error: 0.0,
+            nonlinearity_error: 0.0,
+            max_deflection,
+            max_deflection_at,
+            loads: Vec::new(),
+            max_moment,
+            max_moment_at,
+            max_bending_stress,
+            yield_strength: p.yield_strength,
+            physically_plausible: max_bending_stress <= p.yield_strength,
+            modes: Vec::new(),
+            linear_theory_error: None,
+        }
+    }
+}
+
 /// What the axis follows: a static linear solution, or a sum of mode shapes.
 #[derive(Clone, Debug)]
 enum Axis {
@@ -150,23 +174,11 @@ impl Deformation {
         let scale = load_factor / ei;
         let (max_deflection, max_deflection_at) = extreme(&xs, p.length, |x| scale * beam.at(x).v);
         let (max_moment, max_moment_at) = extreme(&xs, p.length, |x| load_factor * beam.at(x).moment);
-        let max_bending_stress = max_moment.abs() * p.section.extreme_fibre / p.section.second_moment;
-        let labels = Labels {
-            theory,
-            estimated_error,
-            shear_error: if theory == Theory::Timoshenko { 0.0 } else { shear_error },
-            nonlinearity_error,
-            max_deflection,
-            max_deflection_at,
-            loads: p.loads.iter().map(|l| scaled(*l, load_factor)).collect(),
-            max_moment,
-            max_moment_at,
-            max_bending_stress,
-            yield_strength: p.yield_strength,
-            physically_plausible: max_bending_stress <= p.yield_strength,
-            modes: Vec::new(),
-            linear_theory_error: None,
-        };
+        let mut labels = Labels::new(p, theory, (max_deflection, max_deflection_at), (max_moment, max_moment_at));
+        labels.estimated_error = estimated_error;
+        labels.shear_error = if theory == Theory::Timoshenko { 0.0 } else { shear_error };
+        labels.nonlinearity_error = nonlinearity_error;
+        labels.loads = p.loads.iter().map(|l| scaled(*l, load_factor)).collect();
         Ok(Deformation { axis: Axis::Static { beam, scale }, labels })
     }
 
@@ -247,23 +259,11 @@ fn elastica(p: &BeamProblem, ei: f64, shear_error: f64) -> Result<Option<Deforma
         None => (rod_load, -rod_load * rod.at(a).x, 0.0),
         Some(half) => (2.0 * rod_load, rod_load * tip.x, half),
     };
-    let max_bending_stress = max_moment.abs() * p.section.extreme_fibre / p.section.second_moment;
-    let labels = Labels {
-        theory: Theory::Elastica,
-        estimated_error: shear_error,
-        shear_error,
-        nonlinearity_error: 0.0,
-        max_deflection: sign * tip.v,
-        max_deflection_at: peak_at,
-        loads: vec![Load::Point { at: mirrored.unwrap_or(a), force: load }],
-        max_moment,
-        max_moment_at,
-        max_bending_stress,
-        yield_strength: p.yield_strength,
-        physically_plausible: max_bending_stress <= p.yield_strength,
-        modes: Vec::new(),
-        linear_theory_error: Some(rod.linear_error()),
-    };
+    let mut labels = Labels::new(p, Theory::Elastica, (sign * tip.v, peak_at), (max_moment, max_moment_at));
+    labels.estimated_error = shear_error;
+    labels.shear_error = shear_error;
+    labels.loads = vec![Load::Point { at: mirrored.unwrap_or(a), force: load }];
+    labels.linear_theory_error = Some(rod.linear_error());
     Ok(Some(Deformation { axis: Axis::Elastica { rod, sign, mirrored }, labels }))
 }
 
@@ -279,29 +279,17 @@ fn modal(p: &BeamProblem) -> Deformation {
     let (max_deflection, max_deflection_at) = extreme(&xs, length, deflection);
     let (max_curvature, max_moment_at) = extreme(&xs, length, curvature);
     let ei = p.elastic_modulus * p.section.second_moment;
-    let max_bending_stress = p.elastic_modulus * max_curvature.abs() * p.section.extreme_fibre;
     // Shear deflection relative to bending for a half-wave of length L/n: (nπ)² EI/(κGA L²).
     let shear_modulus = p.elastic_modulus / (2.0 * (1.0 + p.poisson));
     let flexibility = ei / (p.section.shear_coefficient * shear_modulus * p.section.area);
     let highest = modes.iter().map(|(m, _)| m.beta_l()).fold(0.0, f64::max);
     let shear_error = highest * highest * flexibility / (length * length);
     let nonlinearity_error = nonlinearity(p.support) * (max_deflection / length).powi(2);
-    let labels = Labels {
-        theory: Theory::EulerBernoulli,
-        estimated_error: shear_error.max(nonlinearity_error),
-        shear_error,
-        nonlinearity_error,
-        max_deflection,
-        max_deflection_at,
-        loads: Vec::new(),
-        max_moment: -ei * max_curvature,
-        max_moment_at,
-        max_bending_stress,
-        yield_strength: p.yield_strength,
-        physically_plausible: max_bending_stress <= p.yield_strength,
-        modes: modes.iter().zip(&p.vibration).map(|((m, a), &(n, _))| ModeLabel { mode: n, beta_l: m.beta_l(), amplitude: *a }).collect(),
-        linear_theory_error: None,
-    };
+    let mut labels = Labels::new(p, Theory::EulerBernoulli, (max_deflection, max_deflection_at), (-ei * max_curvature, max_moment_at));
+    labels.estimated_error = shear_error.max(nonlinearity_error);
+    labels.shear_error = shear_error;
+    labels.nonlinearity_error = nonlinearity_error;
+    labels.modes = modes.iter().zip(&p.vibration).map(|((m, a), &(n, _))| ModeLabel { mode: n, beta_l: m.beta_l(), amplitude: *a }).collect();
     Deformation { axis: Axis::Modal { modes, length }, labels }
 }
 
