@@ -247,6 +247,30 @@ mod tests {
     }
 
     #[test]
+    fn combined_loads_superpose() {
+        // Linear theory: the solution for several loads is the sum of the single-load solutions,
+        // with and without shear flexibility.
+        let loads = [
+            Load::Point { at: 0.9, force: 2.0 },
+            Load::Point { at: 3.2, force: -0.7 },
+            Load::Distributed { from: 0.5, to: 2.5, intensity: 1.3 },
+            Load::EndMoments { start: 0.4, end: -0.6 },
+        ];
+        for support in [SimplySupported, Cantilever, FixedFixed, ProppedCantilever] {
+            for flex in [0.0, 0.05] {
+                let all = LinearBeam::solve(support, L, &loads, flex);
+                let parts: Vec<LinearBeam> = loads.iter().map(|l| LinearBeam::solve(support, L, &[*l], flex)).collect();
+                for i in 0..=16 {
+                    let x = L * f64::from(i) / 16.0;
+                    let sum: f64 = parts.iter().map(|b| b.at(x).v).sum();
+                    let msum: f64 = parts.iter().map(|b| b.at(x).moment).sum();
+                    assert!((all.at(x).v - sum).abs() < 1e-12 && (all.at(x).moment - msum).abs() < 1e-12, "{support:?} x={x}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn maxwell_betti_reciprocity() {
         // Deflection at j from a unit load at i equals deflection at i from a unit load at j.
         for support in [SimplySupported, Cantilever, FixedFixed, ProppedCantilever] {
