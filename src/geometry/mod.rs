@@ -1,12 +1,15 @@
 //! Triangle meshes of structures, in f64, in world coordinates.
 //!
-//! Owns: the indexed mesh type and the tessellation of structures (the rectangular beam here).
+//! Owns: the indexed mesh type, the sweep mesher, and the tessellation of beams and primitives.
 //! Must not touch: mechanics formulas (it asks `mechanics` where section points go), cameras,
 //! rendering or files.
 
 mod beam;
+pub mod primitives;
+mod sweep;
 
 pub use beam::beam_mesh;
+pub use sweep::{sweep, Frame3};
 
 use glam::DVec3;
 
@@ -43,6 +46,29 @@ impl Mesh {
                 a.dot(b.cross(c)) / 6.0
             })
             .sum()
+    }
+
+    /// Total surface area.
+    pub fn area(&self) -> f64 {
+        (0..self.triangles.len())
+            .map(|t| {
+                let [a, b, c] = self.triangle(t);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum()
+    }
+
+    /// Applies an affine map to every vertex.
+    pub fn transform(&mut self, m: &glam::DAffine3) {
+        for p in &mut self.positions {
+            *p = m.transform_point3(*p);
+        }
+        // A mirroring map turns the winding inside out: restore outward orientation.
+        if m.matrix3.determinant() < 0.0 {
+            for t in &mut self.triangles {
+                t.swap(1, 2);
+            }
+        }
     }
 
     /// Whether every vertex coordinate is finite.

@@ -19,7 +19,8 @@ pub use linear::{Load, LinearBeam, Station};
 pub use mapping::{section_frames, AxisPoint, Mapping, SectionFrame};
 pub use model::{BeamProblem, Deformation, Labels, Target, Theory};
 pub use modes::ModeShape;
-pub use section::{Section, SectionOutline, SectionProperties, PAPER_DIVISIONS};
+pub use section::{circle_segments, Section, SectionOutline, SectionProperties, PAPER_DIVISIONS};
+pub(crate) use section::{annulus, rectangle_grid};
 
 use serde::Serialize;
 

@@ -147,7 +147,7 @@ pub fn circle_segments(r: f64, tolerance: f64) -> usize {
 
 /// A w × h rectangle whose edges are split into `n` parts, with the face triangulated on the
 /// n × n grid.
-fn rectangle_grid(w: f64, h: f64, n: usize) -> SectionOutline {
+pub(crate) fn rectangle_grid(w: f64, h: f64, n: usize) -> SectionOutline {
     let point = |i: usize, j: usize| DVec2::new(-w / 2.0 + w * i as f64 / n as f64, -h / 2.0 + h * j as f64 / n as f64);
     // Boundary walk, counter-clockwise from the bottom-left corner.
     let mut boundary: Vec<(usize, usize)> = Vec::with_capacity(4 * n);
@@ -186,7 +186,7 @@ fn i_outline(b: f64, h: f64, tf: f64, tw: f64) -> SectionOutline {
 }
 
 /// A ring between `outer` and `inner`, both listed counter-clockwise with matching vertices.
-fn annulus(outer: Vec<DVec2>, inner: Vec<DVec2>) -> SectionOutline {
+pub(crate) fn annulus(outer: Vec<DVec2>, inner: Vec<DVec2>) -> SectionOutline {
     let n = outer.len() as u32;
     let mut cap = Vec::with_capacity(2 * n as usize);
     // The hole is stored clockwise (reversed), so inner vertex k sits at index n + (n − 1 − k).

@@ -166,6 +166,69 @@ pub fn stations(length: f64, segments: usize, kinks: &[f64]) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mechanics::Load;
+    use std::collections::HashMap;
+
+    fn closed_and_oriented(mesh: &crate::geometry::Mesh) {
+        let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                *edges.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        for (&(a, b), &n) in &edges {
+            assert_eq!(n, 1, "edge {a}->{b} used twice in one direction");
+            assert_eq!(edges.get(&(b, a)), Some(&1), "edge {a}->{b} has no twin");
+        }
+    }
+
+    fn sections() -> [Section; 4] {
+        [
+            Section::Rectangle { width: 0.3, height: 0.5 },
+            Section::ISection { width: 0.15, height: 0.3, flange: 0.0107, web: 0.0071 },
+            Section::HollowBox { width: 0.2, height: 0.3, wall: 0.01 },
+            Section::CircularHollow { diameter: 0.32, wall: 0.01 },
+        ]
+    }
+
+    #[test]
+    fn every_section_gives_a_closed_mesh_with_the_section_volume() {
+        for section in sections() {
+            let mut b = BeamSpec::new(4.0, section.clone());
+            b.tessellation = Tessellation::Chord(1e-5);
+            let mesh = b.build(1e-3).unwrap().mesh;
+            closed_and_oriented(&mesh);
+            let area = section.properties(0.3).area;
+            // Circles are inscribed polygons: their area is short by O(tolerance/r).
+            let tol = if matches!(section, Section::CircularHollow { .. }) { 1e-3 } else { 1e-12 };
+            assert!((mesh.signed_volume() / (4.0 * area) - 1.0).abs() < tol, "{section:?}: {}", mesh.signed_volume() / (4.0 * area));
+        }
+    }
+
+    #[test]
+    fn paper_mesh_has_the_papers_face_count() {
+        let mut b = BeamSpec::rectangular(2.0, 0.2, 0.1);
+        b.tessellation = Tessellation::Paper;
+        let mesh = b.build(1e-3).unwrap().mesh;
+        assert_eq!(mesh.triangles.len(), 12_288);
+        closed_and_oriented(&mesh);
+        assert!((mesh.signed_volume() - 2.0 * 0.2 * 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn deformed_axis_passes_through_the_target_deflection() {
+        let mut b = BeamSpec::rectangular(3.0, 0.3, 0.5);
+        b.support = Support::Cantilever;
+        b.loads = vec![Load::Point { at: 3.0, force: 1.0 }];
+        b.target = Target::Peak { deflection: 0.12 };
+        let built = b.build(1e-3).unwrap();
+        let n = built.mesh.positions.len();
+        let tip: glam::DVec3 = built.mesh.positions[n - 4..].iter().sum::<glam::DVec3>() / 4.0;
+        assert!((tip.z + 0.12).abs() < 1e-12, "{tip}");
+        closed_and_oriented(&built.mesh);
+        // Bending keeps the volume to second order in the rotation.
+        assert!((built.mesh.signed_volume() / (3.0 * 0.15) - 1.0).abs() < 1e-4);
+    }
 
     #[test]
     fn stations_include_kinks_and_both_ends() {
