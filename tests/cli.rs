@@ -291,6 +291,73 @@ fn bad_sections_and_loads_are_named() {
     rejects(&with_scene("        beam(#{ length: 2.0, width: 0.1, height: 0.2 }).vibration([[0, 0.01]])"), &[], &["mode 0 must be a whole number from 1"]);
 }
 
+/// A structure the standard library does not have, written as a Rhai module next to the
+/// recipe, renders with no Rust change; its part labels reach the segmentation images.
+#[test]
+fn a_user_written_structure_module_renders_with_parts_and_instances() {
+    let dir = tempfile::tempdir().unwrap();
+    write_recipe(
+        dir.path(),
+        "lamp_post.rhai",
+        r#"
+        /// A street lamp: a 6 m steel pole on a square footing, a bent arm and a lamp head.
+        fn lamp_post(height) {
+            let footing = shape::box(0.6, 0.6, 0.4).translate(0.0, 0.0, 0.2).part("footing");
+            let pole = shape::frustum(0.09, 0.06, height).translate(0.0, 0.0, 0.4).part("pole");
+            let arm = shape::bend([[-0.03, -0.03], [0.03, -0.03], [0.03, 0.03], [-0.03, 0.03]], 0.8, PI() / 2.0)
+                .translate(0.0, 0.0, 0.4 + height).part("arm");
+            let head = shape::cap(0.3, 0.15).rotate_x(PI()).translate(0.8, 0.0, 0.4 + height + 0.8).part("head");
+            assembly("lamp post", [footing, pole, arm, head]).colour([0.3, 0.32, 0.35])
+        }
+        "#,
+    );
+    let recipe = write_recipe(
+        dir.path(),
+        "street.rhai",
+        r#"
+        import "lamp_post" as lamps;
+        dataset(#{ samples: 2, views: 2, outputs: ["rgb", "depth", "mask", "parts", "instances"],
+            camera: #{ width: 160, height: 240, pitch: [0.0, 0.3] },
+            scene: |rng| [lamps::lamp_post(6.0), lamps::lamp_post(4.0).translate(3.0, 0.0, 0.0)] })
+        "#,
+    );
+    let out = dir.path().join("ds");
+    ok(run(&recipe, &out, &[]));
+    for view in ["000000_00", "000001_01"] {
+        let meta: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join(format!("samples/0000/{view}.json"))).unwrap()).unwrap();
+        let parts: Vec<String> = serde_json::from_value(meta["segmentation"]["part_ids"].clone()).unwrap();
+        assert_eq!(parts, ["background", "footing", "pole", "arm", "head"]);
+        assert_eq!(meta["segmentation"]["instance_ids"][2]["name"], "lamp post");
+        let depth = read_exr(&out.join(format!("samples/0000/{view}.depth.exr")));
+        let part = read_png(&out.join(format!("samples/0000/{view}.parts.png")));
+        let instance = read_png(&out.join(format!("samples/0000/{view}.instances.png")));
+        let m = |key: &str| -> Vec<Vec<f64>> { serde_json::from_value(meta["camera"][key].clone()).unwrap() };
+        let (k, c2w) = (m("K"), m("c2w_opencv"));
+        let mut seen = std::collections::BTreeSet::new();
+        for (i, &z) in depth.iter().enumerate() {
+            assert_eq!(z > 0.0, part[i] != 0);
+            assert_eq!(z > 0.0, instance[i] != 0);
+            if z == 0.0 {
+                continue;
+            }
+            seen.insert((part[i], instance[i]));
+            // Height of the surface point: the footing lies below 0.4 m, the pole and head above.
+            let (row, col) = ((i / 160) as f64, (i % 160) as f64);
+            let z = f64::from(z);
+            let cam = [(col + 0.5 - k[0][2]) * z / k[0][0], (row + 0.5 - k[1][2]) * z / k[1][1], z];
+            let height = c2w[2][0] * cam[0] + c2w[2][1] * cam[1] + c2w[2][2] * cam[2] + c2w[2][3];
+            match parts[part[i] as usize].as_str() {
+                "footing" => assert!(height < 0.4 + 1e-6, "footing pixel at {height} m"),
+                "pole" => assert!(height > 0.4 - 1e-6, "pole pixel at {height} m"),
+                "head" => assert!(height > 4.4 + 0.8 - 0.16, "head pixel at {height} m"),
+                _ => {}
+            }
+        }
+        assert!(seen.iter().any(|&(_, inst)| inst == 1) && seen.iter().any(|&(_, inst)| inst == 2), "{seen:?}");
+        assert!(seen.iter().any(|&(p, _)| p == 2), "the poles are visible");
+    }
+}
+
 #[test]
 fn syntax_error_points_at_file_line_column() {
     rejects("let x = 3;\nlet y = (x + ;\n", &[], &["<dir>/bad.rhai:2:", "let y = (x + ;", "^"]);

@@ -6,11 +6,11 @@ use std::io::Cursor;
 
 pub const DEPTH_CHANNEL: &str = "Z";
 
-fn png(width: u32, height: u32, colour: ::png::ColorType, data: &[u8]) -> Vec<u8> {
+fn png(width: u32, height: u32, colour: ::png::ColorType, depth: ::png::BitDepth, data: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(data.len() / 4 + 1024);
     let mut encoder = ::png::Encoder::new(&mut out, width, height);
     encoder.set_color(colour);
-    encoder.set_depth(::png::BitDepth::Eight);
+    encoder.set_depth(depth);
     encoder.set_compression(::png::Compression::Fast);
     let mut writer = encoder.write_header().expect("PNG header into memory");
     writer.write_image_data(data).expect("PNG data into memory");
@@ -20,12 +20,23 @@ fn png(width: u32, height: u32, colour: ::png::ColorType, data: &[u8]) -> Vec<u8
 
 /// RGB8, row-major.
 pub fn rgb_png(width: u32, height: u32, rgb: &[u8]) -> Vec<u8> {
-    png(width, height, ::png::ColorType::Rgb, rgb)
+    png(width, height, ::png::ColorType::Rgb, ::png::BitDepth::Eight, rgb)
 }
 
 /// 8-bit grey, row-major (255 = structure, 0 = background for the mask).
 pub fn mask_png(width: u32, height: u32, mask: &[u8]) -> Vec<u8> {
-    png(width, height, ::png::ColorType::Grayscale, mask)
+    png(width, height, ::png::ColorType::Grayscale, ::png::BitDepth::Eight, mask)
+}
+
+/// Id image (0 = background): 8-bit grey when every id fits, else 16-bit (big-endian, as PNG
+/// stores it).
+pub fn id_png(width: u32, height: u32, ids: &[u16]) -> Vec<u8> {
+    if ids.iter().all(|&i| i <= 255) {
+        let bytes: Vec<u8> = ids.iter().map(|&i| i as u8).collect();
+        return png(width, height, ::png::ColorType::Grayscale, ::png::BitDepth::Eight, &bytes);
+    }
+    let bytes: Vec<u8> = ids.iter().flat_map(|i| i.to_be_bytes()).collect();
+    png(width, height, ::png::ColorType::Grayscale, ::png::BitDepth::Sixteen, &bytes)
 }
 
 /// Planar depth in metres, 0 where no surface was hit.
@@ -77,6 +88,19 @@ mod tests {
         assert_eq!((rw, rh), (w, h));
         assert_eq!(back, depth);
         assert_eq!(&bytes[..4], &[0x76, 0x2f, 0x31, 0x01], "OpenEXR magic number");
+    }
+
+    #[test]
+    fn id_images_switch_to_16_bit_only_when_needed() {
+        let decode = |bytes: Vec<u8>| {
+            let mut reader = ::png::Decoder::new(Cursor::new(bytes)).read_info().unwrap();
+            let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+            let info = reader.next_frame(&mut buf).unwrap();
+            buf.truncate(info.buffer_size());
+            (info.bit_depth, buf)
+        };
+        assert_eq!(decode(id_png(3, 1, &[0, 7, 255])), (::png::BitDepth::Eight, vec![0, 7, 255]));
+        assert_eq!(decode(id_png(2, 1, &[1, 300])), (::png::BitDepth::Sixteen, vec![0, 1, 1, 44]));
     }
 
     #[test]

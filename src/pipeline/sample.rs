@@ -3,10 +3,10 @@
 use crate::cameras::{rows4, Camera, ViewDraw};
 use crate::geometry::Mesh;
 use crate::mechanics::Labels;
-use crate::output::{depth_exr, mask_png, rgb_png, view_file, SampleStage};
+use crate::output::{depth_exr, id_png, mask_png, rgb_png, view_file, SampleStage};
 use crate::recipe::Recipe;
 use crate::render::{shade, GBuffer, Lighting, TraceMesh, NO_HIT};
-use crate::scene::{DatasetSpec, SceneSpec};
+use crate::scene::{DatasetSpec, SceneSpec, Structure};
 use crate::seeds::{Scope, Stream};
 use anyhow::{bail, Result};
 use glam::DVec3;
@@ -19,11 +19,15 @@ pub const VIEW_SCHEMA: &str = "shmgen.view/1";
 pub struct PreparedSample {
     pub index: u64,
     pub scene: SceneSpec,
-    /// Mechanics labels and segment count of each structure.
-    pub labels: Vec<(Labels, usize)>,
+    /// Mechanics labels and segment count of each beam (None for assemblies).
+    pub labels: Vec<Option<(Labels, usize)>>,
     pub mesh: Mesh,
     /// Structure index of every triangle.
     pub owner: Vec<u32>,
+    /// Part of every triangle, as an index into `parts`.
+    pub part: Vec<u32>,
+    /// Part names, in order of first appearance; part id = index + 1 (0 = background).
+    pub parts: Vec<String>,
     pub centre: DVec3,
     pub radius: f64,
 }
@@ -32,16 +36,27 @@ pub struct PreparedSample {
 /// non-finite output.
 pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
     let scene = recipe.scene(index)?;
-    let mut mesh = Mesh::default();
-    let mut owner = Vec::new();
+    let mut assembled = Assembled::default();
     let mut labels = Vec::new();
-    for (i, beam) in scene.structures.iter().enumerate() {
-        let footprint = recipe.dataset.camera.nearest_pixel_footprint(beam.radius());
-        let built = beam.build(footprint).map_err(|m| anyhow::anyhow!("sample {index}, structure {i}: {m}"))?;
-        owner.extend(std::iter::repeat_n(i as u32, built.mesh.triangles.len()));
-        mesh.append(&built.mesh);
-        labels.push((built.deformation.labels, built.segments));
+    for (i, structure) in scene.structures.iter().enumerate() {
+        let failed = |m: String| anyhow::anyhow!("sample {index}, structure {i}: {m}");
+        match structure {
+            Structure::Beam(beam) => {
+                let footprint = recipe.dataset.camera.nearest_pixel_footprint(beam.radius());
+                let built = beam.build(footprint).map_err(failed)?;
+                assembled.add(&built.mesh, i, "beam");
+                labels.push(Some((built.deformation.labels, built.segments)));
+            }
+            Structure::Assembly(a) => {
+                let tolerance = TOLERANCE_PX * recipe.dataset.camera.nearest_pixel_footprint(a.radius());
+                for (mesh, part) in a.build(tolerance).map_err(failed)? {
+                    assembled.add(&mesh, i, part);
+                }
+                labels.push(None);
+            }
+        }
     }
+    let Assembled { mesh, owner, part, parts } = assembled;
     if !mesh.is_finite() {
         bail!("sample {index}: the deformed mesh has non-finite vertices (check the structure's dimensions and loads)");
     }
@@ -51,7 +66,35 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
     if !(radius > 0.0 && radius.is_finite()) {
         bail!("sample {index}: the scene has no extent (radius {radius})");
     }
-    Ok(PreparedSample { index, scene, labels, mesh, owner, centre, radius })
+    Ok(PreparedSample { index, scene, labels, mesh, owner, part, parts, centre, radius })
+}
+
+/// Chord tolerance of primitives, as a fraction of a pixel at the nearest camera (the beams'
+/// default too).
+const TOLERANCE_PX: f64 = 0.1;
+
+/// The scene mesh being put together, with each triangle's structure and part.
+#[derive(Default)]
+struct Assembled {
+    mesh: Mesh,
+    owner: Vec<u32>,
+    part: Vec<u32>,
+    parts: Vec<String>,
+}
+
+impl Assembled {
+    fn add(&mut self, mesh: &Mesh, structure: usize, part: &str) {
+        let id = match self.parts.iter().position(|p| p == part) {
+            Some(id) => id,
+            None => {
+                self.parts.push(part.to_string());
+                self.parts.len() - 1
+            }
+        };
+        self.owner.extend(std::iter::repeat_n(structure as u32, mesh.triangles.len()));
+        self.part.extend(std::iter::repeat_n(id as u32, mesh.triangles.len()));
+        self.mesh.append(mesh);
+    }
 }
 
 /// The camera of view `view` of a prepared sample.
@@ -64,7 +107,7 @@ pub fn view_camera(dataset: &DatasetSpec, sample: &PreparedSample, view: u32) ->
 pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage) -> Result<u32> {
     let dataset = &recipe.dataset;
     let trace_mesh = TraceMesh::build(&sample.mesh);
-    let albedo: Vec<[f64; 3]> = sample.scene.structures.iter().map(|s| s.material.albedo()).collect();
+    let albedo: Vec<[f64; 3]> = sample.scene.structures.iter().map(|s| s.material().albedo()).collect();
     let background = dataset.background.map(|c| (c * 255.0).round() as u8);
     let lighting = Lighting::default();
     for view in 0..dataset.views {
@@ -87,6 +130,12 @@ pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage)
         if dataset.outputs.mask {
             put(stage, "mask", "png", mask_png(w, h, &mask(&g)))?;
         }
+        if dataset.outputs.parts {
+            put(stage, "parts", "png", id_png(w, h, &ids(&g, &sample.part)))?;
+        }
+        if dataset.outputs.instances {
+            put(stage, "instances", "png", id_png(w, h, &ids(&g, &sample.owner)))?;
+        }
         let meta = view_json(recipe, sample, view, &camera, &draw, &g, files);
         let path = view_file(sample.index, view, "json");
         let mut bytes = serde_json::to_vec_pretty(&meta)?;
@@ -94,6 +143,11 @@ pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage)
         stage.write(path, &bytes)?;
     }
     Ok(dataset.views)
+}
+
+/// Per-pixel id + 1 of what each triangle belongs to (0 = background).
+fn ids(g: &GBuffer, of_triangle: &[u32]) -> Vec<u16> {
+    g.triangle.iter().map(|&t| if t == NO_HIT { 0 } else { of_triangle[t as usize] as u16 + 1 }).collect()
 }
 
 fn mask(g: &GBuffer) -> Vec<u8> {
@@ -115,15 +169,23 @@ fn view_json(
         .structures
         .iter()
         .zip(&sample.labels)
-        .map(|(s, (labels, segments))| {
+        .map(|(s, labels)| {
             let mut v = json!(s);
-            v["kind"] = json!("beam");
-            v["section_properties"] = json!(s.section.properties(s.poisson));
-            v["segments"] = json!(segments);
-            v["labels"] = json!(labels);
+            if let (Structure::Beam(b), Some((labels, segments))) = (s, labels) {
+                v["section_properties"] = json!(b.section.properties(b.poisson));
+                v["segments"] = json!(segments);
+                v["labels"] = json!(labels);
+            }
             v
         })
         .collect();
+    let mut part_ids = vec![json!("background")];
+    part_ids.extend(sample.parts.iter().map(|p| json!(p)));
+    let mut instance_ids = vec![json!(null)];
+    instance_ids.extend(sample.scene.structures.iter().enumerate().map(|(i, s)| match s {
+        Structure::Beam(_) => json!({ "structure": i, "kind": "beam" }),
+        Structure::Assembly(a) => json!({ "structure": i, "kind": "assembly", "name": a.name }),
+    }));
     let hits = g.triangle.iter().filter(|&&t| t != NO_HIT).count();
     json!({
         "schema": VIEW_SCHEMA,
@@ -153,6 +215,7 @@ fn view_json(
         },
         "depth": { "kind": "planar_z", "unit": "m", "no_surface": 0.0, "channel": crate::output::DEPTH_CHANNEL },
         "mask": { "structure": 255, "background": 0 },
+        "segmentation": { "part_ids": part_ids, "instance_ids": instance_ids, "encoding": "PNG grey, 8-bit when every id fits, else 16-bit; 0 = background" },
         "background": recipe.dataset.background,
         "scene": { "structures": structures },
         "mesh": { "vertices": sample.mesh.positions.len(), "triangles": sample.mesh.triangles.len(), "bounding_radius": sample.radius },

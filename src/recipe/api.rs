@@ -48,6 +48,7 @@ pub fn register(engine: &mut Engine, params: Arc<Params>) {
     engine.register_type_with_name::<Dataset>("Dataset");
     engine.register_fn("dataset", |map: Map| -> Fallible<Dataset> { Ok(dataset(map)?) });
     super::beam_api::register(engine);
+    super::shape_api::register(engine);
     register_rng(engine);
 }
 
@@ -111,18 +112,20 @@ fn dataset(map: Map) -> OptResult<Dataset> {
 }
 
 fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {
-    let Some(value) = value else { return Ok(Outputs { rgb: true, depth: true, mask: true }) };
+    let Some(value) = value else { return Ok(Outputs { rgb: true, depth: true, mask: true, parts: false, instances: false }) };
     let list = value.try_cast::<Array>().ok_or("dataset.outputs must be a list like [\"rgb\", \"depth\", \"mask\"]")?;
-    let mut out = Outputs { rgb: false, depth: false, mask: false };
+    let mut out = Outputs { rgb: false, depth: false, mask: false, parts: false, instances: false };
     for item in list {
         let name = item.to_string();
         match name.as_str() {
             "rgb" => out.rgb = true,
             "depth" => out.depth = true,
             "mask" => out.mask = true,
+            "parts" => out.parts = true,
+            "instances" => out.instances = true,
             _ => {
                 let hint = options::nearest(&name, &Outputs::NAMES).map(|k| format!("; did you mean \"{k}\"?")).unwrap_or_default();
-                return Err(format!("unknown output \"{name}\" in dataset.outputs{hint} (known: rgb, depth, mask)"));
+                return Err(format!("unknown output \"{name}\" in dataset.outputs{hint} (known: rgb, depth, mask, parts, instances)"));
             }
         }
     }

@@ -12,11 +12,12 @@ mod beam_api;
 mod diagnostics;
 mod engine;
 mod options;
+mod shape_api;
 
 pub use diagnostics::RecipeError;
 pub use engine::stdlib_dir;
 
-use crate::scene::{BeamSpec, DatasetSpec, SceneSpec};
+use crate::scene::{AssemblySpec, BeamSpec, DatasetSpec, SceneSpec, Structure};
 use crate::seeds::{Scope as StreamScope, Stream};
 use api::{Dataset, Params, ScriptRng};
 use engine::{Resolver, Sources};
@@ -113,8 +114,8 @@ impl Recipe {
     }
 }
 
-/// The structures a scene function returned: one beam, or a list of them.
-fn structures(value: Dynamic) -> Result<Vec<BeamSpec>, String> {
+/// The structures a scene function returned: one structure, or a list of them.
+fn structures(value: Dynamic) -> Result<Vec<Structure>, String> {
     let type_name = value.type_name().to_string();
     let list = if value.is_array() { value.cast::<Array>() } else { vec![value] };
     if list.is_empty() {
@@ -123,8 +124,12 @@ fn structures(value: Dynamic) -> Result<Vec<BeamSpec>, String> {
     list.into_iter()
         .map(|item| {
             let t = item.type_name().to_string();
-            item.try_cast::<BeamSpec>().ok_or(format!(
-                "the scene function must return a structure or a list of structures, not {}",
+            let item = match item.try_cast_result::<BeamSpec>() {
+                Ok(beam) => return Ok(Structure::Beam(beam)),
+                Err(other) => other,
+            };
+            item.try_cast::<AssemblySpec>().map(Structure::Assembly).ok_or(format!(
+                "the scene function must return structures (beams or assemblies), or a list of them, not {}",
                 if t == type_name { t } else { format!("a list containing {t}") }
             ))
         })

@@ -5,8 +5,10 @@
 //! derived mechanical labels. Must not touch: Rhai (recipes build these), tracing or files.
 //! Everything here serialises into the per-view JSON.
 
+mod assembly;
 mod beam;
 
+pub use assembly::{AssemblySpec, ShapeSpec};
 pub use beam::{segments_for_chord, stations, BeamSpec, BuiltBeam, Tessellation};
 
 use crate::cameras::CameraRig;
@@ -31,14 +33,35 @@ pub struct Outputs {
     pub rgb: bool,
     pub depth: bool,
     pub mask: bool,
+    /// Per-pixel part ids (see the id table in each view's JSON).
+    pub parts: bool,
+    /// Per-pixel structure (instance) ids.
+    pub instances: bool,
 }
 
 impl Outputs {
-    pub const NAMES: [&'static str; 3] = ["rgb", "depth", "mask"];
+    pub const NAMES: [&'static str; 5] = ["rgb", "depth", "mask", "parts", "instances"];
+}
+
+/// A structure in a scene.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Structure {
+    Beam(BeamSpec),
+    Assembly(AssemblySpec),
+}
+
+impl Structure {
+    pub fn material(&self) -> &crate::materials::Material {
+        match self {
+            Structure::Beam(b) => &b.material,
+            Structure::Assembly(a) => &a.material,
+        }
+    }
 }
 
 /// One sample: the structures in the scene, already deformed by their loads.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SceneSpec {
-    pub structures: Vec<BeamSpec>,
+    pub structures: Vec<Structure>,
 }

@@ -1,0 +1,135 @@
+//! The assembly part of the recipe API: `shape::` primitives, their placement and part labels,
+//! and `assembly(name, [...])`, which gathers shapes (and merges other assemblies) into one
+//! structure. Descriptions only: tessellation happens in Rust when the scene is built.
+
+use super::api::{fail, Fallible};
+use super::options::number;
+use crate::geometry::primitives::Primitive;
+use crate::scene::{AssemblySpec, ShapeSpec};
+use glam::{DAffine3, DVec3};
+use rhai::{Array, Dynamic, Engine, EvalAltResult, ImmutableString, Module, NativeCallContext};
+
+pub fn register(engine: &mut Engine) {
+    engine.register_type_with_name::<ShapeSpec>("Shape");
+    engine.register_type_with_name::<AssemblySpec>("Assembly");
+    engine.register_static_module("shape", primitives().into());
+    register_placement(engine);
+    engine.register_fn("part", |s: &mut ShapeSpec, name: ImmutableString| {
+        s.part = name.to_string();
+        s.clone()
+    });
+    engine.register_fn("assembly", |name: ImmutableString, items: Array| -> Fallible<AssemblySpec> {
+        let mut assembly = AssemblySpec { name: name.to_string(), shapes: Vec::new(), material: Default::default() };
+        for item in items {
+            let item = match item.try_cast_result::<ShapeSpec>() {
+                Ok(shape) => {
+                    assembly.shapes.push(shape);
+                    continue;
+                }
+                Err(other) => other,
+            };
+            match item.try_cast_result::<AssemblySpec>() {
+                Ok(other) => assembly.shapes.extend(other.shapes),
+                Err(other) => return fail(format!("assembly \"{name}\": {other} ({}) is neither a shape nor an assembly", other.type_name())),
+            }
+        }
+        if assembly.shapes.is_empty() {
+            return fail(format!("assembly \"{name}\" has no shapes"));
+        }
+        Ok(assembly)
+    });
+    engine.register_fn("colour", |a: &mut AssemblySpec, rgb: Array| -> Fallible<AssemblySpec> {
+        a.material.colour = super::options::colour(&Dynamic::from(rgb), "colour")?;
+        Ok(a.clone())
+    });
+}
+
+/// `shape::box(w, d, h)` and friends; a bad dimension is reported at the call.
+fn primitives() -> Module {
+    let mut m = Module::new();
+    m.set_native_fn("box", |ctx: NativeCallContext, w: Dynamic, d: Dynamic, h: Dynamic| {
+        make(&ctx, || Ok(Primitive::Box { size: [number(&w, "box width")?, number(&d, "box depth")?, number(&h, "box height")?] }))
+    });
+    m.set_native_fn("cylinder", |ctx: NativeCallContext, r: Dynamic, h: Dynamic| {
+        make(&ctx, || {
+            let r = number(&r, "cylinder radius")?;
+            Ok(Primitive::Frustum { bottom_radius: r, top_radius: r, height: number(&h, "cylinder height")? })
+        })
+    });
+    m.set_native_fn("cone", |ctx: NativeCallContext, r: Dynamic, h: Dynamic| {
+        make(&ctx, || Ok(Primitive::Frustum { bottom_radius: number(&r, "cone radius")?, top_radius: 0.0, height: number(&h, "cone height")? }))
+    });
+    m.set_native_fn("frustum", |ctx: NativeCallContext, r0: Dynamic, r1: Dynamic, h: Dynamic| {
+        make(&ctx, || {
+            Ok(Primitive::Frustum {
+                bottom_radius: number(&r0, "frustum bottom radius")?,
+                top_radius: number(&r1, "frustum top radius")?,
+                height: number(&h, "frustum height")?,
+            })
+        })
+    });
+    for name in ["tube", "ring"] {
+        m.set_native_fn(name, move |ctx: NativeCallContext, r: Dynamic, h: Dynamic, t: Dynamic| {
+            make(&ctx, || Ok(Primitive::Tube { radius: number(&r, "tube radius")?, height: number(&h, "tube height")?, wall: number(&t, "tube wall")? }))
+        });
+    }
+    m.set_native_fn("cap", |ctx: NativeCallContext, r: Dynamic, h: Dynamic| {
+        make(&ctx, || Ok(Primitive::SphericalCap { radius: number(&r, "cap sphere radius")?, height: number(&h, "cap height")? }))
+    });
+    m.set_native_fn("extrude", |ctx: NativeCallContext, profile: Array, length: Dynamic| {
+        make(&ctx, || Ok(Primitive::Extrusion { profile: profile_points(&profile)?, length: number(&length, "extrude length")? }))
+    });
+    m.set_native_fn("bend", |ctx: NativeCallContext, profile: Array, radius: Dynamic, angle: Dynamic| {
+        make(&ctx, || {
+            Ok(Primitive::Bend { profile: profile_points(&profile)?, radius: number(&radius, "bend radius")?, angle: number(&angle, "bend angle")? })
+        })
+    });
+    m
+}
+
+fn make(ctx: &NativeCallContext, build: impl FnOnce() -> Result<Primitive, String>) -> Result<ShapeSpec, Box<EvalAltResult>> {
+    let at = |msg: String| Box::new(EvalAltResult::ErrorRuntime(msg.into(), ctx.call_position()));
+    let primitive = build().map_err(at)?;
+    primitive.validate().map_err(at)?;
+    Ok(ShapeSpec::new(primitive))
+}
+
+fn profile_points(profile: &Array) -> Result<Vec<[f64; 2]>, String> {
+    profile
+        .iter()
+        .map(|p| match p.clone().try_cast::<Array>().as_deref() {
+            Some([x, y]) => Ok([number(x, "profile x")?, number(y, "profile y")?]),
+            _ => Err(format!("profile point {p} must be [x, y]")),
+        })
+        .collect()
+}
+
+/// Placement applies after what came before, to shapes and to whole assemblies alike.
+fn register_placement(engine: &mut Engine) {
+    fn on_shape(s: &mut ShapeSpec, m: DAffine3) -> ShapeSpec {
+        s.then(m);
+        s.clone()
+    }
+    fn on_assembly(a: &mut AssemblySpec, m: DAffine3) -> AssemblySpec {
+        a.shapes.iter_mut().for_each(|s| s.then(m));
+        a.clone()
+    }
+    macro_rules! placement {
+        ($name:literal, |$($arg:ident),*| $map:expr) => {
+            engine.register_fn($name, |s: &mut ShapeSpec, $($arg: Dynamic),*| -> Fallible<ShapeSpec> {
+                $(let $arg = number(&$arg, concat!($name, " ", stringify!($arg)))?;)*
+                Ok(on_shape(s, $map))
+            });
+            engine.register_fn($name, |a: &mut AssemblySpec, $($arg: Dynamic),*| -> Fallible<AssemblySpec> {
+                $(let $arg = number(&$arg, concat!($name, " ", stringify!($arg)))?;)*
+                Ok(on_assembly(a, $map))
+            });
+        };
+    }
+    placement!("translate", |x, y, z| DAffine3::from_translation(DVec3::new(x, y, z)));
+    placement!("rotate_x", |angle| DAffine3::from_rotation_x(angle));
+    placement!("rotate_y", |angle| DAffine3::from_rotation_y(angle));
+    placement!("rotate_z", |angle| DAffine3::from_rotation_z(angle));
+    placement!("scale", |factor| DAffine3::from_scale(DVec3::splat(factor)));
+    placement!("scale", |x, y, z| DAffine3::from_scale(DVec3::new(x, y, z)));
+}
