@@ -359,6 +359,31 @@ fn a_user_written_structure_module_renders_with_parts_and_instances() {
 }
 
 #[test]
+fn stdlib_structures_render_with_their_parts() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write_recipe(
+        dir.path(),
+        "structures.rhai",
+        r#"
+        import "portal_frame" as portal;
+        import "column" as column;
+        dataset(#{ samples: 1, views: 1, outputs: ["depth", "parts"], camera: #{ width: 200, height: 150, pitch: [0.3, 0.3], yaw: [-1.3, -1.3] },
+            scene: |rng| [portal::steel(12.0, 5.0), column::circular(0.5, 4.0).translate(0.0, -4.0, 0.0)] })
+        "#,
+    );
+    let out = dir.path().join("ds");
+    ok(run(&recipe, &out, &[]));
+    let meta: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("samples/0000/000000_00.json")).unwrap()).unwrap();
+    let parts: Vec<String> = serde_json::from_value(meta["segmentation"]["part_ids"].clone()).unwrap();
+    for expected in ["columns", "base plates", "haunches", "girder", "footing", "shaft", "capital"] {
+        assert!(parts.iter().any(|p| p == expected), "{expected} missing from {parts:?}");
+    }
+    let seen: std::collections::BTreeSet<u8> = read_png(&out.join("samples/0000/000000_00.parts.png")).into_iter().collect();
+    let index = |name: &str| parts.iter().position(|p| p == name).unwrap() as u8;
+    assert!(seen.contains(&index("girder")) && seen.contains(&index("columns")) && seen.contains(&index("shaft")), "{seen:?}");
+}
+
+#[test]
 fn syntax_error_points_at_file_line_column() {
     rejects("let x = 3;\nlet y = (x + ;\n", &[], &["<dir>/bad.rhai:2:", "let y = (x + ;", "^"]);
 }

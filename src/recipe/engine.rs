@@ -14,7 +14,11 @@ use std::sync::{Arc, Mutex};
 pub const MAX_OPERATIONS: u64 = 20_000_000;
 
 /// The standard library shipped inside the binary, used when no `stdlib/` folder is found.
-const EMBEDDED_STDLIB: &[(&str, &str)] = &[("beam", include_str!("../../stdlib/beam.rhai"))];
+const EMBEDDED_STDLIB: &[(&str, &str)] = &[
+    ("beam", include_str!("../../stdlib/beam.rhai")),
+    ("column", include_str!("../../stdlib/column.rhai")),
+    ("portal_frame", include_str!("../../stdlib/portal_frame.rhai")),
+];
 
 /// The folder searched for standard-library modules: `$SHMGEN_STDLIB`, else the repository's.
 pub fn stdlib_dir() -> PathBuf {
