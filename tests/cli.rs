@@ -384,6 +384,37 @@ fn stdlib_structures_render_with_their_parts() {
 }
 
 #[test]
+fn imported_meshes_render_and_broken_files_are_reported_at_the_call() {
+    let dir = tempfile::tempdir().unwrap();
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
+    std::fs::create_dir(dir.path().join("models")).unwrap();
+    for f in ["tetra.obj", "tetra.glb", "face_out_of_range.obj"] {
+        std::fs::copy(corpus.join(f), dir.path().join("models").join(f)).unwrap();
+    }
+    let recipe = write_recipe(
+        dir.path(),
+        "imported.rhai",
+        r#"dataset(#{ samples: 1, views: 2, camera: #{ width: 64, height: 48 },
+            scene: |rng| [assembly("tetra", [shape::mesh("models/tetra.obj", #{ normalize: true }).scale(2.0)]),
+                          assembly("glb", [shape::mesh("models/tetra.glb").translate(3.0, 0.0, 0.0)])] })"#,
+    );
+    let out = dir.path().join("ds");
+    ok(run(&recipe, &out, &[]));
+    let meta: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("samples/0000/000000_00.json")).unwrap()).unwrap();
+    assert_eq!(meta["scene"]["structures"][0]["shapes"][0]["primitive"]["file"], "models/tetra.obj");
+    assert!(meta["coverage"].as_f64().unwrap() > 0.0);
+
+    let bad = write_recipe(dir.path(), "bad.rhai", "dataset(#{ scene: |rng| assembly(\"x\", [\n    shape::mesh(\"models/face_out_of_range.obj\")]) })\n");
+    let output = run(&bad, &dir.path().join("out"), &[]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(stderr.contains("bad.rhai:2:") && stderr.contains("face_out_of_range.obj") && stderr.contains("out of range"), "{stderr}");
+    let escape = write_recipe(dir.path(), "escape.rhai", "dataset(#{ scene: |rng| assembly(\"x\", [shape::mesh(\"../secret.obj\")]) })\n");
+    let stderr = String::from_utf8_lossy(&run(&escape, &dir.path().join("out2"), &[]).stderr).to_string();
+    assert!(stderr.contains("without '..'"), "{stderr}");
+}
+
+#[test]
 fn syntax_error_points_at_file_line_column() {
     rejects("let x = 3;\nlet y = (x + ;\n", &[], &["<dir>/bad.rhai:2:", "let y = (x + ;", "^"]);
 }

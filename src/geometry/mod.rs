@@ -1,10 +1,12 @@
 //! Triangle meshes of structures, in f64, in world coordinates.
 //!
-//! Owns: the indexed mesh type, the sweep mesher, and the tessellation of beams and primitives.
+//! Owns: the indexed mesh type, the sweep mesher, the tessellation of beams and primitives, and
+//! (in `import` alone) reading and writing mesh files.
 //! Must not touch: mechanics formulas (it asks `mechanics` where section points go), cameras,
 //! rendering or files.
 
 mod beam;
+pub mod import;
 pub mod primitives;
 mod sweep;
 
@@ -14,7 +16,7 @@ pub use sweep::{sweep, Frame3};
 use glam::DVec3;
 
 /// An indexed triangle mesh. Triangles wind counter-clockwise seen from outside.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
     pub positions: Vec<DVec3>,
     pub triangles: Vec<[u32; 3]>,

@@ -42,13 +42,13 @@ impl ScriptRng {
     }
 }
 
-pub fn register(engine: &mut Engine, params: Arc<Params>) {
+pub fn register(engine: &mut Engine, params: Arc<Params>, files: Arc<super::shape_api::MeshFiles>) {
     engine.register_fn("param", move |name: ImmutableString, default: Dynamic| param(&params, &name, default));
     engine.register_fn("deg", |x: Dynamic| -> Fallible<f64> { Ok(number(&x, "deg(x)")?.to_radians()) });
     engine.register_type_with_name::<Dataset>("Dataset");
     engine.register_fn("dataset", |map: Map| -> Fallible<Dataset> { Ok(dataset(map)?) });
     super::beam_api::register(engine);
-    super::shape_api::register(engine);
+    super::shape_api::register(engine, files);
     register_rng(engine);
 }
 

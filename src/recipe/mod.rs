@@ -53,9 +53,10 @@ impl Recipe {
         let folder = if folder.as_os_str().is_empty() { PathBuf::from(".") } else { folder };
         let resolver = Arc::new(Resolver::new(&folder, sources.clone()));
         let params = Arc::new(Params { overrides: overrides.iter().cloned().collect(), ..Params::default() });
+        let files = Arc::new(shape_api::MeshFiles::new(&folder, sources.clone()));
 
         let mut engine = engine::sandboxed(resolver.clone());
-        api::register(&mut engine, params.clone());
+        api::register(&mut engine, params.clone(), files.clone());
         let mut ast = engine.compile(&text).map_err(|e| RecipeError::parse(&e, &label, &sources))?;
         ast.set_source(label.as_str());
         let result: Dynamic = engine
@@ -71,7 +72,7 @@ impl Recipe {
         // Closures called later no longer see the recipe's imports: give them the imported
         // modules as static modules under the same aliases.
         let mut sample_engine = engine::sandboxed(resolver.clone());
-        api::register(&mut sample_engine, params.clone());
+        api::register(&mut sample_engine, params.clone(), files);
         for (module, alias) in imports(&ast) {
             let m = resolver
                 .resolve(&engine, &module, Position::NONE)

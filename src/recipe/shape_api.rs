@@ -3,16 +3,60 @@
 //! structure. Descriptions only: tessellation happens in Rust when the scene is built.
 
 use super::api::{fail, Fallible};
-use super::options::number;
+use super::engine::Sources;
+use super::options::{number, Options};
+use crate::geometry::import::{import_mesh, ImportOptions};
 use crate::geometry::primitives::Primitive;
+use crate::geometry::Mesh;
+use std::collections::BTreeMap;
+use std::path::{Component, Path, PathBuf};
+use std::sync::{Arc, Mutex};
 use crate::scene::{AssemblySpec, ShapeSpec};
 use glam::{DAffine3, DVec3};
-use rhai::{Array, Dynamic, Engine, EvalAltResult, ImmutableString, Module, NativeCallContext};
+use rhai::{Array, Dynamic, Engine, EvalAltResult, ImmutableString, Map, Module, NativeCallContext};
 
-pub fn register(engine: &mut Engine) {
+/// Mesh files a recipe imports: read once per recipe, only from inside the recipe's folder.
+pub struct MeshFiles {
+    folder: PathBuf,
+    sources: Arc<Sources>,
+    cache: Mutex<BTreeMap<(String, bool), Arc<Mesh>>>,
+}
+
+impl MeshFiles {
+    pub fn new(folder: &Path, sources: Arc<Sources>) -> Self {
+        MeshFiles { folder: folder.to_path_buf(), sources, cache: Mutex::default() }
+    }
+
+    fn load(&self, file: &str, normalize: bool) -> Result<Arc<Mesh>, String> {
+        let key = (file.to_string(), normalize);
+        if let Some(mesh) = self.cache.lock().unwrap().get(&key) {
+            return Ok(mesh.clone());
+        }
+        let relative = Path::new(file);
+        if file.is_empty() || !relative.components().all(|c| matches!(c, Component::Normal(_))) {
+            return Err(format!("shape::mesh(\"{file}\"): mesh files are named relative to the recipe's folder, without '..' or absolute paths"));
+        }
+        let path = self.folder.join(relative);
+        let imported = import_mesh(&path, ImportOptions { normalize })?;
+        for warning in &imported.warnings {
+            eprintln!("warning: {}: {warning}", path.display());
+        }
+        let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        self.sources.insert(&path.display().to_string(), &format!("mesh file, blake3 {}", blake3::hash(&bytes).to_hex()));
+        let mesh = Arc::new(imported.mesh);
+        self.cache.lock().unwrap().insert(key, mesh.clone());
+        Ok(mesh)
+    }
+}
+
+pub fn register(engine: &mut Engine, files: Arc<MeshFiles>) {
     engine.register_type_with_name::<ShapeSpec>("Shape");
     engine.register_type_with_name::<AssemblySpec>("Assembly");
-    engine.register_static_module("shape", primitives().into());
+    let mut shapes = primitives();
+    let one = files.clone();
+    shapes.set_native_fn("mesh", move |ctx: NativeCallContext, file: ImmutableString| imported(&ctx, &one, &file, Map::new()));
+    shapes.set_native_fn("mesh", move |ctx: NativeCallContext, file: ImmutableString, options: Map| imported(&ctx, &files, &file, options));
+    engine.register_static_module("shape", shapes.into());
     register_placement(engine);
     engine.register_fn("part", |s: &mut ShapeSpec, name: ImmutableString| {
         s.part = name.to_string();
@@ -85,6 +129,19 @@ fn primitives() -> Module {
         })
     });
     m
+}
+
+/// `shape::mesh("file", #{ normalize: true })`.
+fn imported(ctx: &NativeCallContext, files: &MeshFiles, file: &str, options: Map) -> Result<ShapeSpec, Box<EvalAltResult>> {
+    make(ctx, || {
+        let mut o = Options::new(options, "shape::mesh options");
+        let normalize = match o.take("normalize") {
+            None => false,
+            Some(v) => v.as_bool().map_err(|_| format!("shape::mesh options.normalize = {v} must be true or false"))?,
+        };
+        o.finish()?;
+        Ok(Primitive::Imported { file: file.to_string(), normalize, mesh: files.load(file, normalize)? })
+    })
 }
 
 fn make(ctx: &NativeCallContext, build: impl FnOnce() -> Result<Primitive, String>) -> Result<ShapeSpec, Box<EvalAltResult>> {
