@@ -136,7 +136,7 @@ fn written_files_round_trip_through_other_readers() {
     ok(run(&recipe, &out, &[]));
     for view in 0..3 {
         let meta: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out.join(format!("samples/0000/000000_{view:02}.json"))).unwrap()).unwrap();
+            read_json(&out.join(format!("samples/0000/000000_{view:02}.json")));
         let m = |key: &str| -> Vec<Vec<f64>> { serde_json::from_value(meta["camera"][key].clone()).unwrap() };
         let (k, c2w, w2c, gl) = (m("K"), m("c2w_opencv"), m("w2c_opencv"), m("c2w_opengl"));
         assert_eq!(meta["camera"]["pixel_center"], 0.5);
@@ -177,6 +177,10 @@ fn written_files_round_trip_through_other_readers() {
         }
         assert!(hits > 100, "{hits} hits");
     }
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
 
 fn read_exr(path: &Path) -> Vec<f32> {
@@ -227,7 +231,7 @@ fn parameters_read_inside_the_scene_follow_set() {
     );
     let out = dir.path().join("ds");
     ok(run(&recipe, &out, &["--set", "span=3.5"]));
-    let meta: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("samples/0000/000000_00.json")).unwrap()).unwrap();
+    let meta: serde_json::Value = read_json(&out.join("samples/0000/000000_00.json"));
     assert_eq!(meta["scene"]["structures"][0]["length"], 3.5);
 }
 
@@ -251,7 +255,7 @@ fn beam_api_reaches_the_labels() {
     let out = dir.path().join("ds");
     ok(run(&recipe, &out, &[]));
     let meta = |s: u64| -> serde_json::Value {
-        serde_json::from_slice(&std::fs::read(out.join(format!("samples/0000/{s:06}_00.json"))).unwrap()).unwrap()
+        read_json(&out.join(format!("samples/0000/{s:06}_00.json")))
     };
     // Fixed–fixed UDL on an I-beam: Timoshenko, δ = qL⁴/(384 EI)·(1 + 4Φ), Φ = 12EI/(κGAL²)
     // (mechanics.md §2.1), with E = 210 GPa, ν = 0.3 and the section's A, I, κ from the JSON.
@@ -324,7 +328,7 @@ fn a_user_written_structure_module_renders_with_parts_and_instances() {
     let out = dir.path().join("ds");
     ok(run(&recipe, &out, &[]));
     for view in ["000000_00", "000001_01"] {
-        let meta: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join(format!("samples/0000/{view}.json"))).unwrap()).unwrap();
+        let meta: serde_json::Value = read_json(&out.join(format!("samples/0000/{view}.json")));
         let parts: Vec<String> = serde_json::from_value(meta["segmentation"]["part_ids"].clone()).unwrap();
         assert_eq!(parts, ["background", "footing", "pole", "arm", "head"]);
         assert_eq!(meta["segmentation"]["instance_ids"][2]["name"], "lamp post");
@@ -373,7 +377,7 @@ fn stdlib_structures_render_with_their_parts() {
     );
     let out = dir.path().join("ds");
     ok(run(&recipe, &out, &[]));
-    let meta: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("samples/0000/000000_00.json")).unwrap()).unwrap();
+    let meta: serde_json::Value = read_json(&out.join("samples/0000/000000_00.json"));
     let parts: Vec<String> = serde_json::from_value(meta["segmentation"]["part_ids"].clone()).unwrap();
     for expected in ["columns", "base plates", "haunches", "girder", "footing", "shaft", "capital"] {
         assert!(parts.iter().any(|p| p == expected), "{expected} missing from {parts:?}");
@@ -400,7 +404,7 @@ fn imported_meshes_render_and_broken_files_are_reported_at_the_call() {
     );
     let out = dir.path().join("ds");
     ok(run(&recipe, &out, &[]));
-    let meta: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("samples/0000/000000_00.json")).unwrap()).unwrap();
+    let meta: serde_json::Value = read_json(&out.join("samples/0000/000000_00.json"));
     assert_eq!(meta["scene"]["structures"][0]["shapes"][0]["primitive"]["file"], "models/tetra.obj");
     assert!(meta["coverage"].as_f64().unwrap() > 0.0);
 

@@ -73,6 +73,18 @@ impl Mesh {
         }
     }
 
+    /// Whether the surface is closed and consistently oriented: every directed edge appears
+    /// exactly once and its reverse exactly once.
+    pub fn is_closed_and_oriented(&self) -> bool {
+        let mut edges = std::collections::HashMap::new();
+        for t in &self.triangles {
+            for k in 0..3 {
+                *edges.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+            }
+        }
+        edges.iter().all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
+    }
+
     /// Whether every vertex coordinate is finite.
     pub fn is_finite(&self) -> bool {
         self.positions.iter().all(|p| p.is_finite())

@@ -223,20 +223,10 @@ fn ear_clip(points: &[DVec2]) -> Option<Vec<[u32; 3]>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::collections::HashMap;
     use std::f64::consts::PI;
 
-    fn closed_and_oriented(mesh: &Mesh) {
-        let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
-        for t in &mesh.triangles {
-            for k in 0..3 {
-                *edges.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
-            }
-        }
-        for (&(a, b), &n) in &edges {
-            assert_eq!(n, 1, "edge {a}->{b} used twice in one direction");
-            assert_eq!(edges.get(&(b, a)), Some(&1), "edge {a}->{b} has no twin");
-        }
+    fn closed_and_oriented(mesh: &crate::geometry::Mesh) {
+        assert!(mesh.is_closed_and_oriented(), "mesh is open or inconsistently oriented");
     }
 
     /// Area of a regular n-gon of circumradius r: the exact face of our tessellated circles.

@@ -167,19 +167,9 @@ pub fn stations(length: f64, segments: usize, kinks: &[f64]) -> Vec<f64> {
 mod tests {
     use super::*;
     use crate::mechanics::Load;
-    use std::collections::HashMap;
 
     fn closed_and_oriented(mesh: &crate::geometry::Mesh) {
-        let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
-        for t in &mesh.triangles {
-            for k in 0..3 {
-                *edges.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
-            }
-        }
-        for (&(a, b), &n) in &edges {
-            assert_eq!(n, 1, "edge {a}->{b} used twice in one direction");
-            assert_eq!(edges.get(&(b, a)), Some(&1), "edge {a}->{b} has no twin");
-        }
+        assert!(mesh.is_closed_and_oriented(), "mesh is open or inconsistently oriented");
     }
 
     fn sections() -> [Section; 4] {
