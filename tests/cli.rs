@@ -400,13 +400,17 @@ fn imported_meshes_render_and_broken_files_are_reported_at_the_call() {
         "imported.rhai",
         r#"dataset(#{ samples: 1, views: 2, camera: #{ width: 64, height: 48 },
             scene: |rng| [assembly("tetra", [shape::mesh("models/tetra.obj", #{ normalize: true }).scale(2.0)]),
-                          assembly("glb", [shape::mesh("models/tetra.glb").translate(3.0, 0.0, 0.0)])] })"#,
+                          assembly("glb", [shape::mesh("models/tetra.glb").translate(3.0, 0.0, 0.0)]),
+                          assembly("pier", [shape::mesh("models/tetra.obj")
+                              .deform_as_beam("z", "x", beam(#{ length: 1.0, width: 1.0, height: 1.0 }).cantilever().point_load(1.0, 0.2))
+                              .scale(1.0, 1.0, 4.0)])] })"#,
     );
     let out = dir.path().join("ds");
     ok(run(&recipe, &out, &[]));
     let meta: serde_json::Value = read_json(&out.join("samples/0000/000000_00.json"));
     assert_eq!(meta["scene"]["structures"][0]["shapes"][0]["primitive"]["file"], "models/tetra.obj");
     assert!(meta["coverage"].as_f64().unwrap() > 0.0);
+    assert_eq!(meta["scene"]["structures"][2]["shapes"][0]["bending"]["towards"], serde_json::json!([1.0, 0.0, 0.0]));
 
     let bad = write_recipe(dir.path(), "bad.rhai", "dataset(#{ scene: |rng| assembly(\"x\", [\n    shape::mesh(\"models/face_out_of_range.obj\")]) })\n");
     let output = run(&bad, &dir.path().join("out"), &[]);

@@ -11,7 +11,7 @@ use crate::geometry::Mesh;
 use std::collections::BTreeMap;
 use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, Mutex};
-use crate::scene::{AssemblySpec, ShapeSpec};
+use crate::scene::{AssemblySpec, BeamSpec, Bending, ShapeSpec};
 use glam::{DAffine3, DVec3};
 use rhai::{Array, Dynamic, Engine, EvalAltResult, ImmutableString, Map, Module, NativeCallContext};
 
@@ -58,6 +58,15 @@ pub fn register(engine: &mut Engine, files: Arc<MeshFiles>) {
     shapes.set_native_fn("mesh", move |ctx: NativeCallContext, file: ImmutableString, options: Map| imported(&ctx, &files, &file, options));
     engine.register_static_module("shape", shapes.into());
     register_placement(engine);
+    // Bend a shape (an imported mesh, say) as a beam: along `axis`, deflecting `towards`.
+    engine.register_fn("deform_as_beam", |s: &mut ShapeSpec, axis: ImmutableString, towards: ImmutableString, beam: BeamSpec| -> Fallible<ShapeSpec> {
+        let (a, t) = (direction(&axis)?, direction(&towards)?);
+        if a.dot(t).abs() > 1e-12 {
+            return fail(format!("deform_as_beam: the deflection direction \"{towards}\" must be perpendicular to the axis \"{axis}\""));
+        }
+        s.bending = Some(Bending { axis: a.to_array(), towards: t.to_array(), beam });
+        Ok(s.clone())
+    });
     engine.register_fn("part", |s: &mut ShapeSpec, name: ImmutableString| {
         s.part = name.to_string();
         s.clone()
@@ -129,6 +138,19 @@ fn primitives() -> Module {
         })
     });
     m
+}
+
+/// "x", "-z", ...: a signed coordinate axis.
+fn direction(name: &str) -> Fallible<DVec3> {
+    Ok(match name {
+        "x" | "+x" => DVec3::X,
+        "-x" => -DVec3::X,
+        "y" | "+y" => DVec3::Y,
+        "-y" => -DVec3::Y,
+        "z" | "+z" => DVec3::Z,
+        "-z" => -DVec3::Z,
+        other => return fail(format!("direction \"{other}\" is not one of x, y, z, -x, -y, -z")),
+    })
 }
 
 /// `shape::mesh("file", #{ normalize: true })`.

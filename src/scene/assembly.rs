@@ -1,8 +1,10 @@
 //! Assemblies: structures built in recipes from labelled, transformed primitives.
 
+use super::BeamSpec;
 use crate::geometry::primitives::Primitive;
 use crate::geometry::Mesh;
 use crate::materials::Material;
+use crate::mechanics::{section_frames, Deformation, Load};
 use glam::{DAffine3, DMat3, DVec3};
 use serde::Serialize;
 
@@ -13,6 +15,19 @@ pub struct ShapeSpec {
     /// Affine map from the primitive's frame to the assembly's: rows of a 3 × 4 matrix.
     pub transform: [[f64; 4]; 3],
     pub part: String,
+    /// A beam deformation applied in the primitive's own frame, before placement.
+    pub bending: Option<Bending>,
+}
+
+/// Bends a shape like a beam: `axis` runs along the beam (from the shape's lowest coordinate
+/// on it, which is the beam's x = 0), and positive deflection moves material along `towards`.
+/// The beam's length must equal the shape's extent along the axis; its section gives the
+/// stiffness for the labels and Timoshenko, and the shape's bounds give the neutral axis.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Bending {
+    pub axis: [f64; 3],
+    pub towards: [f64; 3],
+    pub beam: BeamSpec,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -24,7 +39,7 @@ pub struct AssemblySpec {
 
 impl ShapeSpec {
     pub fn new(primitive: Primitive) -> Self {
-        ShapeSpec { primitive, transform: to_rows(DAffine3::IDENTITY), part: "body".into() }
+        ShapeSpec { primitive, transform: to_rows(DAffine3::IDENTITY), part: "body".into(), bending: None }
     }
 
     pub fn affine(&self) -> DAffine3 {
@@ -77,6 +92,9 @@ impl AssemblySpec {
                     return Err(format!("assembly \"{}\": a shape of part \"{}\" has a degenerate placement", self.name, s.part));
                 }
                 let mut mesh = s.primitive.mesh(tolerance / s.stretch());
+                if let Some(bending) = &s.bending {
+                    bend(&mut mesh, bending).map_err(|e| format!("assembly \"{}\", part \"{}\": {e}", self.name, s.part))?;
+                }
                 mesh.transform(&m);
                 Ok((mesh, s.part.as_str()))
             })
@@ -84,9 +102,71 @@ impl AssemblySpec {
     }
 }
 
+/// Moves every vertex with the deformed beam: sections turn with the bending rotation and the
+/// axis shortens, exactly as for a meshed beam (the vertices are the stations).
+fn bend(mesh: &mut Mesh, b: &Bending) -> Result<(), String> {
+    let (axis, towards) = (DVec3::from_array(b.axis).normalize(), DVec3::from_array(b.towards).normalize());
+    let up = -towards;
+    let across = up.cross(axis);
+    let along = |p: DVec3| p.dot(axis);
+    let (lo, hi) = mesh.positions.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &p| (lo.min(along(p)), hi.max(along(p))));
+    let extent = hi - lo;
+    if (extent - b.beam.length).abs() > 1e-6 * extent {
+        return Err(format!("the beam's length {} m must equal the shape's extent along the axis, {extent} m", b.beam.length));
+    }
+    let neutral = {
+        let (zl, zh) = mesh.positions.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &p| (l.min(p.dot(up)), h.max(p.dot(up))));
+        0.5 * (zl + zh)
+    };
+    let deformation = Deformation::solve(&b.beam.problem())?;
+    let mut stations: Vec<f64> = mesh.positions.iter().map(|&p| along(p) - lo).collect();
+    stations.extend(b.beam.loads.iter().flat_map(|l| match *l {
+        Load::Point { at, .. } => vec![at],
+        Load::Distributed { from, to, .. } => vec![from, to],
+        Load::EndMoments { .. } => vec![],
+    }));
+    stations.push(0.0);
+    stations.sort_by(f64::total_cmp);
+    stations.dedup();
+    let frames = section_frames(&stations, b.beam.mapping, |x| deformation.at(x));
+    for p in &mut mesh.positions {
+        let s = along(*p) - lo;
+        let frame = frames[stations.partition_point(|&x| x < s)];
+        let z = p.dot(up) - neutral;
+        let (x, z) = frame.place(z);
+        *p = (lo + x) * axis + (neutral + z) * up + p.dot(across) * across;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_bent_box_matches_the_same_beam_meshed_directly() {
+        // A 4 m box along x bent as a cantilever (axis x, deflecting towards −z) lands where the
+        // beam mesher puts the same beam: compare the displaced corner at the tip.
+        let mut beam = BeamSpec::rectangular(4.0, 0.3, 0.5);
+        beam.support = crate::mechanics::Support::Cantilever;
+        beam.loads = vec![Load::Point { at: 4.0, force: 1.0 }];
+        beam.target = crate::mechanics::Target::Peak { deflection: 0.4 };
+        let mut shape = ShapeSpec::new(Primitive::Box { size: [4.0, 0.3, 0.5] });
+        shape.bending = Some(Bending { axis: [1.0, 0.0, 0.0], towards: [0.0, 0.0, -1.0], beam: beam.clone() });
+        let a = AssemblySpec { name: "bent".into(), shapes: vec![shape], material: Material::default() };
+        let bent = &a.build(1e-3).unwrap()[0].0;
+        let direct = beam.build(1e-3).unwrap().mesh;
+        // Both are centred on x = 0 at rest: the beam mesher's tip section (its last four
+        // vertices) must be corners of the bent box.
+        for corner in &direct.positions[direct.positions.len() - 4..] {
+            assert!(bent.positions.iter().any(|p| (*p - *corner).length() < 1e-9), "tip corner {corner} missing");
+        }
+        assert!(bent.is_closed_and_oriented());
+        // A length that does not match the shape is refused, naming both.
+        let mut wrong = a.clone();
+        wrong.shapes[0].bending.as_mut().unwrap().beam.length = 3.0;
+        assert!(wrong.build(1e-3).unwrap_err().contains("must equal the shape's extent"));
+    }
 
     #[test]
     fn placements_compose_and_keep_volumes() {
