@@ -423,6 +423,28 @@ fn imported_meshes_render_and_broken_files_are_reported_at_the_call() {
 }
 
 #[test]
+fn the_a2_silo_recipe_records_damage_and_its_plausible_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/a2_silo.rhai");
+    let out = dir.path().join("a2");
+    ok(run(&recipe, &out, &["--set", "samples=3", "--set", "views=1", "--set", "damage=1.0"]));
+    for s in 0..3 {
+        let meta = read_json(&out.join(format!("samples/0000/{s:06}_00.json")));
+        let parts: Vec<String> = serde_json::from_value(meta["segmentation"]["part_ids"].clone()).unwrap();
+        assert_eq!(parts, ["background", "shell", "roof", "hopper", "ring beams", "legs", "bracing"]);
+        let shell = &meta["scene"]["structures"][0]["shapes"][0]["shell"][0];
+        let (drawn, plausible) = (shell["amplitude"].as_f64().unwrap(), shell["plausible_amplitude"].as_f64().unwrap());
+        assert!((0.02..=0.15).contains(&drawn), "{shell}");
+        assert!(plausible > 0.0 && plausible < 0.02, "real loads give millimetres: {shell}");
+    }
+    rejects(
+        "dataset(#{ scene: |rng| assembly(\"x\", [shape::box(1.0, 1.0, 1.0).ovalise(0.1, 2, 0.0)]) })",
+        &[],
+        &["shell patterns apply to tubes", "<dir>/bad.rhai:1:"],
+    );
+}
+
+#[test]
 fn syntax_error_points_at_file_line_column() {
     rejects("let x = 3;\nlet y = (x + ;\n", &[], &["<dir>/bad.rhai:2:", "let y = (x + ;", "^"]);
 }

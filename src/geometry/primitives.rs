@@ -113,18 +113,14 @@ impl Primitive {
     /// be valid (see `validate`).
     pub fn mesh(&self, tolerance: f64) -> Mesh {
         match self {
-            Primitive::Box { size: [w, d, h] } => sweep(&rectangle_grid(*w, *d, 1), &straight(-0.5 * h, 0.5 * h, 1.0, 1.0)),
+            Primitive::Box { size: [w, d, h] } => sweep(&rectangle_grid(*w, *d, 1), &straight(-0.5 * h, 0.5 * h, 1.0, 1.0, 1)),
             Primitive::Frustum { bottom_radius, top_radius, height } => {
                 let disc = disc(circle_segments(bottom_radius.max(*top_radius), tolerance));
-                sweep(&disc, &straight(0.0, *height, *bottom_radius, *top_radius))
+                sweep(&disc, &straight(0.0, *height, *bottom_radius, *top_radius, 1))
             }
-            Primitive::Tube { radius, height, wall } => {
-                let n = circle_segments(*radius, tolerance);
-                let ring = annulus(circle(n, *radius), circle(n, radius - wall));
-                sweep(&ring, &straight(0.0, *height, 1.0, 1.0))
-            }
+            Primitive::Tube { .. } => self.tube_mesh(tolerance, 1, 0).expect("a tube"),
             Primitive::SphericalCap { radius, height } => sweep(&disc(circle_segments(*radius, tolerance)), &cap_frames(*radius, *height, tolerance)),
-            Primitive::Extrusion { profile, length } => sweep(&polygon(profile).expect("validated"), &straight(0.0, *length, 1.0, 1.0)),
+            Primitive::Extrusion { profile, length } => sweep(&polygon(profile).expect("validated"), &straight(0.0, *length, 1.0, 1.0, 1)),
             Primitive::Bend { profile, radius, angle } => {
                 let reach = radius + profile.iter().map(|p| p[0].abs()).fold(0.0, f64::max);
                 let steps = arc_steps(reach, *angle, tolerance);
@@ -143,9 +139,26 @@ impl Primitive {
     }
 }
 
-/// Frames from z0 to z1 along +z whose (x, y) scale goes from s0 to s1.
-fn straight(z0: f64, z1: f64, s0: f64, s1: f64) -> Vec<Frame3> {
-    [(z0, s0), (z1, s1)].map(|(z, s)| Frame3 { origin: DVec3::new(0.0, 0.0, z), u: s * DVec3::X, v: s * DVec3::Y }).to_vec()
+impl Primitive {
+    /// A tube with at least `rings` intervals along its height and `segments` around it (for
+    /// shell deformations that need them); None for other primitives.
+    pub fn tube_mesh(&self, tolerance: f64, rings: usize, segments: usize) -> Option<Mesh> {
+        let Primitive::Tube { radius, height, wall } = *self else { return None };
+        let n = circle_segments(radius, tolerance).max(segments);
+        let ring = annulus(circle(n, radius), circle(n, radius - wall));
+        Some(sweep(&ring, &straight(0.0, height, 1.0, 1.0, rings)))
+    }
+}
+
+/// Frames from z0 to z1 along +z, `steps` intervals, whose (x, y) scale goes from s0 to s1.
+fn straight(z0: f64, z1: f64, s0: f64, s1: f64, steps: usize) -> Vec<Frame3> {
+    (0..=steps.max(1))
+        .map(|i| {
+            let f = i as f64 / steps.max(1) as f64;
+            let s = s0 + (s1 - s0) * f;
+            Frame3 { origin: DVec3::new(0.0, 0.0, z0 + (z1 - z0) * f), u: s * DVec3::X, v: s * DVec3::Y }
+        })
+        .collect()
 }
 
 /// Latitude frames of a spherical cap, from its base circle up to the pole.

@@ -14,11 +14,13 @@ mod mapping;
 mod model;
 mod modes;
 mod section;
+mod shell;
 
 pub use linear::{Load, LinearBeam, Station};
 pub use mapping::{section_frames, AxisPoint, Mapping, SectionFrame};
 pub use model::{BeamProblem, Deformation, Labels, Target, Theory};
 pub use modes::ModeShape;
+pub use shell::{Shell, ShellPattern};
 pub use section::{circle_segments, Section, SectionOutline, SectionProperties, PAPER_DIVISIONS};
 pub(crate) use section::{annulus, rectangle_grid};
 

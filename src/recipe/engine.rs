@@ -18,6 +18,7 @@ const EMBEDDED_STDLIB: &[(&str, &str)] = &[
     ("beam", include_str!("../../stdlib/beam.rhai")),
     ("column", include_str!("../../stdlib/column.rhai")),
     ("portal_frame", include_str!("../../stdlib/portal_frame.rhai")),
+    ("silo", include_str!("../../stdlib/silo.rhai")),
 ];
 
 /// The folder searched for standard-library modules: `$SHMGEN_STDLIB`, else the repository's.

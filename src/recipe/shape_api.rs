@@ -11,7 +11,8 @@ use crate::geometry::Mesh;
 use std::collections::BTreeMap;
 use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, Mutex};
-use crate::scene::{AssemblySpec, BeamSpec, Bending, ShapeSpec};
+use crate::mechanics::ShellPattern;
+use crate::scene::{AssemblySpec, BeamSpec, Bending, LabelledPattern, ShapeSpec};
 use glam::{DAffine3, DVec3};
 use rhai::{Array, Dynamic, Engine, EvalAltResult, ImmutableString, Map, Module, NativeCallContext};
 
@@ -67,6 +68,7 @@ pub fn register(engine: &mut Engine, files: Arc<MeshFiles>) {
         s.bending = Some(Bending { axis: a.to_array(), towards: t.to_array(), beam });
         Ok(s.clone())
     });
+    register_shell_patterns(engine);
     engine.register_fn("part", |s: &mut ShapeSpec, name: ImmutableString| {
         s.part = name.to_string();
         s.clone()
@@ -138,6 +140,35 @@ fn primitives() -> Module {
         })
     });
     m
+}
+
+/// Silo and tank damage states on tubes: `.ovalise(A, n, towards)`, `.hoop_expansion(A)`,
+/// `.dimple(A, angle, height, radius)`, `.elephant_foot(A, height)`; amplitudes in metres.
+fn register_shell_patterns(engine: &mut Engine) {
+    fn add(s: &mut ShapeSpec, pattern: ShellPattern) -> Fallible<ShapeSpec> {
+        let Some(shell) = s.shell() else { return fail("shell patterns apply to tubes (shape::tube)".to_string()) };
+        pattern.validate(&shell).or_else(fail)?;
+        s.shell.push(LabelledPattern::new(pattern, &shell));
+        Ok(s.clone())
+    }
+    engine.register_fn("ovalise", |s: &mut ShapeSpec, a: Dynamic, n: i64, towards: Dynamic| -> Fallible<ShapeSpec> {
+        let n = u32::try_from(n).map_err(|_| format!("ovalisation n = {n} must be between 1 and 64"))?;
+        add(s, ShellPattern::Ovalisation { amplitude: number(&a, "ovalise amplitude")?, n, towards: number(&towards, "ovalise towards")? })
+    });
+    engine.register_fn("hoop_expansion", |s: &mut ShapeSpec, a: Dynamic| -> Fallible<ShapeSpec> {
+        add(s, ShellPattern::HoopExpansion { amplitude: number(&a, "hoop_expansion amplitude")? })
+    });
+    engine.register_fn("dimple", |s: &mut ShapeSpec, a: Dynamic, angle: Dynamic, height: Dynamic, radius: Dynamic| -> Fallible<ShapeSpec> {
+        add(s, ShellPattern::Dimple {
+            amplitude: number(&a, "dimple amplitude")?,
+            angle: number(&angle, "dimple angle")?,
+            height: number(&height, "dimple height")?,
+            radius: number(&radius, "dimple radius")?,
+        })
+    });
+    engine.register_fn("elephant_foot", |s: &mut ShapeSpec, a: Dynamic, height: Dynamic| -> Fallible<ShapeSpec> {
+        add(s, ShellPattern::ElephantFoot { amplitude: number(&a, "elephant_foot amplitude")?, height: number(&height, "elephant_foot height")? })
+    });
 }
 
 /// "x", "-z", ...: a signed coordinate axis.

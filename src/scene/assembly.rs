@@ -4,7 +4,7 @@ use super::BeamSpec;
 use crate::geometry::primitives::Primitive;
 use crate::geometry::Mesh;
 use crate::materials::Material;
-use crate::mechanics::{section_frames, Deformation, Load};
+use crate::mechanics::{section_frames, Deformation, Load, Shell, ShellPattern};
 use glam::{DAffine3, DMat3, DVec3};
 use serde::Serialize;
 
@@ -17,6 +17,24 @@ pub struct ShapeSpec {
     pub part: String,
     /// A beam deformation applied in the primitive's own frame, before placement.
     pub bending: Option<Bending>,
+    /// Radial shell deformation patterns of a tube, about its own axis, before placement.
+    pub shell: Vec<LabelledPattern>,
+}
+
+/// A shell pattern with what a physical load would plausibly give (written into the JSON).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LabelledPattern {
+    #[serde(flatten)]
+    pub pattern: ShellPattern,
+    pub plausible_amplitude: f64,
+    pub plausible_basis: &'static str,
+}
+
+impl LabelledPattern {
+    pub fn new(pattern: ShellPattern, shell: &Shell) -> Self {
+        let (plausible_amplitude, plausible_basis) = pattern.plausible(shell);
+        LabelledPattern { pattern, plausible_amplitude, plausible_basis }
+    }
 }
 
 /// Bends a shape like a beam: `axis` runs along the beam (from the shape's lowest coordinate
@@ -39,7 +57,15 @@ pub struct AssemblySpec {
 
 impl ShapeSpec {
     pub fn new(primitive: Primitive) -> Self {
-        ShapeSpec { primitive, transform: to_rows(DAffine3::IDENTITY), part: "body".into(), bending: None }
+        ShapeSpec { primitive, transform: to_rows(DAffine3::IDENTITY), part: "body".into(), bending: None, shell: Vec::new() }
+    }
+
+    /// The shell a tube forms, for shell patterns.
+    pub fn shell(&self) -> Option<Shell> {
+        match self.primitive {
+            Primitive::Tube { radius, height, wall } => Some(Shell { radius, wall, height }),
+            _ => None,
+        }
     }
 
     pub fn affine(&self) -> DAffine3 {
@@ -91,7 +117,11 @@ impl AssemblySpec {
                 if !m.is_finite() || m.matrix3.determinant().abs() < 1e-300 {
                     return Err(format!("assembly \"{}\": a shape of part \"{}\" has a degenerate placement", self.name, s.part));
                 }
-                let mut mesh = s.primitive.mesh(tolerance / s.stretch());
+                let local = tolerance / s.stretch();
+                let mut mesh = match s.shell() {
+                    Some(shell) if !s.shell.is_empty() => deformed_shell(&s.primitive, &shell, &s.shell, local),
+                    _ => s.primitive.mesh(local),
+                };
                 if let Some(bending) = &s.bending {
                     bend(&mut mesh, bending).map_err(|e| format!("assembly \"{}\", part \"{}\": {e}", self.name, s.part))?;
                 }
@@ -100,6 +130,24 @@ impl AssemblySpec {
             })
             .collect()
     }
+}
+
+/// A tube meshed finely enough for its patterns (chord rule on each pattern's curvature) with
+/// every vertex moved radially by the sum of the patterns.
+fn deformed_shell(tube: &Primitive, shell: &Shell, patterns: &[LabelledPattern], tolerance: f64) -> Mesh {
+    let (kz, ks) = patterns.iter().map(|p| p.pattern.curvatures(shell)).fold((0.0, 0.0), |(a, b), (z, s)| (a + z, b + s));
+    let need = |length: f64, k: f64| ((length * (k / (8.0 * tolerance)).sqrt()).ceil() as usize).clamp(1, 4096);
+    // An even ring count puts a ring at mid-height, where wind lobes peak.
+    let rings = need(shell.height, kz).next_multiple_of(2);
+    let segments = need(2.0 * std::f64::consts::PI * shell.radius, ks);
+    let mut mesh = tube.tube_mesh(tolerance, rings, segments).expect("shell patterns apply to tubes");
+    for p in &mut mesh.positions {
+        let r = p.x.hypot(p.y);
+        let theta = p.y.atan2(p.x);
+        let w: f64 = patterns.iter().map(|l| l.pattern.at(shell, theta, p.z)).sum();
+        *p += DVec3::new(p.x / r, p.y / r, 0.0) * w;
+    }
+    mesh
 }
 
 /// Moves every vertex with the deformed beam: sections turn with the bending rotation and the
@@ -166,6 +214,32 @@ mod tests {
         let mut wrong = a.clone();
         wrong.shapes[0].bending.as_mut().unwrap().beam.length = 3.0;
         assert!(wrong.build(1e-3).unwrap_err().contains("must equal the shape's extent"));
+    }
+
+    #[test]
+    fn shell_patterns_reach_their_requested_amplitude_on_the_mesh() {
+        // A thick wall keeps the deformed outer (2.94–3.1 m) and inner (2.44–2.6 m) surfaces apart.
+        let tube = Primitive::Tube { radius: 3.0, height: 12.0, wall: 0.5 };
+        let mut shape = ShapeSpec::new(tube);
+        let shell = shape.shell().unwrap();
+        for pattern in [
+            ShellPattern::Ovalisation { amplitude: 0.08, n: 3, towards: 0.0 },
+            ShellPattern::HoopExpansion { amplitude: 0.02 },
+        ] {
+            shape.shell.push(LabelledPattern::new(pattern, &shell));
+        }
+        let a = AssemblySpec { name: "silo".into(), shapes: vec![shape], material: Material::default() };
+        let mesh = &a.build(1e-3).unwrap()[0].0;
+        assert!(mesh.is_closed_and_oriented());
+        // Outer surface: largest radius = r + 0.08 + 0.02 at mid-height on the lobe; smallest
+        // = r − 0.08 + 0.02 between lobes (θ = π/3); ends stay at r + 0.02.
+        let outer: Vec<(f64, f64)> = mesh.positions.iter().map(|p| (p.x.hypot(p.y), p.z)).filter(|(r, _)| *r > 2.8).collect();
+        let max = outer.iter().map(|o| o.0).fold(0.0, f64::max);
+        let min = outer.iter().map(|o| o.0).fold(f64::INFINITY, f64::min);
+        assert!((max - 3.1).abs() < 1e-12, "{max}");
+        assert!((min - 2.94).abs() < 1e-4, "{min}");
+        assert!(outer.iter().filter(|o| o.1 == 0.0).all(|o| (o.0 - 3.02).abs() < 1e-12));
+        assert!((a.shapes[0].shell[0].plausible_amplitude).abs() < 0.01, "real wind gives millimetres");
     }
 
     #[test]

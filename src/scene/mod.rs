@@ -8,7 +8,7 @@
 mod assembly;
 mod beam;
 
-pub use assembly::{AssemblySpec, Bending, ShapeSpec};
+pub use assembly::{AssemblySpec, Bending, LabelledPattern, ShapeSpec};
 pub use beam::{segments_for_chord, stations, BeamSpec, BuiltBeam, Tessellation};
 
 use crate::cameras::CameraRig;

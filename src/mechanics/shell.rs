@@ -1,0 +1,169 @@
+//! Radial deformation patterns of cylindrical shells (silos, tanks), with explicit amplitudes
+//! and the amplitude a physical load would plausibly give (mechanics.md §6).
+//!
+//! Patterns are functions w(θ, z) of the angle about the shell axis and the height above its
+//! base, outward positive, in metres. They are labelled damage or load states, not solutions:
+//! physical responses of real silos are sub-millimetre and invisible at survey distances, so a
+//! visible deformation is stated, and labelled with what a real load would have done.
+
+use serde::Serialize;
+use std::f64::consts::PI;
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "pattern", rename_all = "snake_case")]
+pub enum ShellPattern {
+    /// Uniform hoop expansion under internal pressure.
+    HoopExpansion { amplitude: f64 },
+    /// Wind-type ovalisation (lobing): A sin(πz/H) cos(n(θ − θ₀)), ends kept circular by the
+    /// base and the roof.
+    Ovalisation { amplitude: f64, n: u32, towards: f64 },
+    /// A local inward dimple (positive amplitude = inward): −A cos²(πd/(2R)) within surface
+    /// distance d < R of the point (θ₀, z₀).
+    Dimple { amplitude: f64, angle: f64, height: f64, radius: f64 },
+    /// Elephant's-foot bulge just above the base: A (z/z₀) e^{1 − z/z₀}, peak A at z₀, zero at
+    /// the base.
+    ElephantFoot { amplitude: f64, height: f64 },
+}
+
+/// The shell the patterns act on: radius, wall thickness, height; steel.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Shell {
+    pub radius: f64,
+    pub wall: f64,
+    pub height: f64,
+}
+
+const E: f64 = super::STEEL_E;
+const NU: f64 = super::STEEL_NU;
+
+impl ShellPattern {
+    pub fn validate(&self, shell: &Shell) -> Result<(), String> {
+        let finite = |name: &str, x: f64| if x.is_finite() { Ok(()) } else { Err(format!("{name} = {x} is not a finite number")) };
+        match *self {
+            ShellPattern::HoopExpansion { amplitude } => finite("hoop_expansion amplitude", amplitude),
+            ShellPattern::Ovalisation { amplitude, n, towards } => {
+                finite("ovalisation amplitude", amplitude)?;
+                finite("ovalisation towards", towards)?;
+                if (1..=64).contains(&n) { Ok(()) } else { Err(format!("ovalisation n = {n} must be between 1 and 64")) }
+            }
+            ShellPattern::Dimple { amplitude, angle, height, radius } => {
+                finite("dimple amplitude", amplitude)?;
+                finite("dimple angle", angle)?;
+                if !(0.0..=shell.height).contains(&height) {
+                    return Err(format!("dimple height = {height} m lies outside the shell (0 to {} m)", shell.height));
+                }
+                if radius > 0.0 && radius < PI * shell.radius { Ok(()) } else { Err(format!("dimple radius = {radius} m must be positive and less than half the circumference")) }
+            }
+            ShellPattern::ElephantFoot { amplitude, height } => {
+                finite("elephant_foot amplitude", amplitude)?;
+                if height > 0.0 && height < shell.height { Ok(()) } else { Err(format!("elephant_foot height = {height} m must lie inside the shell")) }
+            }
+        }
+    }
+
+    /// w(θ, z), outward positive.
+    pub fn at(&self, shell: &Shell, theta: f64, z: f64) -> f64 {
+        match *self {
+            ShellPattern::HoopExpansion { amplitude } => amplitude,
+            ShellPattern::Ovalisation { amplitude, n, towards } => {
+                amplitude * (PI * z / shell.height).sin() * (f64::from(n) * (theta - towards)).cos()
+            }
+            ShellPattern::Dimple { amplitude, angle, height, radius } => {
+                let arc = shell.radius * angle_between(theta, angle);
+                let d = arc.hypot(z - height);
+                if d < radius { -amplitude * (PI * d / (2.0 * radius)).cos().powi(2) } else { 0.0 }
+            }
+            ShellPattern::ElephantFoot { amplitude, height } => {
+                let s = z / height;
+                amplitude * s * (1.0 - s).exp()
+            }
+        }
+    }
+
+    /// Largest second derivative of w along the height and around the circumference
+    /// (per metre of arc), for tessellation.
+    pub fn curvatures(&self, shell: &Shell) -> (f64, f64) {
+        match *self {
+            ShellPattern::HoopExpansion { .. } => (0.0, 0.0),
+            ShellPattern::Ovalisation { amplitude, n, .. } => {
+                (amplitude.abs() * (PI / shell.height).powi(2), amplitude.abs() * (f64::from(n) / shell.radius).powi(2))
+            }
+            ShellPattern::Dimple { amplitude, radius, .. } => {
+                let k = amplitude.abs() * 0.5 * (PI / radius).powi(2);
+                (k, k)
+            }
+            ShellPattern::ElephantFoot { amplitude, height } => (amplitude.abs() / (height * height), 0.0),
+        }
+    }
+
+    /// What a physical load would plausibly give, and on what basis.
+    pub fn plausible(&self, shell: &Shell) -> (f64, &'static str) {
+        let (r, t, h) = (shell.radius, shell.wall, shell.height);
+        match *self {
+            ShellPattern::HoopExpansion { .. } => {
+                (9810.0 * h * r * r / (E * t), "membrane hoop expansion p r²/(E t) at the base of a full water silo (p = ρ g H)")
+            }
+            ShellPattern::Ovalisation { n, .. } => (wind_harmonic(shell, n), "shell response to 1 kPa peak wind pressure, AS/NZS 1170.2 Fourier harmonic n, ends held circular"),
+            ShellPattern::Dimple { .. } => (0.010 * 4.0 * (r * t).sqrt(), "EN 1993-1-6 class B dimple tolerance U₀ = 0.010 over the gauge 4√(rt)"),
+            ShellPattern::ElephantFoot { .. } => ((r / t).sqrt() * t / 25.0, "EN 1993-1-6 class B characteristic imperfection √(r/t)·t/Q, Q = 25"),
+        }
+    }
+}
+
+/// Harmonic n of the wind pressure coefficient for a silo of height/diameter ≈ 1.
+fn wind_harmonic(shell: &Shell, n: u32) -> f64 {
+    let c = [0.4, 0.8, 0.3, -0.1, -0.05];
+    let Some(&cn) = c.get(n as usize - 1) else { return 0.0 };
+    let (r, t) = (shell.radius, shell.wall);
+    let p = 1000.0 * cn;
+    if n == 1 {
+        // Global sway of a cantilever tube under c_f q 2r per metre: qH⁴/(8EI), I = π r³ t.
+        return 0.6 * 1000.0 * 2.0 * r * shell.height.powi(4) / (8.0 * E * PI * r.powi(3) * t);
+    }
+    let d = E * t.powi(3) / (12.0 * (1.0 - NU * NU));
+    let lambda2 = (PI / shell.height).powi(2);
+    let mu2 = (f64::from(n * n) - 1.0) / (r * r);
+    p * (lambda2 + mu2).powi(2) / (d * (lambda2 + mu2).powi(4) + E * t / (r * r) * lambda2 * lambda2)
+}
+
+fn angle_between(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(2.0 * PI);
+    d.min(2.0 * PI - d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SILO: Shell = Shell { radius: 3.0, wall: 0.006, height: 15.0 };
+
+    #[test]
+    fn plausible_amplitudes_match_the_worked_examples() {
+        // mechanics.md §6.2 (r = 3 m, t = 6 mm, H = 15 m, q = 1 kPa): W₂ = 0.42 mm, W₃ = 0.96 mm,
+        // W₄ = −0.96 mm, W₅ = −0.74 mm, global sway 0.21 mm; §6.3: dimple tolerance 5.4 mm and
+        // Δw_k = 5.4 mm for class B.
+        let oval = |n| ShellPattern::Ovalisation { amplitude: 0.0, n, towards: 0.0 }.plausible(&SILO).0 * 1e3;
+        for (n, mm) in [(2, 0.42), (3, 0.96), (4, -0.96), (5, -0.74), (1, 0.21)] {
+            assert!((oval(n) - mm).abs() < 0.01 + 0.02 * mm.abs(), "n = {n}: {} mm", oval(n));
+        }
+        let dimple = ShellPattern::Dimple { amplitude: 0.0, angle: 0.0, height: 1.0, radius: 0.3 }.plausible(&SILO).0;
+        assert!((dimple * 1e3 - 5.4).abs() < 0.05);
+        let foot = ShellPattern::ElephantFoot { amplitude: 0.0, height: 0.5 }.plausible(&SILO).0;
+        assert!((foot * 1e3 - 5.4).abs() < 0.05);
+    }
+
+    #[test]
+    fn patterns_reach_their_amplitude_where_they_should() {
+        let oval = ShellPattern::Ovalisation { amplitude: 0.05, n: 3, towards: 0.4 };
+        assert!((oval.at(&SILO, 0.4, 7.5) - 0.05).abs() < 1e-15);
+        assert!(oval.at(&SILO, 0.4, 0.0).abs() < 1e-15 && oval.at(&SILO, 0.4, 15.0).abs() < 1e-15, "ends stay circular");
+        let dimple = ShellPattern::Dimple { amplitude: 0.02, angle: 6.2, height: 4.0, radius: 0.5 };
+        assert_eq!(dimple.at(&SILO, 6.2, 4.0), -0.02);
+        assert_eq!(dimple.at(&SILO, 6.2 + 0.5, 4.0), 0.0);
+        assert!(dimple.at(&SILO, 6.2 - 2.0 * PI, 4.1) < 0.0, "the angle wraps around");
+        let foot = ShellPattern::ElephantFoot { amplitude: 0.03, height: 0.4 };
+        assert!((foot.at(&SILO, 1.0, 0.4) - 0.03).abs() < 1e-15 && foot.at(&SILO, 1.0, 0.0) == 0.0);
+        assert!(ShellPattern::Ovalisation { amplitude: 0.1, n: 0, towards: 0.0 }.validate(&SILO).is_err());
+        assert!(ShellPattern::Dimple { amplitude: 0.1, angle: 0.0, height: 20.0, radius: 0.3 }.validate(&SILO).unwrap_err().contains("height = 20"));
+    }
+}
