@@ -21,7 +21,12 @@ fn box_mesh(centre: DVec3) -> Mesh {
 
 /// Planar depth of the first intersection of the pixel ray with the box (slab method, f64).
 fn analytic_box_depth(cam: &Camera, row: u32, col: u32, centre: DVec3) -> Option<f64> {
-    let d = cam.rotation * cam.intrinsics.ray_through_pixel(row, col);
+    analytic_box_depth_at(cam, f64::from(col) + 0.5, f64::from(row) + 0.5, centre)
+}
+
+/// The same through any image point (u, v).
+fn analytic_box_depth_at(cam: &Camera, u: f64, v: f64, centre: DVec3) -> Option<f64> {
+    let d = cam.rotation * cam.intrinsics.ray_through(u, v);
     let o = cam.position - centre;
     let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
     for axis in 0..3 {
@@ -314,4 +319,42 @@ fn a_deformed_beam_one_kilometre_away_renders_like_one_at_the_origin() {
     }
     let mismatched = a.depth.iter().zip(&b.depth).filter(|(x, y)| (**x > 0.0) != (**y > 0.0)).count();
     assert!(compared > 300 && mismatched <= 2, "{compared} compared, {mismatched} silhouette pixels differ");
+}
+
+#[test]
+fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() {
+    use shmgen::render::{shade, srgb_to_linear, Lighting};
+    // Head-on, the box shows one face of uniform colour on black: a silhouette pixel's linear
+    // value must be the face's times the fraction of the 2 × 2 sub-pixel rays that hit it.
+    let k = Intrinsics::from_fov_y(240, 180, 0.8);
+    let cam = Camera::look_at(k, DVec3::new(0.13, -9.0, 0.07), DVec3::new(0.13, 0.0, 0.07), DVec3::Z);
+    let mesh = TraceMesh::build(&box_mesh(DVec3::ZERO));
+    let g = mesh.trace(&cam);
+    let rgb = shade(&g, &mesh, &cam, &Lighting::default(), |_| [0.5, 0.5, 0.5], [0, 0, 0]);
+    let face = (0..g.depth.len()).filter(|&i| g.depth[i] > 0.0).map(|i| rgb[3 * i]).max().unwrap();
+    let face_linear = srgb_to_linear(f64::from(face) / 255.0);
+    let (mut partial, mut interior) = (0, 0);
+    for row in 0..k.height {
+        for col in 0..k.width {
+            let covered = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)]
+                .iter()
+                .filter(|(du, dv)| analytic_box_depth_at(&cam, f64::from(col) + du, f64::from(row) + dv, DVec3::ZERO).is_some())
+                .count();
+            let got = rgb[3 * (row * k.width + col) as usize];
+            let want = face_linear * covered as f64 / 4.0;
+            let got_linear = srgb_to_linear(f64::from(got) / 255.0);
+            match covered {
+                0 => assert_eq!(got, 0, "({row},{col}) is background"),
+                4 => {
+                    interior += 1;
+                    assert_eq!(got, face, "({row},{col}) is inside the face");
+                }
+                _ => {
+                    partial += 1;
+                    assert!((got_linear - want).abs() < 0.01, "({row},{col}): {got_linear} vs {want} ({covered}/4 covered)");
+                }
+            }
+        }
+    }
+    assert!(partial > 100 && interior > 1000, "{partial} partial, {interior} interior pixels");
 }

@@ -40,14 +40,15 @@ impl Intrinsics {
         half_x.min(half_y)
     }
 
-    /// Direction in camera axes through pixel (row, col) scaled to unit z, so that the ray
-    /// parameter at a hit is the planar depth.
+    /// Direction in camera axes through the centre of pixel (row, col), scaled to unit z so
+    /// that the ray parameter at a hit is the planar depth.
     pub fn ray_through_pixel(&self, row: u32, col: u32) -> DVec3 {
-        DVec3::new(
-            (f64::from(col) + 0.5 - self.cx) / self.fx,
-            (f64::from(row) + 0.5 - self.cy) / self.fy,
-            1.0,
-        )
+        self.ray_through(f64::from(col) + 0.5, f64::from(row) + 0.5)
+    }
+
+    /// Direction in camera axes through image point (u, v) (pixel units), unit z.
+    pub fn ray_through(&self, u: f64, v: f64) -> DVec3 {
+        DVec3::new((u - self.cx) / self.fx, (v - self.cy) / self.fy, 1.0)
     }
 
     /// Pixel coordinates (u, v) of a point in camera axes (z > 0).

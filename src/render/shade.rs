@@ -3,6 +3,7 @@
 
 use super::trace::{GBuffer, TraceMesh, NO_HIT};
 use crate::cameras::Camera;
+use rayon::prelude::*;
 use glam::DVec3;
 use std::sync::OnceLock;
 
@@ -25,39 +26,62 @@ impl Default for Lighting {
     }
 }
 
+/// Sub-pixel positions for pixels on an edge: a fixed 2 × 2 grid, so the result is the same
+/// on every run.
+const EDGE_SAMPLES: [(f64, f64); 4] = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)];
+
 /// RGB8 image (sRGB) of the G-buffer. `albedo_of(triangle)` gives the linear albedo of the
-/// surface a pixel sees; `background` is sRGB 0–255.
+/// surface a pixel sees; `background` is sRGB 0–255. Pixels where the visible surface changes
+/// (silhouettes, creases, material boundaries) are anti-aliased with extra rays, averaged in
+/// linear light; everywhere else one centre ray decides, as for the geometric labels.
 pub fn shade(
     g: &GBuffer,
     mesh: &TraceMesh,
     camera: &Camera,
     lighting: &Lighting,
-    albedo_of: impl Fn(u32) -> [f64; 3],
+    albedo_of: impl Fn(u32) -> [f64; 3] + Sync,
     background: [u8; 3],
 ) -> Vec<u8> {
-    let to_cam = camera.rotation.transpose();
-    let mut rgb = Vec::with_capacity(g.triangle.len() * 3);
+    let width = g.width as usize;
     let lut = srgb_lut();
-    for (i, &tri) in g.triangle.iter().enumerate() {
-        if tri == NO_HIT {
-            rgb.extend_from_slice(&background);
-            continue;
-        }
-        let (row, col) = ((i / g.width as usize) as u32, (i % g.width as usize) as u32);
-        let view = camera.intrinsics.ray_through_pixel(row, col);
-        let mut n = to_cam * mesh.normal(tri);
+    let background_linear = background.map(|c| srgb_to_linear(f64::from(c) / 255.0));
+    let radiance = |tri: Option<u32>, view: DVec3| -> [f64; 3] {
+        let Some(tri) = tri else { return background_linear };
+        let mut n = camera.rotation.transpose() * mesh.normal(tri);
         // Two-sided: light the face the camera sees.
         if n.dot(view) > 0.0 {
             n = -n;
         }
-        let light = lighting.ambient
-            + lighting.key.1 * n.dot(lighting.key.0).max(0.0)
-            + lighting.fill.1 * n.dot(lighting.fill.0).max(0.0);
-        for channel in albedo_of(tri) {
-            let linear = (channel * light).clamp(0.0, 1.0);
-            rgb.push(lut[(linear * (LUT_SIZE - 1) as f64).round() as usize]);
+        let light = lighting.ambient + lighting.key.1 * n.dot(lighting.key.0).max(0.0) + lighting.fill.1 * n.dot(lighting.fill.0).max(0.0);
+        albedo_of(tri).map(|c| (c * light).clamp(0.0, 1.0))
+    };
+    let surface = |i: usize| (g.triangle[i] != NO_HIT).then(|| g.triangle[i]);
+    let same_look = |a: Option<u32>, b: Option<u32>| match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => a == b || (mesh.normal(a).dot(mesh.normal(b)) > 1.0 - 1e-12 && albedo_of(a) == albedo_of(b)),
+        _ => false,
+    };
+    let mut rgb = vec![0u8; g.triangle.len() * 3];
+    rgb.par_chunks_mut(width * 3).enumerate().for_each(|(row, out)| {
+        for col in 0..width {
+            let i = row * width + col;
+            let here = surface(i);
+            let neighbours = [(col > 0).then(|| i - 1), (col + 1 < width).then(|| i + 1), (row > 0).then(|| i - width), (i + width < g.triangle.len()).then(|| i + width)];
+            let edge = neighbours.into_iter().flatten().any(|j| !same_look(here, surface(j)));
+            let colour = if edge {
+                EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
+                    let view = camera.intrinsics.ray_through(col as f64 + du, row as f64 + dv);
+                    let c = radiance(mesh.first_hit(camera, view), view);
+                    [acc[0] + c[0] / 4.0, acc[1] + c[1] / 4.0, acc[2] + c[2] / 4.0]
+                })
+            } else {
+                radiance(here, camera.intrinsics.ray_through_pixel(row as u32, col as u32))
+            };
+            for (k, c) in colour.iter().enumerate() {
+                out[3 * col + k] = lut[(c * (LUT_SIZE - 1) as f64).round() as usize];
+            }
         }
-    }
+    });
     rgb
 }
 

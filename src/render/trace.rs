@@ -107,6 +107,12 @@ impl TraceMesh {
         GBuffer { width: k.width, height: k.height, depth, triangle }
     }
 
+    /// The triangle first hit along `view` (camera axes) from the camera, if any.
+    pub fn first_hit(&self, camera: &Camera, view: DVec3) -> Option<u32> {
+        let origin = camera.position - self.anchor;
+        self.closest_hit(origin, origin.as_vec3a(), camera.rotation * view).map(|(_, tri)| tri)
+    }
+
     /// Planar depth and original triangle of the first surface along `dir` (unit camera z).
     fn closest_hit(&self, origin: DVec3, origin32: Vec3A, dir: DVec3) -> Option<(f32, u32)> {
         let dir32 = traversal_direction(dir.as_vec3a());
