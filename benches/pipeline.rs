@@ -20,11 +20,12 @@ fn main() {
     let recipe_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/quickstart.rhai");
     let samples = 10u64;
     let sets = [("samples".to_string(), samples.to_string()), ("views".to_string(), "20".to_string())];
-    let recipe = Recipe::load(&recipe_path, &sets).expect("quickstart loads");
+    let mut recipe = Recipe::load(&recipe_path, &sets).expect("quickstart loads");
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     println!("shmgen pipeline benchmark: quickstart, {samples} beams × 20 views at 960×960, RGB + depth + mask + JSON, {cores} cores");
 
-    for threads in [1, cores] {
+    for (threads, antialias) in [(1, true), (cores, true), (cores, false)] {
+        recipe.dataset.antialias = antialias;
         let mut rates = Vec::new();
         for _ in 0..5 {
             let dir = tempfile::tempdir().unwrap();
@@ -32,7 +33,9 @@ fn main() {
             let summary = pipeline::run(&recipe, &options).expect("run");
             rates.push(summary.pairs as f64 / summary.seconds);
         }
-        println!("  {threads} thread(s): median {:.1} pairs/s ({:.1} ms per pair), runs {:?}", median(rates.clone()), 1e3 / median(rates.clone()), rates.iter().map(|r| format!("{r:.1}")).collect::<Vec<_>>());
+        let label = if antialias { "on" } else { "off" };
+        let runs: Vec<String> = rates.iter().map(|r| format!("{r:.1}")).collect();
+        println!("  {threads} thread(s), anti-aliasing {label}: median {:.1} pairs/s ({:.1} ms per pair), runs {runs:?}", median(rates.clone()), 1e3 / median(rates));
     }
 
     // Per-stage cost of single views, one thread.
@@ -55,7 +58,7 @@ fn main() {
                 stages[2].1.push(t.elapsed().as_secs_f64());
                 coverage.push(g.triangle.iter().filter(|&&t| t != u32::MAX).count() as f64 / g.triangle.len() as f64);
                 let t = Instant::now();
-                let rgb = shade(&g, &mesh, &camera, &Lighting::default(), |_| [0.5, 0.3, 0.2], [0, 0, 0]);
+                let rgb = shade(&g, &mesh, &camera, &Lighting::default(), |_| [0.5, 0.3, 0.2], [0, 0, 0], true);
                 stages[3].1.push(t.elapsed().as_secs_f64());
                 let t = Instant::now();
                 std::hint::black_box(rgb_png(g.width, g.height, &rgb));

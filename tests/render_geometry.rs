@@ -330,7 +330,9 @@ fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() 
     let cam = Camera::look_at(k, DVec3::new(0.13, -9.0, 0.07), DVec3::new(0.13, 0.0, 0.07), DVec3::Z);
     let mesh = TraceMesh::build(&box_mesh(DVec3::ZERO));
     let g = mesh.trace(&cam);
-    let rgb = shade(&g, &mesh, &cam, &Lighting::default(), |_| [0.5, 0.5, 0.5], [0, 0, 0]);
+    let rgb = shade(&g, &mesh, &cam, &Lighting::default(), |_| [0.5, 0.5, 0.5], [0, 0, 0], true);
+    let plain = shade(&g, &mesh, &cam, &Lighting::default(), |_| [0.5, 0.5, 0.5], [0, 0, 0], false);
+    assert!(plain.iter().all(|&c| c == 0 || c == plain.iter().copied().max().unwrap()), "without anti-aliasing: face or background only");
     let face = (0..g.depth.len()).filter(|&i| g.depth[i] > 0.0).map(|i| rgb[3 * i]).max().unwrap();
     let face_linear = srgb_to_linear(f64::from(face) / 255.0);
     let (mut partial, mut interior) = (0, 0);

@@ -121,7 +121,7 @@ pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage)
             stage.write(path, &bytes)
         };
         if dataset.outputs.rgb {
-            let rgb = shade(&g, &trace_mesh, &camera, &lighting, |t| albedo[sample.owner[t as usize] as usize], background);
+            let rgb = shade(&g, &trace_mesh, &camera, &lighting, |t| albedo[sample.owner[t as usize] as usize], background, dataset.antialias);
             put(stage, "rgb", "png", rgb_png(w, h, &rgb))?;
         }
         if dataset.outputs.depth {

@@ -98,6 +98,10 @@ fn dataset(map: Map) -> OptResult<Dataset> {
     let samples = o.integer("samples", 1, 1, 1 << 40)? as u64;
     let views = o.integer("views", 1, 1, 100_000)? as u32;
     let background = o.colour("background", [0.0; 3])?;
+    let antialias = match o.take("antialias") {
+        None => true,
+        Some(v) => v.as_bool().map_err(|_| format!("dataset.antialias = {v} must be true or false"))?,
+    };
     let outputs = outputs(o.take("outputs"))?;
     let camera = match o.sub("camera")? {
         Some(c) => camera(c)?,
@@ -108,7 +112,7 @@ fn dataset(map: Map) -> OptResult<Dataset> {
         .try_cast::<FnPtr>()
         .ok_or("dataset.scene must be a function of the random source, like |rng| { ... }")?;
     o.finish()?;
-    Ok(Dataset { spec: DatasetSpec { name, seed, samples, views, camera, outputs, background }, scene })
+    Ok(Dataset { spec: DatasetSpec { name, seed, samples, views, camera, outputs, background, antialias }, scene })
 }
 
 fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {

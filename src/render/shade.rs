@@ -31,9 +31,10 @@ impl Default for Lighting {
 const EDGE_SAMPLES: [(f64, f64); 4] = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)];
 
 /// RGB8 image (sRGB) of the G-buffer. `albedo_of(triangle)` gives the linear albedo of the
-/// surface a pixel sees; `background` is sRGB 0–255. Pixels where the visible surface changes
-/// (silhouettes, creases, material boundaries) are anti-aliased with extra rays, averaged in
-/// linear light; everywhere else one centre ray decides, as for the geometric labels.
+/// surface a pixel sees; `background` is sRGB 0–255. A first pass shades one centre ray per
+/// pixel, as for the geometric labels; pixels whose colour differs from a neighbour's by more
+/// than one 8-bit level (silhouettes, creases, material boundaries) are then re-shaded from
+/// four sub-pixel rays averaged in linear light. Smooth shading changes cost nothing extra.
 pub fn shade(
     g: &GBuffer,
     mesh: &TraceMesh,
@@ -41,9 +42,9 @@ pub fn shade(
     lighting: &Lighting,
     albedo_of: impl Fn(u32) -> [f64; 3] + Sync,
     background: [u8; 3],
+    antialias: bool,
 ) -> Vec<u8> {
     let width = g.width as usize;
-    let lut = srgb_lut();
     let background_linear = background.map(|c| srgb_to_linear(f64::from(c) / 255.0));
     let radiance = |tri: Option<u32>, view: DVec3| -> [f64; 3] {
         let Some(tri) = tri else { return background_linear };
@@ -55,34 +56,49 @@ pub fn shade(
         let light = lighting.ambient + lighting.key.1 * n.dot(lighting.key.0).max(0.0) + lighting.fill.1 * n.dot(lighting.fill.0).max(0.0);
         albedo_of(tri).map(|c| (c * light).clamp(0.0, 1.0))
     };
-    let surface = |i: usize| (g.triangle[i] != NO_HIT).then(|| g.triangle[i]);
-    let same_look = |a: Option<u32>, b: Option<u32>| match (a, b) {
-        (None, None) => true,
-        (Some(a), Some(b)) => a == b || (mesh.normal(a).dot(mesh.normal(b)) > 1.0 - 1e-12 && albedo_of(a) == albedo_of(b)),
-        _ => false,
-    };
-    let mut rgb = vec![0u8; g.triangle.len() * 3];
+    let background_bytes = encode(background_linear);
+    let mut centre = vec![0u8; g.triangle.len() * 3];
+    centre.par_chunks_mut(width * 3).enumerate().for_each(|(row, out)| {
+        for col in 0..width {
+            let tri = g.triangle[row * width + col];
+            // Most of a frame is background: no ray, no shading.
+            let colour = if tri == NO_HIT {
+                background_bytes
+            } else {
+                encode(radiance(Some(tri), camera.intrinsics.ray_through_pixel(row as u32, col as u32)))
+            };
+            out[3 * col..3 * col + 3].copy_from_slice(&colour);
+        }
+    });
+    if !antialias {
+        return centre;
+    }
+    let pixel = |i: usize| &centre[3 * i..3 * i + 3];
+    let differs = |i: usize, j: usize| pixel(i).iter().zip(pixel(j)).any(|(a, b)| a.abs_diff(*b) > 1);
+    let mut rgb = centre.clone();
     rgb.par_chunks_mut(width * 3).enumerate().for_each(|(row, out)| {
         for col in 0..width {
             let i = row * width + col;
-            let here = surface(i);
             let neighbours = [(col > 0).then(|| i - 1), (col + 1 < width).then(|| i + 1), (row > 0).then(|| i - width), (i + width < g.triangle.len()).then(|| i + width)];
-            let edge = neighbours.into_iter().flatten().any(|j| !same_look(here, surface(j)));
-            let colour = if edge {
-                EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
-                    let view = camera.intrinsics.ray_through(col as f64 + du, row as f64 + dv);
-                    let c = radiance(mesh.first_hit(camera, view), view);
-                    [acc[0] + c[0] / 4.0, acc[1] + c[1] / 4.0, acc[2] + c[2] / 4.0]
-                })
-            } else {
-                radiance(here, camera.intrinsics.ray_through_pixel(row as u32, col as u32))
-            };
-            for (k, c) in colour.iter().enumerate() {
-                out[3 * col + k] = lut[(c * (LUT_SIZE - 1) as f64).round() as usize];
+            let near_surface = g.triangle[i] != NO_HIT || neighbours.iter().flatten().any(|&j| g.triangle[j] != NO_HIT);
+            if !near_surface || !neighbours.into_iter().flatten().any(|j| differs(i, j)) {
+                continue;
             }
+            let mean = EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
+                let view = camera.intrinsics.ray_through(col as f64 + du, row as f64 + dv);
+                let c = radiance(mesh.first_hit(camera, view), view);
+                [acc[0] + c[0] / 4.0, acc[1] + c[1] / 4.0, acc[2] + c[2] / 4.0]
+            });
+            out[3 * col..3 * col + 3].copy_from_slice(&encode(mean));
         }
     });
     rgb
+}
+
+/// Linear colour → sRGB 8-bit.
+fn encode(linear: [f64; 3]) -> [u8; 3] {
+    let lut = srgb_lut();
+    linear.map(|c| lut[(c * (LUT_SIZE - 1) as f64).round() as usize])
 }
 
 const LUT_SIZE: usize = 4096;

@@ -25,6 +25,8 @@ pub struct DatasetSpec {
     pub outputs: Outputs,
     /// Background colour, sRGB in [0, 1]; black as in the paper.
     pub background: [f64; 3],
+    /// Anti-alias RGB where the image changes (silhouettes, creases); labels never are.
+    pub antialias: bool,
 }
 
 /// Which per-view files are written.
