@@ -437,6 +437,13 @@ fn the_a2_silo_recipe_records_damage_and_its_plausible_size() {
         assert!((0.02..=0.15).contains(&drawn), "{shell}");
         assert!(plausible > 0.0 && plausible < 0.02, "real loads give millimetres: {shell}");
     }
+    // Parity with the paper's silo mesh (26,260 vertices, 18,200 mostly quad faces): within
+    // 20 % in vertices and in quad-equivalent faces (our triangles / 2).
+    let paper = dir.path().join("a2-paper");
+    ok(run(&recipe, &paper, &["--set", "samples=1", "--set", "views=1", "--set", "paper_mesh=true"]));
+    let mesh = &read_json(&paper.join("samples/0000/000000_00.json"))["mesh"];
+    let (v, t) = (mesh["vertices"].as_f64().unwrap(), mesh["triangles"].as_f64().unwrap());
+    assert!((v / 26_260.0 - 1.0).abs() < 0.2 && (t / 2.0 / 18_200.0 - 1.0).abs() < 0.2, "{v} vertices, {t} triangles");
     rejects(
         "dataset(#{ scene: |rng| assembly(\"x\", [shape::box(1.0, 1.0, 1.0).ovalise(0.1, 2, 0.0)]) })",
         &[],

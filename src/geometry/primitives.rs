@@ -143,10 +143,21 @@ impl Primitive {
     /// A tube with at least `rings` intervals along its height and `segments` around it (for
     /// shell deformations that need them); None for other primitives.
     pub fn tube_mesh(&self, tolerance: f64, rings: usize, segments: usize) -> Option<Mesh> {
-        let Primitive::Tube { radius, height, wall } = *self else { return None };
-        let n = circle_segments(radius, tolerance).max(segments);
-        let ring = annulus(circle(n, radius), circle(n, radius - wall));
-        Some(sweep(&ring, &straight(0.0, height, 1.0, 1.0, rings)))
+        let Primitive::Tube { radius, .. } = *self else { return None };
+        self.fixed_mesh(circle_segments(radius, tolerance).max(segments), rings)
+    }
+
+    /// Round primitives with exactly `segments` around and (tubes) `rings` along the height,
+    /// for parity with meshes made elsewhere; None for the others.
+    pub fn fixed_mesh(&self, segments: usize, rings: usize) -> Option<Mesh> {
+        let n = segments.max(3);
+        match *self {
+            Primitive::Tube { radius, height, wall } => {
+                Some(sweep(&annulus(circle(n, radius), circle(n, radius - wall)), &straight(0.0, height, 1.0, 1.0, rings)))
+            }
+            Primitive::Frustum { bottom_radius, top_radius, height } => Some(sweep(&disc(n), &straight(0.0, height, bottom_radius, top_radius, 1))),
+            _ => None,
+        }
     }
 }
 

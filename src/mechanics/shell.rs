@@ -23,6 +23,10 @@ pub enum ShellPattern {
     /// Elephant's-foot bulge just above the base: A (z/z₀) e^{1 − z/z₀}, peak A at z₀, zero at
     /// the base.
     ElephantFoot { amplitude: f64, height: f64 },
+    /// A buckle patch: a checkerboard of inward and outward half-waves of length `wavelength / 2`
+    /// in both directions, centred inward at (θ₀, z₀), under a cos² window of radius R
+    /// (the Koiter-circle eigenshapes of axial buckling, confined to a patch).
+    Buckle { amplitude: f64, angle: f64, height: f64, radius: f64, wavelength: f64 },
 }
 
 /// The shell the patterns act on: radius, wall thickness, height; steel.
@@ -58,6 +62,10 @@ impl ShellPattern {
                 finite("elephant_foot amplitude", amplitude)?;
                 if height > 0.0 && height < shell.height { Ok(()) } else { Err(format!("elephant_foot height = {height} m must lie inside the shell")) }
             }
+            ShellPattern::Buckle { amplitude, angle, height, radius, wavelength } => {
+                ShellPattern::Dimple { amplitude, angle, height, radius }.validate(shell)?;
+                if wavelength > 0.0 && wavelength <= 2.0 * radius { Ok(()) } else { Err(format!("buckle wavelength = {wavelength} m must be positive and at most the patch diameter")) }
+            }
         }
     }
 
@@ -77,6 +85,15 @@ impl ShellPattern {
                 let s = z / height;
                 amplitude * s * (1.0 - s).exp()
             }
+            ShellPattern::Buckle { amplitude, angle, height, radius, wavelength } => {
+                let arc = shell.radius * signed_angle(theta, angle);
+                let d = arc.hypot(z - height);
+                if d >= radius {
+                    return 0.0;
+                }
+                let k = 2.0 * PI / wavelength;
+                -amplitude * (k * arc).cos() * (k * (z - height)).cos() * (PI * d / (2.0 * radius)).cos().powi(2)
+            }
         }
     }
 
@@ -93,6 +110,10 @@ impl ShellPattern {
                 (k, k)
             }
             ShellPattern::ElephantFoot { amplitude, height } => (amplitude.abs() / (height * height), 0.0),
+            ShellPattern::Buckle { amplitude, wavelength, .. } => {
+                let k = amplitude.abs() * (2.0 * PI / wavelength).powi(2);
+                (k, k)
+            }
         }
     }
 
@@ -105,7 +126,9 @@ impl ShellPattern {
             }
             ShellPattern::Ovalisation { n, .. } => (wind_harmonic(shell, n), "shell response to 1 kPa peak wind pressure, AS/NZS 1170.2 Fourier harmonic n, ends held circular"),
             ShellPattern::Dimple { .. } => (0.010 * 4.0 * (r * t).sqrt(), "EN 1993-1-6 class B dimple tolerance U₀ = 0.010 over the gauge 4√(rt)"),
-            ShellPattern::ElephantFoot { .. } => ((r / t).sqrt() * t / 25.0, "EN 1993-1-6 class B characteristic imperfection √(r/t)·t/Q, Q = 25"),
+            ShellPattern::ElephantFoot { .. } | ShellPattern::Buckle { .. } => {
+                ((r / t).sqrt() * t / 25.0, "EN 1993-1-6 class B characteristic imperfection √(r/t)·t/Q, Q = 25")
+            }
         }
     }
 }
@@ -127,8 +150,13 @@ fn wind_harmonic(shell: &Shell, n: u32) -> f64 {
 }
 
 fn angle_between(a: f64, b: f64) -> f64 {
+    signed_angle(a, b).abs()
+}
+
+/// a − b wrapped into (−π, π].
+fn signed_angle(a: f64, b: f64) -> f64 {
     let d = (a - b).rem_euclid(2.0 * PI);
-    d.min(2.0 * PI - d)
+    if d > PI { d - 2.0 * PI } else { d }
 }
 
 #[cfg(test)]
@@ -163,6 +191,10 @@ mod tests {
         assert!(dimple.at(&SILO, 6.2 - 2.0 * PI, 4.1) < 0.0, "the angle wraps around");
         let foot = ShellPattern::ElephantFoot { amplitude: 0.03, height: 0.4 };
         assert!((foot.at(&SILO, 1.0, 0.4) - 0.03).abs() < 1e-15 && foot.at(&SILO, 1.0, 0.0) == 0.0);
+        let buckle = ShellPattern::Buckle { amplitude: 0.04, angle: 1.0, height: 6.0, radius: 1.0, wavelength: 0.5 };
+        assert_eq!(buckle.at(&SILO, 1.0, 6.0), -0.04, "inward at the centre");
+        assert!((buckle.at(&SILO, 1.0, 6.25) - 0.04 * (PI * 0.25 / 2.0).cos().powi(2)).abs() < 1e-15, "outward half a wave up");
+        assert_eq!(buckle.at(&SILO, 1.0, 7.1), 0.0, "nothing outside the patch");
         assert!(ShellPattern::Ovalisation { amplitude: 0.1, n: 0, towards: 0.0 }.validate(&SILO).is_err());
         assert!(ShellPattern::Dimple { amplitude: 0.1, angle: 0.0, height: 20.0, radius: 0.3 }.validate(&SILO).unwrap_err().contains("height = 20"));
     }

@@ -69,6 +69,13 @@ pub fn register(engine: &mut Engine, files: Arc<MeshFiles>) {
         Ok(s.clone())
     });
     register_shell_patterns(engine);
+    engine.register_fn("detail", |s: &mut ShapeSpec, segments: i64, rings: i64| -> Fallible<ShapeSpec> {
+        if !(3..=100_000).contains(&segments) || !(1..=100_000).contains(&rings) {
+            return fail(format!("detail({segments}, {rings}): segments must be 3–100000 and rings 1–100000"));
+        }
+        s.detail = Some([segments as u32, rings as u32]);
+        Ok(s.clone())
+    });
     engine.register_fn("part", |s: &mut ShapeSpec, name: ImmutableString| {
         s.part = name.to_string();
         s.clone()
@@ -143,7 +150,8 @@ fn primitives() -> Module {
 }
 
 /// Silo and tank damage states on tubes: `.ovalise(A, n, towards)`, `.hoop_expansion(A)`,
-/// `.dimple(A, angle, height, radius)`, `.elephant_foot(A, height)`; amplitudes in metres.
+/// `.dimple(A, angle, height, radius)`, `.buckle(A, angle, height, radius, wavelength)`,
+/// `.elephant_foot(A, height)`; amplitudes in metres.
 fn register_shell_patterns(engine: &mut Engine) {
     fn add(s: &mut ShapeSpec, pattern: ShellPattern) -> Fallible<ShapeSpec> {
         let Some(shell) = s.shell() else { return fail("shell patterns apply to tubes (shape::tube)".to_string()) };
@@ -164,6 +172,15 @@ fn register_shell_patterns(engine: &mut Engine) {
             angle: number(&angle, "dimple angle")?,
             height: number(&height, "dimple height")?,
             radius: number(&radius, "dimple radius")?,
+        })
+    });
+    engine.register_fn("buckle", |s: &mut ShapeSpec, a: Dynamic, angle: Dynamic, height: Dynamic, radius: Dynamic, wavelength: Dynamic| -> Fallible<ShapeSpec> {
+        add(s, ShellPattern::Buckle {
+            amplitude: number(&a, "buckle amplitude")?,
+            angle: number(&angle, "buckle angle")?,
+            height: number(&height, "buckle height")?,
+            radius: number(&radius, "buckle radius")?,
+            wavelength: number(&wavelength, "buckle wavelength")?,
         })
     });
     engine.register_fn("elephant_foot", |s: &mut ShapeSpec, a: Dynamic, height: Dynamic| -> Fallible<ShapeSpec> {

@@ -19,6 +19,9 @@ pub struct ShapeSpec {
     pub bending: Option<Bending>,
     /// Radial shell deformation patterns of a tube, about its own axis, before placement.
     pub shell: Vec<LabelledPattern>,
+    /// Fixed (segments around, rings along) for round primitives instead of the tolerance rule,
+    /// for parity with meshes made elsewhere.
+    pub detail: Option<[u32; 2]>,
 }
 
 /// A shell pattern with what a physical load would plausibly give (written into the JSON).
@@ -57,7 +60,7 @@ pub struct AssemblySpec {
 
 impl ShapeSpec {
     pub fn new(primitive: Primitive) -> Self {
-        ShapeSpec { primitive, transform: to_rows(DAffine3::IDENTITY), part: "body".into(), bending: None, shell: Vec::new() }
+        ShapeSpec { primitive, transform: to_rows(DAffine3::IDENTITY), part: "body".into(), bending: None, shell: Vec::new(), detail: None }
     }
 
     /// The shell a tube forms, for shell patterns.
@@ -118,8 +121,10 @@ impl AssemblySpec {
                     return Err(format!("assembly \"{}\": a shape of part \"{}\" has a degenerate placement", self.name, s.part));
                 }
                 let local = tolerance / s.stretch();
-                let mut mesh = match s.shell() {
-                    Some(shell) if !s.shell.is_empty() => deformed_shell(&s.primitive, &shell, &s.shell, local),
+                let fixed = s.detail.and_then(|[n, rings]| s.primitive.fixed_mesh(n as usize, rings as usize));
+                let mut mesh = match (s.shell(), fixed) {
+                    (Some(shell), _) if !s.shell.is_empty() => deformed_shell(&s.primitive, &shell, &s.shell, local),
+                    (_, Some(mesh)) => mesh,
                     _ => s.primitive.mesh(local),
                 };
                 if let Some(bending) = &s.bending {
