@@ -2,8 +2,9 @@
 //!
 //! Owns: the BVH over a scene mesh (built once, reused for all its views), the watertight
 //! ray–triangle test, screen-space culling, the per-pixel geometric buffers (planar depth,
-//! hit triangle) and Lambert shading into RGB. Must not touch: recipes, mechanics or files.
-//! One centre ray per pixel for every geometric label; nothing here is random.
+//! hit triangle) and Lambert shading into RGB, anti-aliased with fixed sub-pixel rays only where
+//! the image changes. Must not touch: recipes, mechanics or files. One centre ray per pixel for
+//! every geometric label; nothing here is random.
 
 mod shade;
 mod trace;
