@@ -6,7 +6,7 @@
 
 use shmgen::cameras::{CameraRig, Distance};
 use shmgen::mechanics::{Deformation, Load, Support, Target, Theory};
-use shmgen::render::{TraceMesh, NO_HIT};
+use shmgen::render::{NO_HIT, TraceMesh};
 use shmgen::scene::{BeamSpec, Tessellation};
 use shmgen::seeds::{Scope, Stream};
 use std::time::Instant;
@@ -21,9 +21,27 @@ fn beams() -> Vec<(String, BeamSpec)> {
     let mut out = Vec::new();
     for (name, support, at, width, height_ratio) in [
         ("SS mid, slender", Support::SimplySupported, 0.5, 0.02, 0.5),
-        ("SS quarter, stocky", Support::SimplySupported, 0.25, 0.25, 1.5),
-        ("cantilever tip, slender", Support::Cantilever, 1.0, 0.05, 0.3),
-        ("cantilever mid, medium", Support::Cantilever, 0.5, 0.12, 1.0),
+        (
+            "SS quarter, stocky",
+            Support::SimplySupported,
+            0.25,
+            0.25,
+            1.5,
+        ),
+        (
+            "cantilever tip, slender",
+            Support::Cantilever,
+            1.0,
+            0.05,
+            0.3,
+        ),
+        (
+            "cantilever mid, medium",
+            Support::Cantilever,
+            0.5,
+            0.12,
+            1.0,
+        ),
     ] {
         let mut b = BeamSpec::rectangular(1.0, width, width * height_ratio);
         b.support = support;
@@ -45,7 +63,8 @@ fn smooth_pixels(depth: &[f32], width: usize) -> Vec<bool> {
             smooth[row * width + col] = z > 0.0
                 && (-1..=1).all(|dr: isize| {
                     (-1..=1).all(|dc: isize| {
-                        let n = depth[(row as isize + dr) as usize * width + (col as isize + dc) as usize];
+                        let n = depth
+                            [(row as isize + dr) as usize * width + (col as isize + dc) as usize];
                         n > 0.0 && (n - z).abs() < 0.01 * z
                     })
                 });
@@ -55,22 +74,43 @@ fn smooth_pixels(depth: &[f32], width: usize) -> Vec<bool> {
 }
 
 fn main() {
-    let rig = CameraRig { distance: Distance::Frame { margin: 1.05 }, ..CameraRig::default() };
+    let rig = CameraRig {
+        distance: Distance::Frame { margin: 1.05 },
+        ..CameraRig::default()
+    };
     let views = 6;
-    println!("Speed against error, A1 beams (L = 1 m, δ = 0.05 L), 960×960, {views} views each, 1 thread per view");
-    println!("depth error: max |z − z_ref| over pixels both see whose reference 3×3 neighbourhood is a continuous surface");
-    println!("(occlusion edges excluded; reference: 4096 segments); silhouette: pixels per view whose hit/miss differs");
+    println!(
+        "Speed against error, A1 beams (L = 1 m, δ = 0.05 L), 960×960, {views} views each, 1 thread per view"
+    );
+    println!(
+        "depth error: max |z − z_ref| over pixels both see whose reference 3×3 neighbourhood is a continuous surface"
+    );
+    println!(
+        "(occlusion edges excluded; reference: 4096 segments); silhouette: pixels per view whose hit/miss differs"
+    );
     let settings: Vec<(String, Tessellation)> = [1, 2, 4, 8, 16, 32, 64]
         .iter()
         .map(|&n| (format!("{n} segments"), Tessellation::Segments(n)))
         .chain([
-            ("pixel tolerance 1 px".to_string(), Tessellation::Pixels(1.0)),
-            ("pixel tolerance 0.25 px".to_string(), Tessellation::Pixels(0.25)),
-            ("pixel tolerance 0.1 px (default)".to_string(), Tessellation::Pixels(0.1)),
+            (
+                "pixel tolerance 1 px".to_string(),
+                Tessellation::Pixels(1.0),
+            ),
+            (
+                "pixel tolerance 0.25 px".to_string(),
+                Tessellation::Pixels(0.25),
+            ),
+            (
+                "pixel tolerance 0.1 px (default)".to_string(),
+                Tessellation::Pixels(0.1),
+            ),
             ("paper mesh (12,288 faces)".to_string(), Tessellation::Paper),
         ])
         .collect();
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
     pool.install(|| {
         for (name, beam) in beams() {
             let footprint = rig.nearest_pixel_footprint(beam.radius());

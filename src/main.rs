@@ -8,7 +8,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "shmgen", version, about = "Synthetic datasets of deformed civil structures from Rhai recipes")]
+#[command(
+    name = "shmgen",
+    version,
+    about = "Synthetic datasets of deformed civil structures from Rhai recipes"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -42,7 +46,9 @@ enum Command {
 }
 
 fn parse_set(s: &str) -> Result<(String, String), String> {
-    let (name, value) = s.split_once('=').ok_or_else(|| format!("--set {s}: expected NAME=VALUE"))?;
+    let (name, value) = s
+        .split_once('=')
+        .ok_or_else(|| format!("--set {s}: expected NAME=VALUE"))?;
     let name = name.trim();
     if name.is_empty() {
         return Err(format!("--set {s}: the parameter name is empty"));
@@ -63,9 +69,26 @@ fn main() -> ExitCode {
 
 fn execute(command: Command) -> Result<()> {
     match command {
-        Command::Run { recipe, out, sets, threads, shard, force, quiet } => {
+        Command::Run {
+            recipe,
+            out,
+            sets,
+            threads,
+            shard,
+            force,
+            quiet,
+        } => {
             let recipe = Recipe::load(&recipe, &sets)?;
-            let summary = pipeline::run(&recipe, &RunOptions { out: out.clone(), threads, shard, force, quiet })?;
+            let summary = pipeline::run(
+                &recipe,
+                &RunOptions {
+                    out: out.clone(),
+                    threads,
+                    shard,
+                    force,
+                    quiet,
+                },
+            )?;
             let rate = summary.pairs as f64 / summary.seconds.max(1e-9);
             println!(
                 "done: {} samples rendered ({} already present), {} image/depth pairs in {:.2} s = {rate:.1} pairs/s, {:.1} MB written to {}{}",
@@ -75,7 +98,11 @@ fn execute(command: Command) -> Result<()> {
                 summary.seconds,
                 summary.bytes as f64 / 1e6,
                 out.display(),
-                if summary.complete { "" } else { " (dataset incomplete: other shards still to run)" }
+                if summary.complete {
+                    ""
+                } else {
+                    " (dataset incomplete: other shards still to run)"
+                }
             );
             Ok(())
         }

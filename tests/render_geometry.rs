@@ -2,10 +2,10 @@
 //! triangles, and back-projection onto the mesh.
 
 use glam::{DMat3, DVec2, DVec3};
-use shmgen::cameras::{CameraRig, Camera, Distance, Intrinsics, ViewDraw};
+use shmgen::cameras::{Camera, CameraRig, Distance, Intrinsics, ViewDraw};
 use shmgen::geometry::Mesh;
-use shmgen::render::{TraceMesh, NO_HIT};
 use shmgen::mechanics::{Load, Section, Support, Target};
+use shmgen::render::{NO_HIT, TraceMesh};
 use shmgen::scene::{BeamSpec, Tessellation};
 use shmgen::seeds::{Scope, Stream};
 
@@ -36,7 +36,10 @@ fn analytic_box_depth_at(cam: &Camera, u: f64, v: f64, centre: DVec3) -> Option<
             }
             continue;
         }
-        let (a, b) = ((-HALF[axis] - o[axis]) / d[axis], (HALF[axis] - o[axis]) / d[axis]);
+        let (a, b) = (
+            (-HALF[axis] - o[axis]) / d[axis],
+            (HALF[axis] - o[axis]) / d[axis],
+        );
         t0 = t0.max(a.min(b));
         t1 = t1.min(a.max(b));
     }
@@ -44,7 +47,14 @@ fn analytic_box_depth_at(cam: &Camera, u: f64, v: f64, centre: DVec3) -> Option<
 }
 
 fn box_edges(centre: DVec3) -> Vec<(DVec3, DVec3)> {
-    let corner = |i: u32| centre + DVec3::new(if i & 1 == 0 { -1.0 } else { 1.0 }, if i & 2 == 0 { -1.0 } else { 1.0 }, if i & 4 == 0 { -1.0 } else { 1.0 }) * HALF;
+    let corner = |i: u32| {
+        centre
+            + DVec3::new(
+                if i & 1 == 0 { -1.0 } else { 1.0 },
+                if i & 2 == 0 { -1.0 } else { 1.0 },
+                if i & 4 == 0 { -1.0 } else { 1.0 },
+            ) * HALF
+    };
     let mut edges = Vec::new();
     for i in 0..8u32 {
         for bit in [1, 2, 4] {
@@ -69,7 +79,10 @@ fn check_box_view(cam: &Camera, centre: DVec3, min_hits: usize) {
     let edges: Vec<(DVec2, DVec2)> = box_edges(centre)
         .iter()
         .map(|(a, b)| {
-            let (pa, pb) = (k.project(cam.world_to_camera(*a)), k.project(cam.world_to_camera(*b)));
+            let (pa, pb) = (
+                k.project(cam.world_to_camera(*a)),
+                k.project(cam.world_to_camera(*b)),
+            );
             (DVec2::new(pa.0, pa.1), DVec2::new(pb.0, pb.1))
         })
         .collect();
@@ -84,15 +97,29 @@ fn check_box_view(cam: &Camera, centre: DVec3, min_hits: usize) {
             assert_eq!(z == 0.0, g.triangle[i] == NO_HIT);
             if let (Some(t), true) = (truth, z > 0.0) {
                 hits += 1;
-                assert!((f64::from(z) - t).abs() <= 1e-5 * t, "pixel ({row},{col}): depth {z} vs analytic {t}");
+                assert!(
+                    (f64::from(z) - t).abs() <= 1e-5 * t,
+                    "pixel ({row},{col}): depth {z} vs analytic {t}"
+                );
             } else if truth.is_some() != (z > 0.0) {
-                let d = edges.iter().map(|(a, b)| segment_distance(centre_px, *a, *b)).fold(f64::INFINITY, f64::min);
-                assert!(d < 1e-3, "pixel ({row},{col}) mask {} vs analytic {}, {d} px from an edge", z > 0.0, truth.is_some());
+                let d = edges
+                    .iter()
+                    .map(|(a, b)| segment_distance(centre_px, *a, *b))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    d < 1e-3,
+                    "pixel ({row},{col}) mask {} vs analytic {}, {d} px from an edge",
+                    z > 0.0,
+                    truth.is_some()
+                );
                 near_edge += 1;
             }
         }
     }
-    assert!(hits >= min_hits, "the box must fill part of the view ({hits} hits)");
+    assert!(
+        hits >= min_hits,
+        "the box must fill part of the view ({hits} hits)"
+    );
     assert!(near_edge < 10);
 }
 
@@ -110,7 +137,12 @@ fn box_head_on_depth_and_mask_match_analytic_geometry() {
 #[test]
 fn box_oblique_depth_and_mask_match_analytic_geometry() {
     let k = paper_intrinsics();
-    let cam = Camera::look_at(k, DVec3::new(4.1, -3.3, 2.7), DVec3::new(0.2, 0.1, -0.1), DVec3::Z);
+    let cam = Camera::look_at(
+        k,
+        DVec3::new(4.1, -3.3, 2.7),
+        DVec3::new(0.2, 0.1, -0.1),
+        DVec3::Z,
+    );
     check_box_view(&cam, DVec3::ZERO, 2000);
 }
 
@@ -126,7 +158,12 @@ fn box_one_kilometre_from_the_origin_keeps_its_accuracy() {
 fn grazing_view_along_a_face_has_no_nan_and_matches_the_box() {
     // The camera sits exactly in the plane of the top face.
     let k = Intrinsics::from_fov_y(320, 240, 1.0);
-    let cam = Camera::look_at(k, DVec3::new(-8.0, 0.0, HALF.z), DVec3::new(0.0, 0.0, HALF.z), DVec3::Z);
+    let cam = Camera::look_at(
+        k,
+        DVec3::new(-8.0, 0.0, HALF.z),
+        DVec3::new(0.0, 0.0, HALF.z),
+        DVec3::Z,
+    );
     check_box_view(&cam, DVec3::ZERO, 500);
 }
 
@@ -138,16 +175,41 @@ fn deformed_beams() -> Vec<BeamSpec> {
     let mut cantilever = BeamSpec::rectangular(3.0, 0.2, 0.35);
     cantilever.support = Support::Cantilever;
     target(&mut cantilever, 2.0, 0.6);
-    let mut ss = BeamSpec::new(5.0, Section::ISection { width: 0.3, height: 0.5, flange: 0.03, web: 0.02 });
+    let mut ss = BeamSpec::new(
+        5.0,
+        Section::ISection {
+            width: 0.3,
+            height: 0.5,
+            flange: 0.03,
+            web: 0.02,
+        },
+    );
     target(&mut ss, 1e-9, 0.25); // load next to the pin
     ss.yaw = 0.7;
     ss.centre = [0.3, -0.2, 1.0];
-    let mut stocky = BeamSpec::new(1.0, Section::HollowBox { width: 0.6, height: 1.2, wall: 0.08 });
+    let mut stocky = BeamSpec::new(
+        1.0,
+        Section::HollowBox {
+            width: 0.6,
+            height: 1.2,
+            wall: 0.08,
+        },
+    );
     stocky.support = Support::FixedFixed;
     target(&mut stocky, 0.5, 0.05);
-    let mut tube = BeamSpec::new(4.0, Section::CircularHollow { diameter: 0.4, wall: 0.05 });
+    let mut tube = BeamSpec::new(
+        4.0,
+        Section::CircularHollow {
+            diameter: 0.4,
+            wall: 0.05,
+        },
+    );
     tube.support = Support::ProppedCantilever;
-    tube.loads = vec![Load::Distributed { from: 0.0, to: 4.0, intensity: 1.0 }];
+    tube.loads = vec![Load::Distributed {
+        from: 0.0,
+        to: 4.0,
+        intensity: 1.0,
+    }];
     tube.target = Target::Peak { deflection: 0.3 };
     vec![cantilever, ss, stocky, tube]
 }
@@ -172,7 +234,10 @@ fn holes(mesh: &Mesh, trace: &TraceMesh, cam: &Camera) -> usize {
             continue;
         }
         let lo = p[0].min(p[1]).min(p[2]).max(DVec2::ZERO);
-        let hi = p[0].max(p[1]).max(p[2]).min(DVec2::new(f64::from(k.width), f64::from(k.height)));
+        let hi = p[0]
+            .max(p[1])
+            .max(p[2])
+            .min(DVec2::new(f64::from(k.width), f64::from(k.height)));
         for row in (lo.y.floor() as u32)..(hi.y.ceil() as u32).min(k.height) {
             for col in (lo.x.floor() as u32)..(hi.x.ceil() as u32).min(k.width) {
                 let c = DVec2::new(f64::from(col) + 0.5, f64::from(row) + 0.5);
@@ -191,20 +256,63 @@ fn holes(mesh: &Mesh, trace: &TraceMesh, cam: &Camera) -> usize {
 
 #[test]
 fn closed_meshes_have_no_holes_from_200_cameras_including_the_poles() {
-    let rig = CameraRig { width: 160, height: 120, distance: Distance::Frame { margin: 1.1 }, ..CameraRig::default() };
+    let rig = CameraRig {
+        width: 160,
+        height: 120,
+        distance: Distance::Frame { margin: 1.1 },
+        ..CameraRig::default()
+    };
     for (b, beam) in deformed_beams().iter().enumerate() {
         let mesh = built(beam);
         let trace = TraceMesh::build(&mesh);
         let (lo, hi) = mesh.bounds().unwrap();
         let centre = 0.5 * (lo + hi);
-        let radius = mesh.positions.iter().map(|p| p.distance(centre)).fold(0.0, f64::max);
+        let radius = mesh
+            .positions
+            .iter()
+            .map(|p| p.distance(centre))
+            .fold(0.0, f64::max);
         for view in 0..200u32 {
             let cam = match view {
                 // Exact poles and a camera exactly along the beam axis.
-                0 => shmgen::cameras::orbit_camera(rig.intrinsics(), centre, &ViewDraw { yaw: 0.3, pitch: std::f64::consts::FRAC_PI_2, roll: 0.0, distance: 3.0 * radius }),
-                1 => shmgen::cameras::orbit_camera(rig.intrinsics(), centre, &ViewDraw { yaw: 2.0, pitch: -std::f64::consts::FRAC_PI_2, roll: 0.4, distance: 3.0 * radius }),
-                2 => shmgen::cameras::orbit_camera(rig.intrinsics(), centre, &ViewDraw { yaw: 0.0, pitch: 0.0, roll: 0.0, distance: 3.0 * radius }),
-                _ => rig.draw(&mut Stream::new(11, Scope::View(b as u64, view), "camera"), centre, radius).0,
+                0 => shmgen::cameras::orbit_camera(
+                    rig.intrinsics(),
+                    centre,
+                    &ViewDraw {
+                        yaw: 0.3,
+                        pitch: std::f64::consts::FRAC_PI_2,
+                        roll: 0.0,
+                        distance: 3.0 * radius,
+                    },
+                ),
+                1 => shmgen::cameras::orbit_camera(
+                    rig.intrinsics(),
+                    centre,
+                    &ViewDraw {
+                        yaw: 2.0,
+                        pitch: -std::f64::consts::FRAC_PI_2,
+                        roll: 0.4,
+                        distance: 3.0 * radius,
+                    },
+                ),
+                2 => shmgen::cameras::orbit_camera(
+                    rig.intrinsics(),
+                    centre,
+                    &ViewDraw {
+                        yaw: 0.0,
+                        pitch: 0.0,
+                        roll: 0.0,
+                        distance: 3.0 * radius,
+                    },
+                ),
+                _ => {
+                    rig.draw(
+                        &mut Stream::new(11, Scope::View(b as u64, view), "camera"),
+                        centre,
+                        radius,
+                    )
+                    .0
+                }
             };
             assert_eq!(holes(&mesh, &trace, &cam), 0, "beam {b}, view {view}");
         }
@@ -215,7 +323,9 @@ fn closed_meshes_have_no_holes_from_200_cameras_including_the_poles() {
 fn point_triangle_distance(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let n = (b - a).cross(c - a).normalize();
     let q = p - n * n.dot(p - a);
-    let inside = [(a, b), (b, c), (c, a)].iter().all(|&(u, v)| (v - u).cross(q - u).dot(n) >= -1e-12);
+    let inside = [(a, b), (b, c), (c, a)]
+        .iter()
+        .all(|&(u, v)| (v - u).cross(q - u).dot(n) >= -1e-12);
     if inside {
         return (p - q).length();
     }
@@ -230,7 +340,11 @@ fn point_triangle_distance(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
 
 #[test]
 fn back_projected_depth_lies_on_the_mesh() {
-    let rig = CameraRig { width: 240, height: 180, ..CameraRig::default() };
+    let rig = CameraRig {
+        width: 240,
+        height: 180,
+        ..CameraRig::default()
+    };
     for (b, beam) in deformed_beams().iter().enumerate() {
         let mesh = built(beam);
         let trace = TraceMesh::build(&mesh);
@@ -238,7 +352,11 @@ fn back_projected_depth_lies_on_the_mesh() {
         let centre = 0.5 * (lo + hi);
         let size = (hi - lo).length();
         for view in 0..6u32 {
-            let (cam, _) = rig.draw(&mut Stream::new(5, Scope::View(b as u64, view), "camera"), centre, 0.5 * size);
+            let (cam, _) = rig.draw(
+                &mut Stream::new(5, Scope::View(b as u64, view), "camera"),
+                centre,
+                0.5 * size,
+            );
             let g = trace.trace(&cam);
             let k = cam.intrinsics;
             let c2w = cam.c2w_cv();
@@ -249,26 +367,41 @@ fn back_projected_depth_lies_on_the_mesh() {
                 }
                 let (row, col) = ((i as u32) / k.width, (i as u32) % k.width);
                 let z = f64::from(z);
-                let x_cam = DVec3::new((f64::from(col) + 0.5 - k.cx) * z / k.fx, (f64::from(row) + 0.5 - k.cy) * z / k.fy, z);
+                let x_cam = DVec3::new(
+                    (f64::from(col) + 0.5 - k.cx) * z / k.fx,
+                    (f64::from(row) + 0.5 - k.cy) * z / k.fy,
+                    z,
+                );
                 let world = c2w.transform_point3(x_cam);
                 let [a, bb, c] = mesh.triangle(g.triangle[i] as usize);
                 worst = worst.max(point_triangle_distance(world, a, bb, c));
             }
-            assert!(worst < 1e-5 * size, "beam {b} view {view}: back-projection off the surface by {worst} m");
+            assert!(
+                worst < 1e-5 * size,
+                "beam {b} view {view}: back-projection off the surface by {worst} m"
+            );
         }
     }
 }
 
 #[test]
 fn rotation_of_the_rig_is_a_proper_rotation() {
-    let cam = Camera::look_at(paper_intrinsics(), DVec3::new(1.0, 2.0, 3.0), DVec3::ZERO, DVec3::Z);
+    let cam = Camera::look_at(
+        paper_intrinsics(),
+        DVec3::new(1.0, 2.0, 3.0),
+        DVec3::ZERO,
+        DVec3::Z,
+    );
     let r: DMat3 = cam.rotation;
     assert!((r.determinant() - 1.0).abs() < 1e-12);
 }
 
 fn sagging(length: f64, width: f64, height: f64, deflection: f64) -> BeamSpec {
     let mut b = BeamSpec::rectangular(length, width, height);
-    b.loads = vec![Load::Point { at: 0.5 * length, force: 1.0 }];
+    b.loads = vec![Load::Point {
+        at: 0.5 * length,
+        force: 1.0,
+    }];
     b.target = Target::Peak { deflection };
     b
 }
@@ -278,7 +411,16 @@ fn depth_from_below(beam: &BeamSpec, distance: f64) -> f64 {
     let mesh = built(beam);
     let k = Intrinsics::from_fov_y(65, 65, 0.2);
     let centre = DVec3::from_array(beam.centre);
-    let cam = shmgen::cameras::orbit_camera(k, centre, &ViewDraw { yaw: 0.0, pitch: -std::f64::consts::FRAC_PI_2, roll: 0.0, distance });
+    let cam = shmgen::cameras::orbit_camera(
+        k,
+        centre,
+        &ViewDraw {
+            yaw: 0.0,
+            pitch: -std::f64::consts::FRAC_PI_2,
+            roll: 0.0,
+            distance,
+        },
+    );
     let g = TraceMesh::build(&mesh).trace(&cam);
     f64::from(g.depth[32 * 65 + 32])
 }
@@ -292,7 +434,11 @@ fn a_deflection_of_a_millionth_of_the_span_is_visible_in_depth() {
     let straight = depth_from_below(&sagging(l, 0.01, l / 1000.0, 0.0), 0.3);
     let bent = depth_from_below(&sagging(l, 0.01, l / 1000.0, delta), 0.3);
     assert!(straight > 0.0 && bent > 0.0);
-    assert!(((straight - bent) - delta).abs() < 0.1 * delta, "depth moved by {} for δ = {delta}", straight - bent);
+    assert!(
+        ((straight - bent) - delta).abs() < 0.1 * delta,
+        "depth moved by {} for δ = {delta}",
+        straight - bent
+    );
 }
 
 #[test]
@@ -300,13 +446,25 @@ fn a_deformed_beam_one_kilometre_away_renders_like_one_at_the_origin() {
     let near = sagging(6.0, 0.2, 0.4, 0.3);
     let mut far = near.clone();
     far.centre = [1000.0, -800.0, 250.0];
-    let rig = CameraRig { width: 200, height: 150, ..CameraRig::default() };
+    let rig = CameraRig {
+        width: 200,
+        height: 150,
+        ..CameraRig::default()
+    };
     let render = |b: &BeamSpec| {
         let mesh = built(b);
         let (lo, hi) = mesh.bounds().unwrap();
         let centre = 0.5 * (lo + hi);
-        let radius = mesh.positions.iter().map(|p| p.distance(centre)).fold(0.0, f64::max);
-        let (cam, _) = rig.draw(&mut Stream::new(2, Scope::View(0, 0), "camera"), centre, radius);
+        let radius = mesh
+            .positions
+            .iter()
+            .map(|p| p.distance(centre))
+            .fold(0.0, f64::max);
+        let (cam, _) = rig.draw(
+            &mut Stream::new(2, Scope::View(0, 0), "camera"),
+            centre,
+            radius,
+        );
         TraceMesh::build(&mesh).trace(&cam)
     };
     let (a, b) = (render(&near), render(&far));
@@ -314,33 +472,84 @@ fn a_deformed_beam_one_kilometre_away_renders_like_one_at_the_origin() {
     for i in 0..a.depth.len() {
         if a.depth[i] > 0.0 && b.depth[i] > 0.0 {
             compared += 1;
-            assert!((a.depth[i] - b.depth[i]).abs() <= 1e-5 * a.depth[i], "pixel {i}: {} vs {}", a.depth[i], b.depth[i]);
+            assert!(
+                (a.depth[i] - b.depth[i]).abs() <= 1e-5 * a.depth[i],
+                "pixel {i}: {} vs {}",
+                a.depth[i],
+                b.depth[i]
+            );
         }
     }
-    let mismatched = a.depth.iter().zip(&b.depth).filter(|(x, y)| (**x > 0.0) != (**y > 0.0)).count();
-    assert!(compared > 300 && mismatched <= 2, "{compared} compared, {mismatched} silhouette pixels differ");
+    let mismatched = a
+        .depth
+        .iter()
+        .zip(&b.depth)
+        .filter(|(x, y)| (**x > 0.0) != (**y > 0.0))
+        .count();
+    assert!(
+        compared > 300 && mismatched <= 2,
+        "{compared} compared, {mismatched} silhouette pixels differ"
+    );
 }
 
 #[test]
 fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() {
-    use shmgen::render::{shade, srgb_to_linear, Lighting};
+    use shmgen::render::{Lighting, shade, srgb_to_linear};
     // Head-on, the box shows one face of uniform colour on black: a silhouette pixel's linear
     // value must be the face's times the fraction of the 2 × 2 sub-pixel rays that hit it.
     let k = Intrinsics::from_fov_y(240, 180, 0.8);
-    let cam = Camera::look_at(k, DVec3::new(0.13, -9.0, 0.07), DVec3::new(0.13, 0.0, 0.07), DVec3::Z);
+    let cam = Camera::look_at(
+        k,
+        DVec3::new(0.13, -9.0, 0.07),
+        DVec3::new(0.13, 0.0, 0.07),
+        DVec3::Z,
+    );
     let mesh = TraceMesh::build(&box_mesh(DVec3::ZERO));
     let g = mesh.trace(&cam);
-    let rgb = shade(&g, &mesh, &cam, &Lighting::default(), |_| [0.5, 0.5, 0.5], [0, 0, 0], true);
-    let plain = shade(&g, &mesh, &cam, &Lighting::default(), |_| [0.5, 0.5, 0.5], [0, 0, 0], false);
-    assert!(plain.iter().all(|&c| c == 0 || c == plain.iter().copied().max().unwrap()), "without anti-aliasing: face or background only");
-    let face = (0..g.depth.len()).filter(|&i| g.depth[i] > 0.0).map(|i| rgb[3 * i]).max().unwrap();
+    let rgb = shade(
+        &g,
+        &mesh,
+        &cam,
+        &Lighting::default(),
+        |_| [0.5, 0.5, 0.5],
+        [0, 0, 0],
+        true,
+    );
+    let plain = shade(
+        &g,
+        &mesh,
+        &cam,
+        &Lighting::default(),
+        |_| [0.5, 0.5, 0.5],
+        [0, 0, 0],
+        false,
+    );
+    assert!(
+        plain
+            .iter()
+            .all(|&c| c == 0 || c == plain.iter().copied().max().unwrap()),
+        "without anti-aliasing: face or background only"
+    );
+    let face = (0..g.depth.len())
+        .filter(|&i| g.depth[i] > 0.0)
+        .map(|i| rgb[3 * i])
+        .max()
+        .unwrap();
     let face_linear = srgb_to_linear(f64::from(face) / 255.0);
     let (mut partial, mut interior) = (0, 0);
     for row in 0..k.height {
         for col in 0..k.width {
             let covered = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)]
                 .iter()
-                .filter(|(du, dv)| analytic_box_depth_at(&cam, f64::from(col) + du, f64::from(row) + dv, DVec3::ZERO).is_some())
+                .filter(|(du, dv)| {
+                    analytic_box_depth_at(
+                        &cam,
+                        f64::from(col) + du,
+                        f64::from(row) + dv,
+                        DVec3::ZERO,
+                    )
+                    .is_some()
+                })
                 .count();
             let got = rgb[3 * (row * k.width + col) as usize];
             let want = face_linear * covered as f64 / 4.0;
@@ -353,10 +562,16 @@ fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() 
                 }
                 _ => {
                     partial += 1;
-                    assert!((got_linear - want).abs() < 0.01, "({row},{col}): {got_linear} vs {want} ({covered}/4 covered)");
+                    assert!(
+                        (got_linear - want).abs() < 0.01,
+                        "({row},{col}): {got_linear} vs {want} ({covered}/4 covered)"
+                    );
                 }
             }
         }
     }
-    assert!(partial > 100 && interior > 1000, "{partial} partial, {interior} interior pixels");
+    assert!(
+        partial > 100 && interior > 1000,
+        "{partial} partial, {interior} interior pixels"
+    );
 }

@@ -7,7 +7,7 @@
 
 mod rig;
 
-pub use rig::{orbit_camera, CameraRig, Distance, ViewDraw};
+pub use rig::{CameraRig, Distance, ViewDraw, orbit_camera};
 
 use glam::{DMat3, DMat4, DVec3, DVec4};
 
@@ -26,11 +26,22 @@ impl Intrinsics {
     /// Square pixels, centred principal point, vertical field of view `fov_y` (radians).
     pub fn from_fov_y(width: u32, height: u32, fov_y: f64) -> Self {
         let f = 0.5 * f64::from(height) / (0.5 * fov_y).tan();
-        Intrinsics { width, height, fx: f, fy: f, cx: 0.5 * f64::from(width), cy: 0.5 * f64::from(height) }
+        Intrinsics {
+            width,
+            height,
+            fx: f,
+            fy: f,
+            cx: 0.5 * f64::from(width),
+            cy: 0.5 * f64::from(height),
+        }
     }
 
     pub fn matrix(&self) -> [[f64; 3]; 3] {
-        [[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]]
+        [
+            [self.fx, 0.0, self.cx],
+            [0.0, self.fy, self.cy],
+            [0.0, 0.0, 1.0],
+        ]
     }
 
     /// The smaller of the horizontal and vertical half fields of view.
@@ -72,10 +83,18 @@ impl Camera {
     /// axis instead of producing NaN.
     pub fn look_at(intrinsics: Intrinsics, eye: DVec3, target: DVec3, up: DVec3) -> Self {
         let forward = (target - eye).normalize();
-        let helper = if forward.cross(up).length_squared() > 1e-12 { up } else { forward.any_orthonormal_vector() };
+        let helper = if forward.cross(up).length_squared() > 1e-12 {
+            up
+        } else {
+            forward.any_orthonormal_vector()
+        };
         let right = forward.cross(helper).normalize();
         let down = forward.cross(right);
-        Camera { intrinsics, rotation: DMat3::from_cols(right, down, forward), position: eye }
+        Camera {
+            intrinsics,
+            rotation: DMat3::from_cols(right, down, forward),
+            position: eye,
+        }
     }
 
     /// Camera-to-world, OpenCV axes.
@@ -92,7 +111,12 @@ impl Camera {
     pub fn w2c_cv(&self) -> DMat4 {
         let rt = self.rotation.transpose();
         let t = -(rt * self.position);
-        DMat4::from_cols(rt.x_axis.extend(0.0), rt.y_axis.extend(0.0), rt.z_axis.extend(0.0), t.extend(1.0))
+        DMat4::from_cols(
+            rt.x_axis.extend(0.0),
+            rt.y_axis.extend(0.0),
+            rt.z_axis.extend(0.0),
+            t.extend(1.0),
+        )
     }
 
     /// Camera-to-world in OpenGL/nerfstudio axes: c2w_gl = c2w_cv · diag(1, −1, −1, 1).
@@ -135,13 +159,21 @@ mod tests {
         let k = Intrinsics::from_fov_y(640, 480, 0.9);
         for (row, col) in [(0, 0), (479, 639), (240, 320), (13, 601)] {
             let (u, v) = k.project(k.ray_through_pixel(row, col) * 7.5);
-            assert!((u - (f64::from(col) + 0.5)).abs() < 1e-9 && (v - (f64::from(row) + 0.5)).abs() < 1e-9);
+            assert!(
+                (u - (f64::from(col) + 0.5)).abs() < 1e-9
+                    && (v - (f64::from(row) + 0.5)).abs() < 1e-9
+            );
         }
     }
 
     #[test]
     fn matrices_are_consistent() {
-        let cam = Camera::look_at(k(), DVec3::new(3.0, -4.0, 2.0), DVec3::new(0.5, 0.2, 0.1), DVec3::Z);
+        let cam = Camera::look_at(
+            k(),
+            DVec3::new(3.0, -4.0, 2.0),
+            DVec3::new(0.5, 0.2, 0.1),
+            DVec3::Z,
+        );
         let p = DVec3::new(0.3, 0.7, -0.4);
         let via_w2c = cam.w2c_cv().transform_point3(p);
         assert!((via_w2c - cam.world_to_camera(p)).length() < 1e-12);
@@ -159,7 +191,11 @@ mod tests {
 
     #[test]
     fn look_at_along_up_is_finite() {
-        for eye in [DVec3::new(0.0, 0.0, 10.0), DVec3::new(0.0, 0.0, -10.0), DVec3::new(1e-9, 0.0, 5.0)] {
+        for eye in [
+            DVec3::new(0.0, 0.0, 10.0),
+            DVec3::new(0.0, 0.0, -10.0),
+            DVec3::new(1e-9, 0.0, 5.0),
+        ] {
             let cam = Camera::look_at(k(), eye, DVec3::ZERO, DVec3::Z);
             assert!(cam.c2w_cv().is_finite(), "{eye}");
             assert!((cam.rotation.determinant() - 1.0).abs() < 1e-9);

@@ -80,7 +80,12 @@ impl CameraRig {
             Distance::Range { min, max } => stream.uniform(min, max),
             Distance::Frame { margin } => margin * radius / intrinsics.min_half_fov().sin(),
         };
-        let draw = ViewDraw { yaw, pitch, roll, distance };
+        let draw = ViewDraw {
+            yaw,
+            pitch,
+            roll,
+            distance,
+        };
         (orbit_camera(intrinsics, centre, &draw), draw)
     }
 }
@@ -98,7 +103,11 @@ pub fn orbit_camera(intrinsics: Intrinsics, target: DVec3, d: &ViewDraw) -> Came
     let (sr, cr) = d.roll.sin_cos();
     // Roll turns the image clockwise as seen by the viewer (x towards y).
     let (right, down) = (cr * right + sr * down, cr * down - sr * right);
-    Camera { intrinsics, rotation: DMat3::from_cols(right, down, forward), position: target + d.distance * outward }
+    Camera {
+        intrinsics,
+        rotation: DMat3::from_cols(right, down, forward),
+        position: target + d.distance * outward,
+    }
 }
 
 #[cfg(test)]
@@ -113,7 +122,12 @@ mod tests {
         let target = DVec3::new(1.0, 2.0, 3.0);
         for pitch in [FRAC_PI_2, -FRAC_PI_2, FRAC_PI_2 - 1e-12, 0.0] {
             for yaw in [0.0, 1.0, PI] {
-                let d = ViewDraw { yaw, pitch, roll: 0.3, distance: 5.0 };
+                let d = ViewDraw {
+                    yaw,
+                    pitch,
+                    roll: 0.3,
+                    distance: 5.0,
+                };
                 let cam = orbit_camera(k, target, &d);
                 let r = cam.rotation;
                 assert!(r.is_finite());
@@ -128,14 +142,30 @@ mod tests {
     #[test]
     fn unrolled_side_view_has_world_up_as_image_up() {
         let k = CameraRig::default().intrinsics();
-        let cam = orbit_camera(k, DVec3::ZERO, &ViewDraw { yaw: 0.7, pitch: 0.2, roll: 0.0, distance: 3.0 });
-        assert!(cam.rotation.y_axis.z < 0.0, "image down must point to world −z");
+        let cam = orbit_camera(
+            k,
+            DVec3::ZERO,
+            &ViewDraw {
+                yaw: 0.7,
+                pitch: 0.2,
+                roll: 0.0,
+                distance: 3.0,
+            },
+        );
+        assert!(
+            cam.rotation.y_axis.z < 0.0,
+            "image down must point to world −z"
+        );
         assert_eq!(cam.rotation.x_axis.z, 0.0, "no roll: horizon is level");
     }
 
     #[test]
     fn framing_distance_keeps_the_bounding_sphere_in_view() {
-        let rig = CameraRig { width: 960, height: 540, ..CameraRig::default() };
+        let rig = CameraRig {
+            width: 960,
+            height: 540,
+            ..CameraRig::default()
+        };
         let mut s = Stream::new(3, Scope::View(0, 0), "camera");
         let (cam, d) = rig.draw(&mut s, DVec3::ZERO, 2.0);
         // The sphere's tangent cone half-angle equals the narrower half FOV / margin.
@@ -147,11 +177,20 @@ mod tests {
 
     #[test]
     fn band_draws_stay_in_their_ranges() {
-        let rig = CameraRig { pitch: [0.2, 0.6], yaw: [1.0, 2.0], roll: [-0.1, 0.1], ..CameraRig::default() };
+        let rig = CameraRig {
+            pitch: [0.2, 0.6],
+            yaw: [1.0, 2.0],
+            roll: [-0.1, 0.1],
+            ..CameraRig::default()
+        };
         for v in 0..500 {
             let mut s = Stream::new(1, Scope::View(7, v), "camera");
             let (_, d) = rig.draw(&mut s, DVec3::ZERO, 1.0);
-            assert!((0.2..=0.6).contains(&d.pitch) && (1.0..2.0).contains(&d.yaw) && (-0.1..0.1).contains(&d.roll));
+            assert!(
+                (0.2..=0.6).contains(&d.pitch)
+                    && (1.0..2.0).contains(&d.yaw)
+                    && (-0.1..0.1).contains(&d.roll)
+            );
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Meshing a straight beam: its section swept along the deformed axis.
 
-use super::sweep::{sweep, Frame3};
 use super::Mesh;
+use super::sweep::{Frame3, sweep};
 use crate::mechanics::{SectionFrame, SectionOutline};
 use glam::{DMat3, DVec3};
 
@@ -10,7 +10,13 @@ use glam::{DMat3, DVec3};
 /// undeformed beam and placed in the world by `rotation` and `centre`. Side faces between
 /// stations are flat quads: the beam kinematics is affine across a section, so sections need
 /// no interior vertices and only the length is subdivided.
-pub fn beam_mesh(length: f64, frames: &[SectionFrame], outline: &SectionOutline, rotation: DMat3, centre: DVec3) -> Mesh {
+pub fn beam_mesh(
+    length: f64,
+    frames: &[SectionFrame],
+    outline: &SectionOutline,
+    rotation: DMat3,
+    centre: DVec3,
+) -> Mesh {
     let frames: Vec<Frame3> = frames
         .iter()
         .map(|f| Frame3 {

@@ -81,13 +81,18 @@ enum Format {
 }
 
 fn format_of(path: &Path) -> Result<Format, String> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("obj") => Ok(Format::Obj),
         Some("ply") => Ok(Format::Ply),
         Some("stl") => Ok(Format::Stl),
         Some("gltf" | "glb") => Ok(Format::Gltf),
-        Some(other) => Err(format!("unsupported extension '.{other}' (supported: {SUPPORTED})")),
+        Some(other) => Err(format!(
+            "unsupported extension '.{other}' (supported: {SUPPORTED})"
+        )),
         None => Err(format!("no file extension (supported: {SUPPORTED})")),
     }
 }
@@ -111,7 +116,10 @@ fn check_file_size(path: &Path) -> Result<u64, String> {
         return Err("not a regular file".into());
     }
     if meta.len() > MAX_FILE_BYTES {
-        return Err(format!("file is {} bytes, over the 1 GiB limit", meta.len()));
+        return Err(format!(
+            "file is {} bytes, over the 1 GiB limit",
+            meta.len()
+        ));
     }
     Ok(meta.len())
 }
@@ -122,7 +130,9 @@ fn read_all(path: &Path) -> Result<Vec<u8>, String> {
 
 fn check_triangle_count(count: u64) -> Result<(), String> {
     if count > MAX_TRIANGLES {
-        return Err(format!("{count} triangles, over the limit of {MAX_TRIANGLES}"));
+        return Err(format!(
+            "{count} triangles, over the limit of {MAX_TRIANGLES}"
+        ));
     }
     Ok(())
 }
@@ -172,7 +182,10 @@ impl Builder {
             ));
         }
         if self.short_faces > 0 {
-            w.push(format!("dropped {} faces with fewer than 3 vertices", self.short_faces));
+            w.push(format!(
+                "dropped {} faces with fewer than 3 vertices",
+                self.short_faces
+            ));
         }
         w
     }
@@ -184,8 +197,9 @@ fn finish(builder: Builder, options: ImportOptions) -> Result<Imported, String> 
     check_finite(&mesh)?;
     let dropped = drop_degenerate(&mut mesh);
     if dropped > 0 {
-        warnings
-            .push(format!("dropped {dropped} degenerate triangles (repeated vertex or zero area)"));
+        warnings.push(format!(
+            "dropped {dropped} degenerate triangles (repeated vertex or zero area)"
+        ));
     }
     if mesh.triangles.is_empty() {
         return Err(if dropped > 0 {
@@ -202,7 +216,10 @@ fn finish(builder: Builder, options: ImportOptions) -> Result<Imported, String> 
 
 fn check_finite(mesh: &Mesh) -> Result<(), String> {
     match mesh.positions.iter().position(|p| !p.is_finite()) {
-        Some(i) => Err(format!("vertex {i} is not finite: {}", show(mesh.positions[i]))),
+        Some(i) => Err(format!(
+            "vertex {i} is not finite: {}",
+            show(mesh.positions[i])
+        )),
         None => Ok(()),
     }
 }
@@ -216,7 +233,8 @@ fn show(p: DVec3) -> String {
 fn drop_degenerate(mesh: &mut Mesh) -> usize {
     let before = mesh.triangles.len();
     let positions = &mesh.positions;
-    mesh.triangles.retain(|t| !is_degenerate(t.map(|i| positions[i as usize]), *t));
+    mesh.triangles
+        .retain(|t| !is_degenerate(t.map(|i| positions[i as usize]), *t));
     before - mesh.triangles.len()
 }
 
@@ -224,8 +242,10 @@ fn is_degenerate([a, b, c]: [DVec3; 3], [i, j, k]: [u32; 3]) -> bool {
     if i == j || j == k || k == i {
         return true;
     }
-    let longest =
-        (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
+    let longest = (b - a)
+        .length_squared()
+        .max((c - b).length_squared())
+        .max((a - c).length_squared());
     (b - a).cross(c - a).length() <= DEGENERATE_RATIO * longest
 }
 
@@ -267,10 +287,11 @@ fn read_obj(bytes: &[u8]) -> Result<Builder, String> {
     for model in &models {
         let base = builder.mesh.positions.len() as i64;
         let m = &model.mesh;
-        builder
-            .mesh
-            .positions
-            .extend(m.positions.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2])));
+        builder.mesh.positions.extend(
+            m.positions
+                .chunks_exact(3)
+                .map(|c| DVec3::new(c[0], c[1], c[2])),
+        );
         // tobj leaves the arities empty when every face is a triangle.
         let arities: Box<dyn Iterator<Item = usize>> = if m.face_arities.is_empty() {
             Box::new(std::iter::repeat_n(3, m.indices.len() / 3))
@@ -279,8 +300,10 @@ fn read_obj(bytes: &[u8]) -> Result<Builder, String> {
         };
         let mut start = 0;
         for arity in arities {
-            let slice =
-                m.indices.get(start..start + arity).ok_or("invalid OBJ: inconsistent face data")?;
+            let slice = m
+                .indices
+                .get(start..start + arity)
+                .ok_or("invalid OBJ: inconsistent face data")?;
             corners.clear();
             corners.extend(slice.iter().map(|&i| base + i as i64));
             builder.push_face(face, &corners)?;
@@ -300,7 +323,10 @@ fn read_obj(bytes: &[u8]) -> Result<Builder, String> {
 /// with a line number (tobj's errors carry neither).
 fn locate_obj_error(bytes: &[u8]) -> Option<String> {
     let text = String::from_utf8_lossy(bytes);
-    let total = text.lines().filter(|l| l.split_whitespace().next() == Some("v")).count() as i64;
+    let total = text
+        .lines()
+        .filter(|l| l.split_whitespace().next() == Some("v"))
+        .count() as i64;
     let (mut seen, mut face) = (0i64, 0usize);
     for (n, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
@@ -314,7 +340,9 @@ fn locate_obj_error(bytes: &[u8]) -> Option<String> {
                     ));
                 }
                 if xyz.iter().any(|c| !c.is_finite()) {
-                    return Some(format!("vertex {seen} (line {line_no}) is not finite: '{line}'"));
+                    return Some(format!(
+                        "vertex {seen} (line {line_no}) is not finite: '{line}'"
+                    ));
                 }
                 seen += 1;
             }
@@ -326,7 +354,11 @@ fn locate_obj_error(bytes: &[u8]) -> Option<String> {
                             "face {face} (line {line_no}): cannot read vertex index '{word}'"
                         ));
                     };
-                    let index = if written < 0 { seen + written } else { written - 1 };
+                    let index = if written < 0 {
+                        seen + written
+                    } else {
+                        written - 1
+                    };
                     if written == 0 || index < 0 || index >= total {
                         return Some(format!(
                             "face {face} (line {line_no}) refers to vertex {written}, out of range (the file has {total} vertices)"
@@ -351,9 +383,17 @@ fn read_ply(path: &Path) -> Result<Builder, String> {
     let file = File::open(path).map_err(|e| format!("cannot open: {e}"))?;
     let mut reader = Reader::new(BufReader::new(file));
     let parser = Parser::<DefaultElement>::new();
-    let header = parser.read_header(&mut reader).map_err(|e| format!("bad PLY header: {e}"))?;
-    let faces = header.elements.get("face").ok_or("bad PLY header: no 'face' element")?;
-    let vertices = header.elements.get("vertex").ok_or("bad PLY header: no 'vertex' element")?;
+    let header = parser
+        .read_header(&mut reader)
+        .map_err(|e| format!("bad PLY header: {e}"))?;
+    let faces = header
+        .elements
+        .get("face")
+        .ok_or("bad PLY header: no 'face' element")?;
+    let vertices = header
+        .elements
+        .get("vertex")
+        .ok_or("bad PLY header: no 'vertex' element")?;
     // Every face yields at least one triangle, so the header count bounds the work up front.
     check_triangle_count(faces.count as u64)?;
     let index_name = ply_index_property(faces)?;
@@ -361,21 +401,39 @@ fn read_ply(path: &Path) -> Result<Builder, String> {
         match vertices.properties.get(axis).map(|p| &p.data_type) {
             Some(ply_rs_bw::ply::PropertyType::Scalar(_)) => {}
             _ => {
-                return Err(format!("bad PLY header: vertex has no scalar property '{axis}'"));
+                return Err(format!(
+                    "bad PLY header: vertex has no scalar property '{axis}'"
+                ));
             }
         }
     }
-    let payload =
-        parser.read_payload(&mut reader, &header).map_err(|e| format!("bad PLY data: {e}"))?;
+    let payload = parser
+        .read_payload(&mut reader, &header)
+        .map_err(|e| format!("bad PLY data: {e}"))?;
     let mut builder = Builder::default();
-    for (i, v) in payload.get("vertex").map(Vec::as_slice).unwrap_or_default().iter().enumerate() {
+    for (i, v) in payload
+        .get("vertex")
+        .map(Vec::as_slice)
+        .unwrap_or_default()
+        .iter()
+        .enumerate()
+    {
         let c = |axis| {
             ply_scalar(v.get(axis)).ok_or_else(|| format!("vertex {i} lacks a numeric '{axis}'"))
         };
-        builder.mesh.positions.push(DVec3::new(c("x")?, c("y")?, c("z")?));
+        builder
+            .mesh
+            .positions
+            .push(DVec3::new(c("x")?, c("y")?, c("z")?));
     }
     let mut corners = Vec::new();
-    for (f, face) in payload.get("face").map(Vec::as_slice).unwrap_or_default().iter().enumerate() {
+    for (f, face) in payload
+        .get("face")
+        .map(Vec::as_slice)
+        .unwrap_or_default()
+        .iter()
+        .enumerate()
+    {
         ply_list(face.get(index_name), &mut corners)
             .ok_or_else(|| format!("face {f}: '{index_name}' is not a list of integers"))?;
         builder.push_face(f, &corners)?;
@@ -469,13 +527,17 @@ fn read_stl_bytes(path: &Path) -> Result<Vec<u8>, String> {
     if head.len() == STL_HEADER && !head.starts_with(b"solid") {
         check_triangle_count(stl_declared_count(&head)?)?;
     }
-    file.read_to_end(&mut head).map_err(|e| format!("cannot read: {e}"))?;
+    file.read_to_end(&mut head)
+        .map_err(|e| format!("cannot read: {e}"))?;
     Ok(head)
 }
 
 fn stl_declared_count(bytes: &[u8]) -> Result<u64, String> {
     let count = bytes.get(80..84).ok_or_else(|| {
-        format!("truncated binary STL: {} bytes, shorter than the 84-byte header", bytes.len())
+        format!(
+            "truncated binary STL: {} bytes, shorter than the 84-byte header",
+            bytes.len()
+        )
     })?;
     Ok(u32::from_le_bytes(count.try_into().unwrap_or_default()) as u64)
 }
@@ -500,7 +562,10 @@ fn stl_triangles(bytes: &[u8]) -> Result<Builder, String> {
         for (k, v) in triangle.vertices.iter().enumerate() {
             let p = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
             if !p.is_finite() {
-                return Err(format!("vertex {k} of triangle {t} is not finite: {}", show(p)));
+                return Err(format!(
+                    "vertex {k} of triangle {t} is not finite: {}",
+                    show(p)
+                ));
             }
             let positions = &mut builder.mesh.positions;
             corners[k] = *index_of.entry(v.0.map(f32::to_bits)).or_insert_with(|| {
@@ -522,7 +587,12 @@ fn read_gltf(path: &Path) -> Result<Builder, String> {
     let (document, blob) = gltf_document(&bytes, &mut builder.warnings)?;
     let buffers = gltf_buffers(&document, blob, path)?;
     let instances = gltf_instances(&document, &mut builder.warnings)?;
-    check_triangle_count(instances.iter().map(|(mesh, _)| gltf_triangle_bound(mesh)).sum())?;
+    check_triangle_count(
+        instances
+            .iter()
+            .map(|(mesh, _)| gltf_triangle_bound(mesh))
+            .sum(),
+    )?;
     for (mesh, transform) in &instances {
         for primitive in mesh.primitives() {
             let place = format!("mesh {} primitive {}", mesh.index(), primitive.index());
@@ -578,8 +648,12 @@ fn prepare_for_validation(
             warnings.push(format!(
                 "POSITION accessor {a} lacks the min/max the glTF spec requires (ignored)"
             ));
-            accessor.min.get_or_insert_with(|| serde_json::json!([0.0, 0.0, 0.0]));
-            accessor.max.get_or_insert_with(|| serde_json::json!([0.0, 0.0, 0.0]));
+            accessor
+                .min
+                .get_or_insert_with(|| serde_json::json!([0.0, 0.0, 0.0]));
+            accessor
+                .max
+                .get_or_insert_with(|| serde_json::json!([0.0, 0.0, 0.0]));
         }
     }
     Ok(())
@@ -689,10 +763,12 @@ fn gltf_instances<'a>(
 /// Upper bound on a mesh's triangles from accessor counts alone, before any data is read.
 fn gltf_triangle_bound(mesh: &gltf::Mesh) -> u64 {
     mesh.primitives()
-        .map(|p| match p.indices().or_else(|| p.get(&gltf::Semantic::Positions)) {
-            Some(a) => a.count() as u64,
-            None => 0,
-        })
+        .map(
+            |p| match p.indices().or_else(|| p.get(&gltf::Semantic::Positions)) {
+                Some(a) => a.count() as u64,
+                None => 0,
+            },
+        )
         .sum()
 }
 
@@ -704,18 +780,28 @@ fn gltf_primitive(
 ) -> Result<(), String> {
     use gltf::mesh::Mode;
     let mode = primitive.mode();
-    if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
-        builder.warnings.push(format!("skipped a primitive of mode {mode:?} (not triangles)"));
+    if !matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    ) {
+        builder.warnings.push(format!(
+            "skipped a primitive of mode {mode:?} (not triangles)"
+        ));
         return Ok(());
     }
-    let accessor = primitive.get(&gltf::Semantic::Positions).ok_or("no POSITION attribute")?;
+    let accessor = primitive
+        .get(&gltf::Semantic::Positions)
+        .ok_or("no POSITION attribute")?;
     let positions = gltf_positions(&accessor, buffers)?;
     let indices = match primitive.indices() {
         Some(a) => gltf_indices(&a, buffers)?,
         None => (0..positions.len() as u32).collect(),
     };
     let base = builder.mesh.positions.len() as i64;
-    builder.mesh.positions.extend(positions.iter().map(|&p| transform.transform_point3(p)));
+    builder
+        .mesh
+        .positions
+        .extend(positions.iter().map(|&p| transform.transform_point3(p)));
     // A mirroring transform turns counter-clockwise into clockwise (glTF spec, 3.7.2.1).
     let mirrored = transform.determinant() < 0.0;
     for (t, corners) in gltf_triangles(mode, &indices).enumerate() {
@@ -723,7 +809,9 @@ fn gltf_primitive(
         if mirrored {
             c.swap(1, 2);
         }
-        builder.push_face(t, &c).map_err(|e| e.replacen("face", "triangle", 1))?;
+        builder
+            .push_face(t, &c)
+            .map_err(|e| e.replacen("face", "triangle", 1))?;
     }
     Ok(())
 }
@@ -749,7 +837,10 @@ fn gltf_triangles(mode: gltf::mesh::Mode, idx: &[u32]) -> Box<dyn Iterator<Item 
 fn gltf_positions(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<DVec3>, String> {
     use gltf::accessor::{DataType, Dimensions};
     if accessor.data_type() != DataType::F32 || accessor.dimensions() != Dimensions::Vec3 {
-        return Err(format!("POSITION accessor {} is not float VEC3", accessor.index()));
+        return Err(format!(
+            "POSITION accessor {} is not float VEC3",
+            accessor.index()
+        ));
     }
     let items = accessor_items(accessor, buffers, 12)?;
     Ok(items
@@ -794,7 +885,9 @@ fn accessor_items<'b>(
     if accessor.sparse().is_some() {
         return Err(format!("accessor {i} is sparse, which is not supported"));
     }
-    let view = accessor.view().ok_or_else(|| format!("accessor {i} has no buffer view"))?;
+    let view = accessor
+        .view()
+        .ok_or_else(|| format!("accessor {i} has no buffer view"))?;
     let count = accessor.count();
     if count == 0 {
         return Ok(None.into_iter().flatten());
@@ -806,19 +899,20 @@ fn accessor_items<'b>(
         ));
     }
     let buffer = &buffers[view.buffer().index()];
-    let view_end =
-        view.offset().checked_add(view.length()).filter(|&e| e <= buffer.len()).ok_or_else(
-            || {
-                format!(
-                    "buffer view {} (bytes {}+{}) runs past the end of buffer {} ({} bytes)",
-                    view.index(),
-                    view.offset(),
-                    view.length(),
-                    view.buffer().index(),
-                    buffer.len()
-                )
-            },
-        )?;
+    let view_end = view
+        .offset()
+        .checked_add(view.length())
+        .filter(|&e| e <= buffer.len())
+        .ok_or_else(|| {
+            format!(
+                "buffer view {} (bytes {}+{}) runs past the end of buffer {} ({} bytes)",
+                view.index(),
+                view.offset(),
+                view.length(),
+                view.buffer().index(),
+                buffer.len()
+            )
+        })?;
     let data = &buffer[view.offset()..view_end];
     let needed = (count - 1)
         .checked_mul(stride)
@@ -830,7 +924,11 @@ fn accessor_items<'b>(
             accessor.offset(), view.index(), data.len()
         ))?;
     let data = &data[accessor.offset()..needed];
-    Ok(Some((0..count).map(move |k| &data[k * stride..k * stride + size])).into_iter().flatten())
+    Ok(
+        Some((0..count).map(move |k| &data[k * stride..k * stride + size]))
+            .into_iter()
+            .flatten(),
+    )
 }
 
 #[cfg(test)]
@@ -839,7 +937,9 @@ mod tests {
     use std::path::PathBuf;
 
     fn corpus(name: &str) -> PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes").join(name)
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/meshes")
+            .join(name)
     }
 
     fn import(path: &Path) -> Result<Imported, String> {
@@ -867,7 +967,11 @@ mod tests {
 
     /// Positions as an order-free set of exact bit patterns.
     fn position_set(mesh: &Mesh) -> Vec<[u64; 3]> {
-        let mut v: Vec<_> = mesh.positions.iter().map(|p| p.to_array().map(f64::to_bits)).collect();
+        let mut v: Vec<_> = mesh
+            .positions
+            .iter()
+            .map(|p| p.to_array().map(f64::to_bits))
+            .collect();
         v.sort();
         v.dedup();
         v
@@ -891,12 +995,21 @@ mod tests {
         [0., 1., 1.],
     ];
     /// Outward counter-clockwise quads of the unit cube.
-    const CUBE_QUADS: [[u32; 4]; 6] =
-        [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5], [0, 4, 7, 3]];
+    const CUBE_QUADS: [[u32; 4]; 6] = [
+        [0, 3, 2, 1],
+        [4, 5, 6, 7],
+        [0, 1, 5, 4],
+        [2, 3, 7, 6],
+        [1, 2, 6, 5],
+        [0, 4, 7, 3],
+    ];
 
     fn cube() -> Mesh {
         Mesh {
-            positions: CUBE_CORNERS.iter().map(|c| DVec3::from_array(c.map(f64::from))).collect(),
+            positions: CUBE_CORNERS
+                .iter()
+                .map(|c| DVec3::from_array(c.map(f64::from)))
+                .collect(),
             triangles: CUBE_QUADS
                 .iter()
                 .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
@@ -958,7 +1071,12 @@ mod tests {
             .flat_map(f32::to_le_bytes)
             .collect();
         let pos_len = bin.len();
-        bin.extend(mesh.triangles.iter().flatten().flat_map(|&i| (i as u16).to_le_bytes()));
+        bin.extend(
+            mesh.triangles
+                .iter()
+                .flatten()
+                .flat_map(|&i| (i as u16).to_le_bytes()),
+        );
         std::fs::write(dir.join(format!("{name}.bin")), &bin).unwrap();
         let json = format!(
             r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":{nodes},
@@ -978,7 +1096,11 @@ mod tests {
 
     fn assert_same_geometry(got: &Mesh, want: &Mesh, volume: f64, what: &str) {
         assert_eq!(position_set(got), position_set(want), "{what}: positions");
-        assert_eq!(got.triangles.len(), want.triangles.len(), "{what}: triangle count");
+        assert_eq!(
+            got.triangles.len(),
+            want.triangles.len(),
+            "{what}: triangle count"
+        );
         assert!(
             (got.signed_volume() - volume).abs() < 1e-12,
             "{what}: volume {} != {volume}",
@@ -999,7 +1121,11 @@ mod tests {
         ];
         for name in files {
             let imported = import(&corpus(name)).unwrap_or_else(|e| panic!("{e}"));
-            assert!(imported.warnings.is_empty(), "{name}: {:?}", imported.warnings);
+            assert!(
+                imported.warnings.is_empty(),
+                "{name}: {:?}",
+                imported.warnings
+            );
             assert_same_geometry(&imported.mesh, &tetrahedron(), 1.0 / 6.0, name);
         }
     }
@@ -1021,7 +1147,10 @@ mod tests {
             assert_same_geometry(&imported.mesh, &want, 1.0, &path.display().to_string());
         }
         let quads = import(&files[0]).unwrap();
-        assert_eq!(quads.warnings, ["fan-triangulated 6 polygons with more than 3 vertices"]);
+        assert_eq!(
+            quads.warnings,
+            ["fan-triangulated 6 polygons with more than 3 vertices"]
+        );
     }
 
     #[test]
@@ -1037,8 +1166,15 @@ mod tests {
         );
         let mesh = imported.mesh;
         assert_eq!(mesh.triangles.len(), 24);
-        assert!((mesh.signed_volume() - 16.0).abs() < 1e-12, "volume {}", mesh.signed_volume());
-        assert_eq!(mesh.bounds().unwrap(), (DVec3::new(8.0, 0.0, 0.0), DVec3::new(12.0, 2.0, 2.0)));
+        assert!(
+            (mesh.signed_volume() - 16.0).abs() < 1e-12,
+            "volume {}",
+            mesh.signed_volume()
+        );
+        assert_eq!(
+            mesh.bounds().unwrap(),
+            (DVec3::new(8.0, 0.0, 0.0), DVec3::new(12.0, 2.0, 2.0))
+        );
     }
 
     #[test]
@@ -1052,7 +1188,10 @@ mod tests {
         let back = import(&path).unwrap();
         assert!(back.warnings.is_empty(), "{:?}", back.warnings);
         let bits = |m: &Mesh| {
-            m.positions.iter().map(|p| p.to_array().map(f64::to_bits)).collect::<Vec<_>>()
+            m.positions
+                .iter()
+                .map(|p| p.to_array().map(f64::to_bits))
+                .collect::<Vec<_>>()
         };
         assert_eq!(bits(&back.mesh), bits(&mesh));
         assert_eq!(back.mesh.triangles, mesh.triangles);
@@ -1066,7 +1205,9 @@ mod tests {
         }
         let dir = tempfile::tempdir().unwrap();
         let path = write(dir.path(), "box.ply", &export_ply(&mesh));
-        let out = import_mesh(&path, ImportOptions { normalize: true }).unwrap().mesh;
+        let out = import_mesh(&path, ImportOptions { normalize: true })
+            .unwrap()
+            .mesh;
         let (lo, hi) = out.bounds().unwrap();
         assert!((lo + hi).length() < 1e-15, "centre {}", (lo + hi) / 2.0);
         assert!(((hi - lo).length() - 1.0).abs() < 1e-15);
@@ -1078,14 +1219,22 @@ mod tests {
     #[test]
     fn zero_diagonal_cannot_be_normalised() {
         let mut mesh = tetrahedron();
-        mesh.positions.iter_mut().for_each(|p| *p = DVec3::splat(1e308));
+        mesh.positions
+            .iter_mut()
+            .for_each(|p| *p = DVec3::splat(1e308));
         mesh.positions[1].x = -1e308; // a real triangle whose box diagonal overflows
-        let mut m = Mesh { positions: mesh.positions.clone(), triangles: mesh.triangles.clone() };
+        let mut m = Mesh {
+            positions: mesh.positions.clone(),
+            triangles: mesh.triangles.clone(),
+        };
         assert_eq!(
             normalize(&mut m).unwrap_err(),
             "cannot normalise: the bounding box diagonal overflows"
         );
-        let mut flat = Mesh { positions: vec![DVec3::ONE; 3], triangles: vec![[0, 1, 2]] };
+        let mut flat = Mesh {
+            positions: vec![DVec3::ONE; 3],
+            triangles: vec![[0, 1, 2]],
+        };
         assert!(normalize(&mut flat).unwrap_err().contains("zero diagonal"));
     }
 
@@ -1116,16 +1265,32 @@ mod tests {
         let e = err(&corpus("face_out_of_range.obj"));
         assert_mentions(
             &e,
-            &["face_out_of_range.obj", "face 1 (line 5)", "vertex 9", "out of range"],
+            &[
+                "face_out_of_range.obj",
+                "face 1 (line 5)",
+                "vertex 9",
+                "out of range",
+            ],
         );
         let e = err(&corpus("nan_vertex.obj"));
         assert_mentions(&e, &["nan_vertex.obj", "vertex 2 (line 3)", "not finite"]);
         let dir = tempfile::tempdir().unwrap();
         let e = err(&write(dir.path(), "garbage.obj", b"v 0 0 zero\nf 1 2 3\n"));
-        assert_mentions(&e, &["vertex 0 (line 1) is not three numbers: 'v 0 0 zero'"]);
-        let e = err(&write(dir.path(), "bad_face.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n"));
+        assert_mentions(
+            &e,
+            &["vertex 0 (line 1) is not three numbers: 'v 0 0 zero'"],
+        );
+        let e = err(&write(
+            dir.path(),
+            "bad_face.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n",
+        ));
         assert_mentions(&e, &["face 0 (line 4): cannot read vertex index 'x'"]);
-        let e = err(&write(dir.path(), "degenerate_only.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 2\n"));
+        let e = err(&write(
+            dir.path(),
+            "degenerate_only.obj",
+            b"v 0 0 0\nv 1 0 0\nf 1 2 2\n",
+        ));
         assert_mentions(&e, &["no triangles left"]);
     }
 
@@ -1134,11 +1299,17 @@ mod tests {
         let e = err(&corpus("bad_header.ply"));
         assert_mentions(&e, &["bad_header.ply", "bad PLY header", "Line 5"]);
         let e = err(&corpus("index_out_of_range.ply"));
-        assert_mentions(&e, &["face 1 refers to vertex 7, out of range (the mesh has 3 vertices)"]);
+        assert_mentions(
+            &e,
+            &["face 1 refers to vertex 7, out of range (the mesh has 3 vertices)"],
+        );
         let dir = tempfile::tempdir().unwrap();
         let mut truncated = export_ply(&cube());
         truncated.truncate(truncated.len() - 7);
-        assert_mentions(&err(&write(dir.path(), "truncated.ply", &truncated)), &["bad PLY data"]);
+        assert_mentions(
+            &err(&write(dir.path(), "truncated.ply", &truncated)),
+            &["bad PLY data"],
+        );
         let no_faces = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n";
         assert_mentions(
             &err(&write(dir.path(), "no_faces.ply", no_faces.as_bytes())),
@@ -1147,7 +1318,10 @@ mod tests {
         let mut nan = export_ply(&tetrahedron());
         let at = nan.len() - 4 * 13 - 8; // z of the last vertex
         nan[at..at + 8].copy_from_slice(&f64::NAN.to_le_bytes());
-        assert_mentions(&err(&write(dir.path(), "nan.ply", &nan)), &["vertex 3 is not finite"]);
+        assert_mentions(
+            &err(&write(dir.path(), "nan.ply", &nan)),
+            &["vertex 3 is not finite"],
+        );
         let huge = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
                     element face 50000001\nproperty list uchar int vertex_indices\nend_header\n";
         assert_mentions(
@@ -1161,7 +1335,11 @@ mod tests {
         let e = err(&corpus("truncated_binary.stl"));
         assert_mentions(
             &e,
-            &["truncated binary STL", "declares 4 triangles (284 bytes)", "254 bytes"],
+            &[
+                "truncated binary STL",
+                "declares 4 triangles (284 bytes)",
+                "254 bytes",
+            ],
         );
         let e = err(&corpus("nan_binary.stl"));
         assert_mentions(&e, &["vertex 1 of triangle 2 is not finite: (NaN, 0, 0)"]);
@@ -1203,7 +1381,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = write_gltf(dir.path(), "short_bin", &cube(), r#"[{"mesh":0}]"#);
         std::fs::write(dir.path().join("short_bin.bin"), [0u8; 10]).unwrap();
-        assert_mentions(&err(&path), &["buffer 0 has 10 bytes, fewer than its byteLength 168"]);
+        assert_mentions(
+            &err(&path),
+            &["buffer 0 has 10 bytes, fewer than its byteLength 168"],
+        );
         std::fs::remove_file(dir.path().join("short_bin.bin")).unwrap();
         assert_mentions(&err(&path), &["buffer 0", "short_bin.bin", "cannot open"]);
         let mut glb = std::fs::read(corpus("tetra.glb")).unwrap();
@@ -1214,8 +1395,16 @@ mod tests {
         assert_mentions(&e, &["cycle.gltf", "the node hierarchy is not a tree"]);
         let mut bad_index = tetrahedron();
         bad_index.triangles[3] = [1, 2, 30];
-        let e = err(&write_gltf(dir.path(), "bad_index", &bad_index, r#"[{"mesh":0}]"#));
-        assert_mentions(&e, &["mesh 0 primitive 0: triangle 3 refers to vertex 30, out of range"]);
+        let e = err(&write_gltf(
+            dir.path(),
+            "bad_index",
+            &bad_index,
+            r#"[{"mesh":0}]"#,
+        ));
+        assert_mentions(
+            &e,
+            &["mesh 0 primitive 0: triangle 3 refers to vertex 30, out of range"],
+        );
     }
 
     #[test]
@@ -1238,9 +1427,16 @@ mod tests {
         let e = err(&write(dir.path(), "mesh.3ds", b"x"));
         assert_mentions(
             &e,
-            &["mesh.3ds", "unsupported extension '.3ds'", ".obj, .ply, .stl, .gltf, .glb"],
+            &[
+                "mesh.3ds",
+                "unsupported extension '.3ds'",
+                ".obj, .ply, .stl, .gltf, .glb",
+            ],
         );
-        assert_mentions(&err(&write(dir.path(), "noext", b"x")), &["no file extension"]);
+        assert_mentions(
+            &err(&write(dir.path(), "noext", b"x")),
+            &["no file extension"],
+        );
     }
 
     /// Random damage to every valid file must give Ok or Err, never a panic.

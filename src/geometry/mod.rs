@@ -11,7 +11,7 @@ pub mod primitives;
 mod sweep;
 
 pub use beam::beam_mesh;
-pub use sweep::{sweep, Frame3};
+pub use sweep::{Frame3, sweep};
 
 use glam::DVec3;
 
@@ -27,13 +27,18 @@ impl Mesh {
     pub fn append(&mut self, other: &Mesh) {
         let base = self.positions.len() as u32;
         self.positions.extend_from_slice(&other.positions);
-        self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
+        self.triangles
+            .extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
     }
 
     /// Axis-aligned bounds (min, max); None for an empty mesh.
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
         let first = *self.positions.first()?;
-        Some(self.positions.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
+        Some(
+            self.positions
+                .iter()
+                .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
+        )
     }
 
     pub fn triangle(&self, t: usize) -> [DVec3; 3] {
@@ -82,7 +87,9 @@ impl Mesh {
                 *edges.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
             }
         }
-        edges.iter().all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
+        edges
+            .iter()
+            .all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
     }
 
     /// Whether every vertex coordinate is finite.

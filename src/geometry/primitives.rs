@@ -3,9 +3,9 @@
 //! Each is a section outline swept through frames, tessellated so that no chord strays more
 //! than the given tolerance from the true surface — the same rule as beams.
 
-use super::sweep::{sweep, Frame3};
 use super::Mesh;
-use crate::mechanics::{annulus, circle_segments, rectangle_grid, SectionOutline};
+use super::sweep::{Frame3, sweep};
+use crate::mechanics::{SectionOutline, annulus, circle_segments, rectangle_grid};
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 use std::f64::consts::TAU;
@@ -19,7 +19,11 @@ pub enum Primitive {
     Box { size: [f64; 3] },
     /// Base circle at z = 0, top circle at z = height; a cylinder when the radii are equal, a
     /// cone when the top radius is 0.
-    Frustum { bottom_radius: f64, top_radius: f64, height: f64 },
+    Frustum {
+        bottom_radius: f64,
+        top_radius: f64,
+        height: f64,
+    },
     /// Hollow cylinder (a ring when short): outer radius and wall, base at z = 0.
     Tube { radius: f64, height: f64, wall: f64 },
     /// The cap of a sphere of `radius`, `height` tall, its base circle at z = 0.
@@ -28,7 +32,11 @@ pub enum Primitive {
     Extrusion { profile: Vec<[f64; 2]>, length: f64 },
     /// A simple polygon swept along a circular arc that starts at the origin heading +z and
     /// bends towards +x with the given radius, through `angle` radians.
-    Bend { profile: Vec<[f64; 2]>, radius: f64, angle: f64 },
+    Bend {
+        profile: Vec<[f64; 2]>,
+        radius: f64,
+        angle: f64,
+    },
     /// A mesh read from a file (path relative to the recipe), optionally normalised as in the
     /// 3DGEN paper (bounding box centred, diagonal 1).
     Imported {
@@ -43,39 +51,82 @@ impl Primitive {
     /// Checks dimensions; the message names the primitive, the parameter and its value.
     pub fn validate(&self) -> Result<(), String> {
         let positive = |what: &str, x: f64| {
-            if x > 0.0 && x.is_finite() { Ok(()) } else { Err(format!("{} {what} = {x} must be positive (metres)", self.name())) }
+            if x > 0.0 && x.is_finite() {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{} {what} = {x} must be positive (metres)",
+                    self.name()
+                ))
+            }
         };
         match self {
-            Primitive::Box { size } => size.iter().zip(["width", "depth", "height"]).try_for_each(|(&x, n)| positive(n, x)),
-            Primitive::Frustum { bottom_radius, top_radius, height } => {
+            Primitive::Box { size } => size
+                .iter()
+                .zip(["width", "depth", "height"])
+                .try_for_each(|(&x, n)| positive(n, x)),
+            Primitive::Frustum {
+                bottom_radius,
+                top_radius,
+                height,
+            } => {
                 positive("height", *height)?;
                 positive("bottom_radius", *bottom_radius)?;
                 if !(*top_radius >= 0.0 && top_radius.is_finite()) {
-                    return Err(format!("{} top_radius = {top_radius} must be zero or positive (metres)", self.name()));
+                    return Err(format!(
+                        "{} top_radius = {top_radius} must be zero or positive (metres)",
+                        self.name()
+                    ));
                 }
                 Ok(())
             }
-            Primitive::Tube { radius, height, wall } => {
+            Primitive::Tube {
+                radius,
+                height,
+                wall,
+            } => {
                 positive("radius", *radius)?;
                 positive("height", *height)?;
                 positive("wall", *wall)?;
-                if wall >= radius { Err(format!("tube wall = {wall} m must be less than the radius ({radius} m)")) } else { Ok(()) }
+                if wall >= radius {
+                    Err(format!(
+                        "tube wall = {wall} m must be less than the radius ({radius} m)"
+                    ))
+                } else {
+                    Ok(())
+                }
             }
             Primitive::SphericalCap { radius, height } => {
                 positive("radius", *radius)?;
                 positive("height", *height)?;
-                if height > &(2.0 * radius) { Err(format!("cap height = {height} m must not exceed the sphere's diameter ({} m)", 2.0 * radius)) } else { Ok(()) }
+                if height > &(2.0 * radius) {
+                    Err(format!(
+                        "cap height = {height} m must not exceed the sphere's diameter ({} m)",
+                        2.0 * radius
+                    ))
+                } else {
+                    Ok(())
+                }
             }
             Primitive::Extrusion { profile, length } => {
                 positive("length", *length)?;
                 polygon(profile).map(drop)
             }
-            Primitive::Bend { profile, radius, angle } => {
+            Primitive::Bend {
+                profile,
+                radius,
+                angle,
+            } => {
                 positive("radius", *radius)?;
                 positive("angle", *angle)?;
-                let reach = profile.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max);
+                let reach = profile
+                    .iter()
+                    .map(|p| p[0])
+                    .fold(f64::NEG_INFINITY, f64::max);
                 if reach >= *radius {
-                    return Err(format!("bend: the profile reaches x = {reach} m, past the bend radius {radius} m"));
+                    return Err(format!(
+                        "bend: the profile reaches x = {reach} m, past the bend radius {radius} m"
+                    ));
                 }
                 polygon(profile).map(drop)
             }
@@ -97,15 +148,26 @@ impl Primitive {
 
     /// Radius of a sphere about the local origin that contains the primitive.
     pub fn bounding_radius(&self) -> f64 {
-        let far = |profile: &[[f64; 2]]| profile.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
+        let far =
+            |profile: &[[f64; 2]]| profile.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
         match self {
             Primitive::Box { size } => 0.5 * DVec3::from_array(*size).length(),
-            Primitive::Frustum { bottom_radius, top_radius, height } => bottom_radius.max(*top_radius).hypot(*height),
+            Primitive::Frustum {
+                bottom_radius,
+                top_radius,
+                height,
+            } => bottom_radius.max(*top_radius).hypot(*height),
             Primitive::Tube { radius, height, .. } => radius.hypot(*height),
             Primitive::SphericalCap { radius, height } => radius.hypot(*height),
             Primitive::Extrusion { profile, length } => far(profile).hypot(*length),
-            Primitive::Bend { profile, radius, .. } => 2.0 * radius + far(profile),
-            Primitive::Imported { mesh, .. } => mesh.positions.iter().map(|p| p.length()).fold(0.0, f64::max),
+            Primitive::Bend {
+                profile, radius, ..
+            } => 2.0 * radius + far(profile),
+            Primitive::Imported { mesh, .. } => mesh
+                .positions
+                .iter()
+                .map(|p| p.length())
+                .fold(0.0, f64::max),
         }
     }
 
@@ -113,15 +175,35 @@ impl Primitive {
     /// be valid (see `validate`).
     pub fn mesh(&self, tolerance: f64) -> Mesh {
         match self {
-            Primitive::Box { size: [w, d, h] } => sweep(&rectangle_grid(*w, *d, 1), &straight(-0.5 * h, 0.5 * h, 1.0, 1.0, 1)),
-            Primitive::Frustum { bottom_radius, top_radius, height } => {
+            Primitive::Box { size: [w, d, h] } => sweep(
+                &rectangle_grid(*w, *d, 1),
+                &straight(-0.5 * h, 0.5 * h, 1.0, 1.0, 1),
+            ),
+            Primitive::Frustum {
+                bottom_radius,
+                top_radius,
+                height,
+            } => {
                 let disc = disc(circle_segments(bottom_radius.max(*top_radius), tolerance));
-                sweep(&disc, &straight(0.0, *height, *bottom_radius, *top_radius, 1))
+                sweep(
+                    &disc,
+                    &straight(0.0, *height, *bottom_radius, *top_radius, 1),
+                )
             }
             Primitive::Tube { .. } => self.tube_mesh(tolerance, 1, 0).expect("a tube"),
-            Primitive::SphericalCap { radius, height } => sweep(&disc(circle_segments(*radius, tolerance)), &cap_frames(*radius, *height, tolerance)),
-            Primitive::Extrusion { profile, length } => sweep(&polygon(profile).expect("validated"), &straight(0.0, *length, 1.0, 1.0, 1)),
-            Primitive::Bend { profile, radius, angle } => {
+            Primitive::SphericalCap { radius, height } => sweep(
+                &disc(circle_segments(*radius, tolerance)),
+                &cap_frames(*radius, *height, tolerance),
+            ),
+            Primitive::Extrusion { profile, length } => sweep(
+                &polygon(profile).expect("validated"),
+                &straight(0.0, *length, 1.0, 1.0, 1),
+            ),
+            Primitive::Bend {
+                profile,
+                radius,
+                angle,
+            } => {
                 let reach = radius + profile.iter().map(|p| p[0].abs()).fold(0.0, f64::max);
                 let steps = arc_steps(reach, *angle, tolerance);
                 let frames = (0..=steps)
@@ -129,7 +211,11 @@ impl Primitive {
                         let (s, c) = (angle * i as f64 / steps as f64).sin_cos();
                         // Arc centre at (radius, 0, 0); u points along the outward normal of the
                         // arc's plane curve so that u × v is the tangent.
-                        Frame3 { origin: DVec3::new(radius * (1.0 - c), 0.0, radius * s), u: DVec3::new(c, 0.0, -s), v: DVec3::Y }
+                        Frame3 {
+                            origin: DVec3::new(radius * (1.0 - c), 0.0, radius * s),
+                            u: DVec3::new(c, 0.0, -s),
+                            v: DVec3::Y,
+                        }
                     })
                     .collect::<Vec<_>>();
                 sweep(&polygon(profile).expect("validated"), &frames)
@@ -143,7 +229,9 @@ impl Primitive {
     /// A tube with at least `rings` intervals along its height and `segments` around it (for
     /// shell deformations that need them); None for other primitives.
     pub fn tube_mesh(&self, tolerance: f64, rings: usize, segments: usize) -> Option<Mesh> {
-        let Primitive::Tube { radius, .. } = *self else { return None };
+        let Primitive::Tube { radius, .. } = *self else {
+            return None;
+        };
         self.fixed_mesh(circle_segments(radius, tolerance).max(segments), rings)
     }
 
@@ -152,10 +240,22 @@ impl Primitive {
     pub fn fixed_mesh(&self, segments: usize, rings: usize) -> Option<Mesh> {
         let n = segments.max(3);
         match *self {
-            Primitive::Tube { radius, height, wall } => {
-                Some(sweep(&annulus(circle(n, radius), circle(n, radius - wall)), &straight(0.0, height, 1.0, 1.0, rings)))
-            }
-            Primitive::Frustum { bottom_radius, top_radius, height } => Some(sweep(&disc(n), &straight(0.0, height, bottom_radius, top_radius, 1))),
+            Primitive::Tube {
+                radius,
+                height,
+                wall,
+            } => Some(sweep(
+                &annulus(circle(n, radius), circle(n, radius - wall)),
+                &straight(0.0, height, 1.0, 1.0, rings),
+            )),
+            Primitive::Frustum {
+                bottom_radius,
+                top_radius,
+                height,
+            } => Some(sweep(
+                &disc(n),
+                &straight(0.0, height, bottom_radius, top_radius, 1),
+            )),
             _ => None,
         }
     }
@@ -167,7 +267,11 @@ fn straight(z0: f64, z1: f64, s0: f64, s1: f64, steps: usize) -> Vec<Frame3> {
         .map(|i| {
             let f = i as f64 / steps.max(1) as f64;
             let s = s0 + (s1 - s0) * f;
-            Frame3 { origin: DVec3::new(0.0, 0.0, z0 + (z1 - z0) * f), u: s * DVec3::X, v: s * DVec3::Y }
+            Frame3 {
+                origin: DVec3::new(0.0, 0.0, z0 + (z1 - z0) * f),
+                u: s * DVec3::X,
+                v: s * DVec3::Y,
+            }
         })
         .collect()
 }
@@ -180,7 +284,11 @@ fn cap_frames(radius: f64, height: f64, tolerance: f64) -> Vec<Frame3> {
         .map(|i| {
             let theta = top * (1.0 - i as f64 / steps as f64);
             let (s, c) = theta.sin_cos();
-            Frame3 { origin: DVec3::new(0.0, 0.0, height - radius + radius * c), u: radius * s * DVec3::X, v: radius * s * DVec3::Y }
+            Frame3 {
+                origin: DVec3::new(0.0, 0.0, height - radius + radius * c),
+                u: radius * s * DVec3::X,
+                v: radius * s * DVec3::Y,
+            }
         })
         .collect()
 }
@@ -189,11 +297,17 @@ fn cap_frames(radius: f64, height: f64, tolerance: f64) -> Vec<Frame3> {
 fn arc_steps(radius: f64, angle: f64, tolerance: f64) -> usize {
     let step = 2.0 * (1.0 - tolerance / radius).clamp(-1.0, 1.0).acos();
     let n = (angle / step).ceil();
-    if n.is_finite() { (n as usize).clamp(1, 4096) } else { 4096 }
+    if n.is_finite() {
+        (n as usize).clamp(1, 4096)
+    } else {
+        4096
+    }
 }
 
 fn circle(n: usize, r: f64) -> Vec<DVec2> {
-    (0..n).map(|k| DVec2::from_angle(TAU * k as f64 / n as f64) * r).collect()
+    (0..n)
+        .map(|k| DVec2::from_angle(TAU * k as f64 / n as f64) * r)
+        .collect()
 }
 
 /// The unit disc as an n-gon fanned from its centre.
@@ -210,17 +324,28 @@ fn disc(n: usize) -> SectionOutline {
 fn polygon(profile: &[[f64; 2]]) -> Result<SectionOutline, String> {
     let mut points: Vec<DVec2> = profile.iter().map(|&p| DVec2::from_array(p)).collect();
     if points.len() < 3 || points.iter().any(|p| !p.is_finite()) {
-        return Err(format!("a profile needs at least 3 finite points, got {profile:?}"));
+        return Err(format!(
+            "a profile needs at least 3 finite points, got {profile:?}"
+        ));
     }
-    let area: f64 = (0..points.len()).map(|i| points[i].perp_dot(points[(i + 1) % points.len()])).sum::<f64>() / 2.0;
+    let area: f64 = (0..points.len())
+        .map(|i| points[i].perp_dot(points[(i + 1) % points.len()]))
+        .sum::<f64>()
+        / 2.0;
     if area.abs() < 1e-12 {
         return Err(format!("the profile {profile:?} encloses no area"));
     }
     if area < 0.0 {
         points.reverse();
     }
-    let cap = ear_clip(&points).ok_or_else(|| format!("the profile {profile:?} is not a simple polygon (its edges cross)"))?;
-    Ok(SectionOutline { loops: vec![points], interior: Vec::new(), cap })
+    let cap = ear_clip(&points).ok_or_else(|| {
+        format!("the profile {profile:?} is not a simple polygon (its edges cross)")
+    })?;
+    Ok(SectionOutline {
+        loops: vec![points],
+        interior: Vec::new(),
+        cap,
+    })
 }
 
 /// Triangulates a counter-clockwise simple polygon; None if it is not simple.
@@ -230,14 +355,27 @@ fn ear_clip(points: &[DVec2]) -> Option<Vec<[u32; 3]>> {
     while left.len() > 3 {
         let n = left.len();
         let ear = (0..n).find(|&i| {
-            let (a, b, c) = (points[left[(i + n - 1) % n]], points[left[i]], points[left[(i + 1) % n]]);
+            let (a, b, c) = (
+                points[left[(i + n - 1) % n]],
+                points[left[i]],
+                points[left[(i + 1) % n]],
+            );
             (b - a).perp_dot(c - b) > 0.0
                 && left.iter().all(|&j| {
                     let p = points[j];
-                    p == a || p == b || p == c || !((b - a).perp_dot(p - a) >= 0.0 && (c - b).perp_dot(p - b) >= 0.0 && (a - c).perp_dot(p - c) >= 0.0)
+                    p == a
+                        || p == b
+                        || p == c
+                        || !((b - a).perp_dot(p - a) >= 0.0
+                            && (c - b).perp_dot(p - b) >= 0.0
+                            && (a - c).perp_dot(p - c) >= 0.0)
                 })
         })?;
-        triangles.push([left[(ear + n - 1) % n] as u32, left[ear] as u32, left[(ear + 1) % n] as u32]);
+        triangles.push([
+            left[(ear + n - 1) % n] as u32,
+            left[ear] as u32,
+            left[(ear + 1) % n] as u32,
+        ]);
         left.remove(ear);
     }
     triangles.push([left[0] as u32, left[1] as u32, left[2] as u32]);
@@ -250,7 +388,10 @@ mod tests {
     use std::f64::consts::PI;
 
     fn closed_and_oriented(mesh: &crate::geometry::Mesh) {
-        assert!(mesh.is_closed_and_oriented(), "mesh is open or inconsistently oriented");
+        assert!(
+            mesh.is_closed_and_oriented(),
+            "mesh is open or inconsistently oriented"
+        );
     }
 
     /// Area of a regular n-gon of circumradius r: the exact face of our tessellated circles.
@@ -261,68 +402,161 @@ mod tests {
     #[test]
     fn volumes_and_areas_match_closed_forms() {
         let tol = 1e-3;
-        let b = Primitive::Box { size: [2.0, 3.0, 0.5] }.mesh(tol);
+        let b = Primitive::Box {
+            size: [2.0, 3.0, 0.5],
+        }
+        .mesh(tol);
         closed_and_oriented(&b);
-        assert!((b.signed_volume() - 3.0).abs() < 1e-12 && (b.area() - 2.0 * (6.0 + 1.0 + 1.5)).abs() < 1e-12);
+        assert!(
+            (b.signed_volume() - 3.0).abs() < 1e-12
+                && (b.area() - 2.0 * (6.0 + 1.0 + 1.5)).abs() < 1e-12
+        );
 
         // Frustum of regular n-gons: V = h/3 (B₀ + B₁ + √(B₀B₁)).
         let (r0, r1, h) = (1.5, 0.6, 2.0);
-        let f = Primitive::Frustum { bottom_radius: r0, top_radius: r1, height: h }.mesh(tol);
+        let f = Primitive::Frustum {
+            bottom_radius: r0,
+            top_radius: r1,
+            height: h,
+        }
+        .mesh(tol);
         closed_and_oriented(&f);
         let n = circle_segments(r0, tol);
         let (b0, b1) = (ngon(n, r0), ngon(n, r1));
         assert!((f.signed_volume() - h / 3.0 * (b0 + b1 + (b0 * b1).sqrt())).abs() < 1e-9);
         // And within the tolerance's reach of the smooth frustum.
-        assert!((f.signed_volume() / (PI * h / 3.0 * (r0 * r0 + r0 * r1 + r1 * r1)) - 1.0).abs() < 2.0 * tol / r1);
+        assert!(
+            (f.signed_volume() / (PI * h / 3.0 * (r0 * r0 + r0 * r1 + r1 * r1)) - 1.0).abs()
+                < 2.0 * tol / r1
+        );
 
-        let cone = Primitive::Frustum { bottom_radius: 1.0, top_radius: 0.0, height: 3.0 }.mesh(tol);
+        let cone = Primitive::Frustum {
+            bottom_radius: 1.0,
+            top_radius: 0.0,
+            height: 3.0,
+        }
+        .mesh(tol);
         closed_and_oriented(&cone);
         assert!((cone.signed_volume() - ngon(circle_segments(1.0, tol), 1.0)).abs() < 1e-9);
 
         // Tube: h(B(r) − B(r − t)); lateral area = h × (outer + inner perimeters) + 2 annuli.
         let (r, t) = (1.0, 0.1);
-        let tube = Primitive::Tube { radius: r, height: h, wall: t }.mesh(tol);
+        let tube = Primitive::Tube {
+            radius: r,
+            height: h,
+            wall: t,
+        }
+        .mesh(tol);
         closed_and_oriented(&tube);
         let n = circle_segments(r, tol);
         let side = |rr: f64| n as f64 * 2.0 * rr * (PI / n as f64).sin();
         assert!((tube.signed_volume() - h * (ngon(n, r) - ngon(n, r - t))).abs() < 1e-9);
-        assert!((tube.area() - (h * (side(r) + side(r - t)) + 2.0 * (ngon(n, r) - ngon(n, r - t)))).abs() < 1e-9);
+        assert!(
+            (tube.area() - (h * (side(r) + side(r - t)) + 2.0 * (ngon(n, r) - ngon(n, r - t))))
+                .abs()
+                < 1e-9
+        );
 
         // Spherical cap: V = π h²(3R − h)/3, within the tessellation's reach.
-        let cap = Primitive::SphericalCap { radius: 2.0, height: 0.8 }.mesh(1e-4);
+        let cap = Primitive::SphericalCap {
+            radius: 2.0,
+            height: 0.8,
+        }
+        .mesh(1e-4);
         closed_and_oriented(&cap);
         let exact = PI * 0.64 * (6.0 - 0.8) / 3.0;
-        assert!((cap.signed_volume() / exact - 1.0).abs() < 1e-3, "{}", cap.signed_volume() / exact);
+        assert!(
+            (cap.signed_volume() / exact - 1.0).abs() < 1e-3,
+            "{}",
+            cap.signed_volume() / exact
+        );
 
         // Extrusion of an L-shaped (non-convex) profile: area × length.
-        let l_shape = vec![[0.0, 0.0], [2.0, 0.0], [2.0, 0.5], [0.5, 0.5], [0.5, 1.5], [0.0, 1.5]];
-        let e = Primitive::Extrusion { profile: l_shape.clone(), length: 4.0 }.mesh(tol);
+        let l_shape = vec![
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [2.0, 0.5],
+            [0.5, 0.5],
+            [0.5, 1.5],
+            [0.0, 1.5],
+        ];
+        let e = Primitive::Extrusion {
+            profile: l_shape.clone(),
+            length: 4.0,
+        }
+        .mesh(tol);
         closed_and_oriented(&e);
         assert!((e.signed_volume() - 4.0 * 1.5).abs() < 1e-12);
         // Clockwise input is accepted and turned around.
         let reversed: Vec<[f64; 2]> = l_shape.iter().rev().copied().collect();
-        assert!((Primitive::Extrusion { profile: reversed, length: 4.0 }.mesh(tol).signed_volume() - 6.0).abs() < 1e-12);
+        assert!(
+            (Primitive::Extrusion {
+                profile: reversed,
+                length: 4.0
+            }
+            .mesh(tol)
+            .signed_volume()
+                - 6.0)
+                .abs()
+                < 1e-12
+        );
 
         // Bend of a centred square: Pappus, V = area × radius × angle.
         let square = vec![[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]];
-        let bend = Primitive::Bend { profile: square, radius: 2.0, angle: PI / 2.0 }.mesh(1e-5);
+        let bend = Primitive::Bend {
+            profile: square,
+            radius: 2.0,
+            angle: PI / 2.0,
+        }
+        .mesh(1e-5);
         closed_and_oriented(&bend);
         assert!((bend.signed_volume() / (0.04 * 2.0 * PI / 2.0) - 1.0).abs() < 1e-4);
     }
 
     #[test]
     fn every_primitive_survives_a_ply_round_trip_exactly() {
-        use crate::geometry::import::{export_ply, import_mesh, ImportOptions};
+        use crate::geometry::import::{ImportOptions, export_ply, import_mesh};
         let dir = tempfile::tempdir().unwrap();
-        let profile = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 0.3], [0.2, 0.3], [0.2, 1.0], [0.0, 1.0]];
+        let profile = vec![
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [1.0, 0.3],
+            [0.2, 0.3],
+            [0.2, 1.0],
+            [0.0, 1.0],
+        ];
         let all = [
-            Primitive::Box { size: [1.0, 2.0, 3.0] },
-            Primitive::Frustum { bottom_radius: 1.0, top_radius: 0.4, height: 2.0 },
-            Primitive::Frustum { bottom_radius: 1.0, top_radius: 0.0, height: 2.0 },
-            Primitive::Tube { radius: 1.0, height: 0.3, wall: 0.1 },
-            Primitive::SphericalCap { radius: 1.0, height: 0.5 },
-            Primitive::Extrusion { profile: profile.clone(), length: 2.0 },
-            Primitive::Bend { profile: profile.iter().map(|p| [p[0] - 0.5, p[1]]).collect(), radius: 3.0, angle: 1.0 },
+            Primitive::Box {
+                size: [1.0, 2.0, 3.0],
+            },
+            Primitive::Frustum {
+                bottom_radius: 1.0,
+                top_radius: 0.4,
+                height: 2.0,
+            },
+            Primitive::Frustum {
+                bottom_radius: 1.0,
+                top_radius: 0.0,
+                height: 2.0,
+            },
+            Primitive::Tube {
+                radius: 1.0,
+                height: 0.3,
+                wall: 0.1,
+            },
+            Primitive::SphericalCap {
+                radius: 1.0,
+                height: 0.5,
+            },
+            Primitive::Extrusion {
+                profile: profile.clone(),
+                length: 2.0,
+            },
+            Primitive::Bend {
+                profile: profile.iter().map(|p| [p[0] - 0.5, p[1]]).collect(),
+                radius: 3.0,
+                angle: 1.0,
+            },
         ];
         for (i, p) in all.iter().enumerate() {
             let mesh = p.mesh(1e-3);
@@ -332,10 +566,16 @@ mod tests {
             assert_eq!(back.mesh.positions, mesh.positions, "{p:?}");
             // Degenerate triangles (a cone's apex, a cap's pole) are dropped on import with a
             // warning; every other triangle comes back unchanged.
-            let solid: Vec<[u32; 3]> = mesh.triangles.iter().copied().filter(|t| {
-                let [a, b, c] = t.map(|k| mesh.positions[k as usize]);
-                (b - a).cross(c - a).length() > 1e-12 * (b - a).length_squared().max((c - a).length_squared())
-            }).collect();
+            let solid: Vec<[u32; 3]> = mesh
+                .triangles
+                .iter()
+                .copied()
+                .filter(|t| {
+                    let [a, b, c] = t.map(|k| mesh.positions[k as usize]);
+                    (b - a).cross(c - a).length()
+                        > 1e-12 * (b - a).length_squared().max((c - a).length_squared())
+                })
+                .collect();
             assert_eq!(back.mesh.triangles, solid, "{p:?}");
             assert!((back.mesh.signed_volume() - mesh.signed_volume()).abs() < 1e-12);
         }
@@ -343,10 +583,40 @@ mod tests {
 
     #[test]
     fn bad_primitives_are_named() {
-        assert!(Primitive::Tube { radius: 1.0, height: 1.0, wall: 1.5 }.validate().unwrap_err().contains("wall = 1.5"));
-        assert!(Primitive::Box { size: [1.0, f64::NAN, 1.0] }.validate().unwrap_err().contains("depth = NaN"));
+        assert!(
+            Primitive::Tube {
+                radius: 1.0,
+                height: 1.0,
+                wall: 1.5
+            }
+            .validate()
+            .unwrap_err()
+            .contains("wall = 1.5")
+        );
+        assert!(
+            Primitive::Box {
+                size: [1.0, f64::NAN, 1.0]
+            }
+            .validate()
+            .unwrap_err()
+            .contains("depth = NaN")
+        );
         let bow_tie = vec![[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]];
-        assert!(Primitive::Extrusion { profile: bow_tie, length: 1.0 }.validate().is_err());
-        assert!(Primitive::SphericalCap { radius: 1.0, height: 3.0 }.validate().is_err());
+        assert!(
+            Primitive::Extrusion {
+                profile: bow_tie,
+                length: 1.0
+            }
+            .validate()
+            .is_err()
+        );
+        assert!(
+            Primitive::SphericalCap {
+                radius: 1.0,
+                height: 3.0
+            }
+            .validate()
+            .is_err()
+        );
     }
 }

@@ -30,8 +30,10 @@ pub fn sweep(outline: &SectionOutline, frames: &[Frame3]) -> Mesh {
         mesh.positions.extend(ring.iter().map(|&p| frame.place(p)));
     }
     let (first, last) = (&frames[0], &frames[frames.len() - 1]);
-    mesh.positions.extend(outline.interior.iter().map(|&p| first.place(p)));
-    mesh.positions.extend(outline.interior.iter().map(|&p| last.place(p)));
+    mesh.positions
+        .extend(outline.interior.iter().map(|&p| first.place(p)));
+    mesh.positions
+        .extend(outline.interior.iter().map(|&p| last.place(p)));
 
     let mut loop_start = 0u32;
     for lp in &outline.loops {
@@ -59,7 +61,11 @@ pub fn sweep(outline: &SectionOutline, frames: &[Frame3]) -> Mesh {
         // The cap is counter-clockwise in (u, v): it faces along u × v at the far end, and
         // must be reversed at the near end.
         mesh.triangles.push(t.map(|i| cap_vertex(i, true)));
-        mesh.triangles.push([cap_vertex(t[0], false), cap_vertex(t[2], false), cap_vertex(t[1], false)]);
+        mesh.triangles.push([
+            cap_vertex(t[0], false),
+            cap_vertex(t[2], false),
+            cap_vertex(t[1], false),
+        ]);
     }
     mesh
 }

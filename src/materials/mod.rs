@@ -14,7 +14,9 @@ pub struct Material {
 impl Default for Material {
     /// Light grey, like primed steel.
     fn default() -> Self {
-        Material { colour: [0.62, 0.62, 0.6] }
+        Material {
+            colour: [0.62, 0.62, 0.6],
+        }
     }
 }
 

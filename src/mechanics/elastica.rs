@@ -64,7 +64,11 @@ impl Elastica {
     /// the largest finite one.
     pub fn from_load_parameter(length: f64, load_at: f64, alpha: f64) -> Elastica {
         let (length, load_at) = sanitise(length, load_at);
-        let alpha = if alpha.is_nan() { 0.0 } else { alpha.clamp(-f64::MAX, f64::MAX) };
+        let alpha = if alpha.is_nan() {
+            0.0
+        } else {
+            alpha.clamp(-f64::MAX, f64::MAX)
+        };
         let magnitude = alpha.abs();
         let shape = if magnitude > SEPARATRIX_ALPHA {
             Shape::Separatrix
@@ -77,9 +81,15 @@ impl Elastica {
     /// The elastica whose tip (s = length) deflects downward by `tip_deflection` metres.
     /// Negative values mean an upward load (mirror image). Err with a clear message naming the
     /// value if it cannot be reached (|δ| must stay below the length an inextensible rod allows).
-    pub fn from_tip_deflection(length: f64, load_at: f64, tip_deflection: f64) -> Result<Elastica, String> {
+    pub fn from_tip_deflection(
+        length: f64,
+        load_at: f64,
+        tip_deflection: f64,
+    ) -> Result<Elastica, String> {
         if !(length.is_finite() && length > 0.0) {
-            return Err(format!("elastica: the length must be positive and finite, got {length}"));
+            return Err(format!(
+                "elastica: the length must be positive and finite, got {length}"
+            ));
         }
         let (length, load_at) = sanitise(length, load_at);
         let target = tip_deflection.abs();
@@ -90,7 +100,12 @@ impl Elastica {
             ));
         }
         let (magnitude, shape) = solve_tip_deflection(length, load_at, target);
-        Ok(Elastica::build(length, load_at, magnitude.copysign(tip_deflection), shape))
+        Ok(Elastica::build(
+            length,
+            load_at,
+            magnitude.copysign(tip_deflection),
+            shape,
+        ))
     }
 
     pub fn alpha(&self) -> f64 {
@@ -99,11 +114,19 @@ impl Elastica {
 
     /// Centreline at arc length s ∈ [0, length] (s outside is clamped into range).
     pub fn at(&self, s: f64) -> Centreline {
-        let s = if s.is_nan() { 0.0 } else { s.clamp(0.0, self.length) };
+        let s = if s.is_nan() {
+            0.0
+        } else {
+            s.clamp(0.0, self.length)
+        };
         let a = self.load_at;
         let down = if s <= a && a > 0.0 {
             let p = self.segment.at(s / a);
-            Centreline { x: a * p.x, v: a * p.v, theta: p.theta }
+            Centreline {
+                x: a * p.x,
+                v: a * p.v,
+                theta: p.theta,
+            }
         } else {
             let beyond = s - a;
             Centreline {
@@ -112,7 +135,15 @@ impl Elastica {
                 theta: self.end.theta,
             }
         };
-        if self.alpha < 0.0 { Centreline { v: -down.v, theta: -down.theta, ..down } } else { down }
+        if self.alpha < 0.0 {
+            Centreline {
+                v: -down.v,
+                theta: -down.theta,
+                ..down
+            }
+        } else {
+            down
+        }
     }
 
     /// Relative error |δ_linear − δ_exact| / δ_exact of linear theory's tip deflection for the
@@ -140,13 +171,23 @@ impl Elastica {
             Segment::Straight
         } else {
             match shape {
-                Shape::Separatrix => Segment::Separatrix { root_alpha: magnitude.sqrt() },
+                Shape::Separatrix => Segment::Separatrix {
+                    root_alpha: magnitude.sqrt(),
+                },
                 Shape::Carlson(tip) => Segment::Table(Table::integrate(magnitude, tip)),
             }
         };
         let end = segment.at(1.0);
         let (end_sin, end_cos) = segment.end_direction();
-        Elastica { length, load_at, alpha, segment, end, end_sin, end_cos }
+        Elastica {
+            length,
+            load_at,
+            alpha,
+            segment,
+            end,
+            end_sin,
+            end_cos,
+        }
     }
 }
 
@@ -159,9 +200,19 @@ const LINEAR_ERROR_SERIES_BELOW: f64 = 0.05;
 
 /// α/3 − δ_v/a of the tip-loaded elastica: coefficients of α³, α⁵, α⁷, α⁹ of the exact
 /// perturbation series (rational arithmetic; the first two are §4.2's 4/105 and 0.0081385).
-const DROP_DEFICIT: [f64; 4] = [4.0 / 105.0, -47.0 / 5775.0, 21584.0 / 10135125.0, -2837452.0 / 4583103525.0];
+const DROP_DEFICIT: [f64; 4] = [
+    4.0 / 105.0,
+    -47.0 / 5775.0,
+    21584.0 / 10135125.0,
+    -2837452.0 / 4583103525.0,
+];
 /// α/2 − sin θ₀, same form (from θ₀ = α/2 − 11α³/240 + 3601α⁵/403200 − …).
-const SIN_TIP_DEFICIT: [f64; 4] = [1.0 / 15.0, -47.0 / 3150.0, 2698.0 / 675675.0, -1418726.0 / 1206079875.0];
+const SIN_TIP_DEFICIT: [f64; 4] = [
+    1.0 / 15.0,
+    -47.0 / 3150.0,
+    2698.0 / 675675.0,
+    -1418726.0 / 1206079875.0,
+];
 
 /// Σ c_i α^(2i+3), the shape of both deficit series.
 fn polynomial(alpha: f64, coefficients: &[f64]) -> f64 {
@@ -170,8 +221,16 @@ fn polynomial(alpha: f64, coefficients: &[f64]) -> f64 {
 }
 
 fn sanitise(length: f64, load_at: f64) -> (f64, f64) {
-    let length = if length.is_finite() && length > 0.0 { length } else { 0.0 };
-    let load_at = if load_at.is_nan() { length } else { load_at.clamp(0.0, length) };
+    let length = if length.is_finite() && length > 0.0 {
+        length
+    } else {
+        0.0
+    };
+    let load_at = if load_at.is_nan() {
+        length
+    } else {
+        load_at.clamp(0.0, length)
+    };
     (length, load_at)
 }
 
@@ -195,15 +254,26 @@ fn solve_tip_deflection(l: f64, a: f64, target: f64) -> (f64, Shape) {
     let half = TipAngle::from_m(0.5);
     let last = TipAngle::for_alpha(SEPARATRIX_ALPHA);
     let tip = if target <= deflection(half) {
-        TipAngle::from_m(illinois(|m| deflection(TipAngle::from_m(m)) - target, 0.0, 0.5))
+        TipAngle::from_m(illinois(
+            |m| deflection(TipAngle::from_m(m)) - target,
+            0.0,
+            0.5,
+        ))
     } else if target <= deflection(last) {
-        let ln_q = illinois(|ln_q| target - deflection(TipAngle::from_q(ln_q.exp())), last.q.ln(), 0.5f64.ln());
+        let ln_q = illinois(
+            |ln_q| target - deflection(TipAngle::from_q(ln_q.exp())),
+            last.q.ln(),
+            0.5f64.ln(),
+        );
         TipAngle::from_q(ln_q.exp())
     } else {
         // Separatrix: l − δ = 2a(tanh(u₁ + √α) − 1/√2)/√α, and tanh is 1 to f64 precision
         // for √α > √SEPARATRIX_ALPHA; the straight part's own 1 − sin θ₀ ~ 1e-24 is negligible.
         let root_alpha = 2.0 * a * (1.0 - FRAC_1_SQRT_2) / (l - target);
-        return ((root_alpha * root_alpha).clamp(SEPARATRIX_ALPHA, f64::MAX), Shape::Separatrix);
+        return (
+            (root_alpha * root_alpha).clamp(SEPARATRIX_ALPHA, f64::MAX),
+            Shape::Separatrix,
+        );
     };
     (tip.alpha(), Shape::Carlson(tip))
 }
@@ -236,7 +306,11 @@ impl TipAngle {
         } else {
             // √α ≈ ln(4/k′) − u₁ is nearly linear in ln q (and decreasing).
             let root = alpha.sqrt();
-            let ln_q = illinois(|ln_q| root - TipAngle::from_q(ln_q.exp()).alpha().sqrt(), LN_Q_MIN, 0.5f64.ln());
+            let ln_q = illinois(
+                |ln_q| root - TipAngle::from_q(ln_q.exp()).alpha().sqrt(),
+                LN_Q_MIN,
+                0.5f64.ln(),
+            );
             TipAngle::from_q(ln_q.exp())
         }
     }
@@ -281,7 +355,11 @@ impl Segment {
     /// Position and angle at ξ = s/a ∈ [0, 1].
     fn at(&self, xi: f64) -> Centreline {
         match self {
-            Segment::Straight => Centreline { x: xi, v: 0.0, theta: 0.0 },
+            Segment::Straight => Centreline {
+                x: xi,
+                v: 0.0,
+                theta: 0.0,
+            },
             Segment::Table(table) => table.at(xi),
             Segment::Separatrix { root_alpha } => separatrix(*root_alpha, xi).0,
         }
@@ -358,7 +436,11 @@ impl Table {
     fn integrate(alpha: f64, tip: TipAngle) -> Table {
         let n = (alpha.sqrt() / STEP).ceil().max(1.0) as usize;
         let h = 1.0 / n as f64;
-        let end = State { sin: tip.m, cos: tip.cos(), bend: 0.0 };
+        let end = State {
+            sin: tip.m,
+            cos: tip.cos(),
+            bend: 0.0,
+        };
         let mut state = end;
         let mut steps = Vec::with_capacity(n);
         for _ in 0..n {
@@ -368,7 +450,11 @@ impl Table {
         }
         steps.reverse();
         anchor_at_clamp(&mut steps);
-        Table { steps, end_sin: end.sin, end_cos: end.cos }
+        Table {
+            steps,
+            end_sin: end.sin,
+            end_cos: end.cos,
+        }
     }
 
     fn at(&self, xi: f64) -> Centreline {
@@ -422,7 +508,11 @@ impl Step {
         // The truncated series drifts off the unit circle by its truncation error; putting it
         // back keeps sin² + cos² = 1 exact without touching the relative precision of either.
         let norm = s.hypot(c);
-        let next = State { sin: s / norm, cos: c / norm, bend: bend.iter().sum() };
+        let next = State {
+            sin: s / norm,
+            cos: c / norm,
+            bend: bend.iter().sum(),
+        };
         (Step { theta, x, v }, next)
     }
 
@@ -480,12 +570,18 @@ fn carlson_rf(x0: f64, y0: f64, z0: f64) -> f64 {
     let (mut x, mut y, mut z) = (x0, y0, z0);
     let a0 = (x0 + y0 + z0) / 3.0;
     let mut a = a0;
-    let q = (3.0 * DUPLICATION_TOLERANCE).powf(-1.0 / 6.0) * (a0 - x0).abs().max((a0 - y0).abs()).max((a0 - z0).abs());
+    let q = (3.0 * DUPLICATION_TOLERANCE).powf(-1.0 / 6.0)
+        * (a0 - x0).abs().max((a0 - y0).abs()).max((a0 - z0).abs());
     let mut scale = 1.0;
     while scale * q >= a.abs() {
         let (sx, sy, sz) = (x.sqrt(), y.sqrt(), z.sqrt());
         let lambda = sx * sy + sy * sz + sz * sx;
-        (x, y, z, a) = ((x + lambda) / 4.0, (y + lambda) / 4.0, (z + lambda) / 4.0, (a + lambda) / 4.0);
+        (x, y, z, a) = (
+            (x + lambda) / 4.0,
+            (y + lambda) / 4.0,
+            (z + lambda) / 4.0,
+            (a + lambda) / 4.0,
+        );
         scale /= 4.0;
     }
     let dx = (a0 - x0) * scale / a;
@@ -501,13 +597,19 @@ fn carlson_rd(x0: f64, y0: f64, z0: f64) -> f64 {
     let (mut x, mut y, mut z) = (x0, y0, z0);
     let a0 = (x0 + y0 + 3.0 * z0) / 5.0;
     let mut a = a0;
-    let q = (DUPLICATION_TOLERANCE / 4.0).powf(-1.0 / 6.0) * (a0 - x0).abs().max((a0 - y0).abs()).max((a0 - z0).abs());
+    let q = (DUPLICATION_TOLERANCE / 4.0).powf(-1.0 / 6.0)
+        * (a0 - x0).abs().max((a0 - y0).abs()).max((a0 - z0).abs());
     let (mut scale, mut sum) = (1.0, 0.0);
     while scale * q >= a.abs() {
         let (sx, sy, sz) = (x.sqrt(), y.sqrt(), z.sqrt());
         let lambda = sx * sy + sy * sz + sz * sx;
         sum += scale / (sz * (z + lambda));
-        (x, y, z, a) = ((x + lambda) / 4.0, (y + lambda) / 4.0, (z + lambda) / 4.0, (a + lambda) / 4.0);
+        (x, y, z, a) = (
+            (x + lambda) / 4.0,
+            (y + lambda) / 4.0,
+            (z + lambda) / 4.0,
+            (a + lambda) / 4.0,
+        );
         scale /= 4.0;
     }
     let dx = (a0 - x0) * scale / a;
@@ -518,7 +620,9 @@ fn carlson_rd(x0: f64, y0: f64, z0: f64) -> f64 {
     let e3 = (3.0 * xy - 8.0 * z2) * dz;
     let e4 = 3.0 * (xy - z2) * z2;
     let e5 = xy * z2 * dz;
-    let series = 1.0 - 3.0 * e2 / 14.0 + e3 / 6.0 + 9.0 * e2 * e2 / 88.0 - 3.0 * e4 / 22.0 - 9.0 * e2 * e3 / 52.0
+    let series = 1.0 - 3.0 * e2 / 14.0 + e3 / 6.0 + 9.0 * e2 * e2 / 88.0
+        - 3.0 * e4 / 22.0
+        - 9.0 * e2 * e3 / 52.0
         + 3.0 * e5 / 26.0;
     scale * series / (a * a.sqrt()) + 3.0 * sum
 }
@@ -555,15 +659,24 @@ mod tests {
     }
 
     fn assert_close(what: &str, got: f64, want: f64, tolerance: f64) {
-        assert!((got - want).abs() <= tolerance, "{what}: got {got:e}, want {want:e} ± {tolerance:e}");
+        assert!(
+            (got - want).abs() <= tolerance,
+            "{what}: got {got:e}, want {want:e} ± {tolerance:e}"
+        );
     }
 
     fn assert_finite(e: &Elastica, context: &str) {
-        assert!(e.alpha().is_finite() && e.linear_error().is_finite(), "{context}: {e:?}");
+        assert!(
+            e.alpha().is_finite() && e.linear_error().is_finite(),
+            "{context}: {e:?}"
+        );
         for i in -2..=102 {
             let s = e.length * i as f64 / 100.0;
             let c = e.at(s);
-            assert!(c.x.is_finite() && c.v.is_finite() && c.theta.is_finite(), "{context}, s = {s}: {c:?}");
+            assert!(
+                c.x.is_finite() && c.v.is_finite() && c.theta.is_finite(),
+                "{context}, s = {s}: {c:?}"
+            );
         }
     }
 
@@ -574,17 +687,39 @@ mod tests {
     #[test]
     fn carlson_integrals_match_published_values() {
         // Carlson (1995), Numer. Algorithms 10, §3 test values; 13–14 digits printed.
-        assert_close("R_F(1,2,0)", carlson_rf(1.0, 2.0, 0.0), 1.311_028_777_146_1, 1e-13);
-        assert_close("R_F(2,3,4)", carlson_rf(2.0, 3.0, 4.0), 0.584_082_841_677_15, 1e-13);
-        assert_close("R_D(0,2,1)", carlson_rd(0.0, 2.0, 1.0), 1.797_210_352_103_4, 1e-13);
-        assert_close("R_D(2,3,4)", carlson_rd(2.0, 3.0, 4.0), 0.165_105_272_942_61, 1e-13);
+        assert_close(
+            "R_F(1,2,0)",
+            carlson_rf(1.0, 2.0, 0.0),
+            1.311_028_777_146_1,
+            1e-13,
+        );
+        assert_close(
+            "R_F(2,3,4)",
+            carlson_rf(2.0, 3.0, 4.0),
+            0.584_082_841_677_15,
+            1e-13,
+        );
+        assert_close(
+            "R_D(0,2,1)",
+            carlson_rd(0.0, 2.0, 1.0),
+            1.797_210_352_103_4,
+            1e-13,
+        );
+        assert_close(
+            "R_D(2,3,4)",
+            carlson_rd(2.0, 3.0, 4.0),
+            0.165_105_272_942_61,
+            1e-13,
+        );
     }
 
     #[test]
     fn bisshopp_drucker_tip_values_for_alpha_1_2_5() {
         // δ_v/L and u/L to 1e-5 (the table's 5 significant digits); θ₀ is printed in degrees
         // to 0.01°, so it is held to half of that.
-        for (alpha, drop, shortening, angle) in BISSHOPP_DRUCKER.into_iter().filter(|r| [1.0, 2.0, 5.0].contains(&r.0))
+        for (alpha, drop, shortening, angle) in BISSHOPP_DRUCKER
+            .into_iter()
+            .filter(|r| [1.0, 2.0, 5.0].contains(&r.0))
         {
             let (d, u, t) = tip_values(2.5, alpha);
             assert_close(&format!("δ_v/L at α = {alpha}"), d, drop, 1e-5);
@@ -601,7 +736,12 @@ mod tests {
         for (alpha, drop, shortening, angle) in BISSHOPP_DRUCKER {
             let (d, u, t) = tip_values(1.0, alpha);
             assert_close(&format!("δ_v/L at α = {alpha}"), d, drop, 5.0e-6 + 1e-12);
-            assert_close(&format!("u/L at α = {alpha}"), u, shortening, 5.0e-6 + 1e-12);
+            assert_close(
+                &format!("u/L at α = {alpha}"),
+                u,
+                shortening,
+                5.0e-6 + 1e-12,
+            );
             assert_close(&format!("θ₀ at α = {alpha}"), t, angle, 0.01);
         }
     }
@@ -616,31 +756,106 @@ mod tests {
             (
                 0.5,
                 [
-                    (0.1, 0.09996266584225813, 0.0023764405137488213, 0.04670452599541612),
-                    (0.25, 0.24948377172852895, 0.014060968009844167, 0.10740195077224755),
-                    (0.5, 0.4966850336577463, 0.05095414333233582, 0.18374739223208564),
-                    (0.75, 0.7412180623552035, 0.10284520217277733, 0.22936404137025346),
-                    (1.0, 0.9840810375291625, 0.1621435756583696, 0.24453364713321832),
+                    (
+                        0.1,
+                        0.09996266584225813,
+                        0.0023764405137488213,
+                        0.04670452599541612,
+                    ),
+                    (
+                        0.25,
+                        0.24948377172852895,
+                        0.014060968009844167,
+                        0.10740195077224755,
+                    ),
+                    (
+                        0.5,
+                        0.4966850336577463,
+                        0.05095414333233582,
+                        0.18374739223208564,
+                    ),
+                    (
+                        0.75,
+                        0.7412180623552035,
+                        0.10284520217277733,
+                        0.22936404137025346,
+                    ),
+                    (
+                        1.0,
+                        0.9840810375291625,
+                        0.1621435756583696,
+                        0.24453364713321832,
+                    ),
                 ],
             ),
             (
                 5.0,
                 [
-                    (0.1, 0.09862729878843858, 0.014381979794186563, 0.2813620975100102),
-                    (0.25, 0.23263666980908373, 0.08021138491788601, 0.6150519389756615),
-                    (0.5, 0.40345713793575705, 0.26089090765423445, 0.9762173083539804),
-                    (0.75, 0.5210908448914229, 0.4810885045996703, 1.1596595560405007),
-                    (1.0, 0.6123716392755701, 0.7137915236119128, 1.215368117611681),
+                    (
+                        0.1,
+                        0.09862729878843858,
+                        0.014381979794186563,
+                        0.2813620975100102,
+                    ),
+                    (
+                        0.25,
+                        0.23263666980908373,
+                        0.08021138491788601,
+                        0.6150519389756615,
+                    ),
+                    (
+                        0.5,
+                        0.40345713793575705,
+                        0.26089090765423445,
+                        0.9762173083539804,
+                    ),
+                    (
+                        0.75,
+                        0.5210908448914229,
+                        0.4810885045996703,
+                        1.1596595560405007,
+                    ),
+                    (
+                        1.0,
+                        0.6123716392755701,
+                        0.7137915236119128,
+                        1.215368117611681,
+                    ),
                 ],
             ),
             (
                 50.0,
                 [
-                    (0.1, 0.08909304993475807, 0.039808376565405895, 0.7649340839970408),
-                    (0.25, 0.16019890184669738, 0.16997138903881293, 1.288411488088395),
-                    (0.5, 0.19317772082798448, 0.4172388578782992, 1.5224715932049435),
-                    (0.75, 0.19886783225155596, 0.6671583426657225, 1.562313003470528),
-                    (1.0, 0.19999960395040237, 0.9171554473035874, 1.5679819015714367),
+                    (
+                        0.1,
+                        0.08909304993475807,
+                        0.039808376565405895,
+                        0.7649340839970408,
+                    ),
+                    (
+                        0.25,
+                        0.16019890184669738,
+                        0.16997138903881293,
+                        1.288411488088395,
+                    ),
+                    (
+                        0.5,
+                        0.19317772082798448,
+                        0.4172388578782992,
+                        1.5224715932049435,
+                    ),
+                    (
+                        0.75,
+                        0.19886783225155596,
+                        0.6671583426657225,
+                        1.562313003470528,
+                    ),
+                    (
+                        1.0,
+                        0.19999960395040237,
+                        0.9171554473035874,
+                        1.5679819015714367,
+                    ),
                 ],
             ),
         ];
@@ -667,9 +882,24 @@ mod tests {
             let end = Elastica::from_load_parameter(1.0, 1.0, alpha).at(1.0);
             let reach = (1.0 + tip.m).sqrt() / tip.rf();
             assert_close(&format!("x_tip at α = {alpha}"), end.x, reach, 1e-14);
-            assert_close(&format!("v_tip/δ at α = {alpha}"), end.v / tip.tip_drop(), 1.0, 4e-15);
-            assert_close(&format!("θ₀ at α = {alpha}"), end.theta / tip.m.atan2(tip.cos()), 1.0, 4e-15);
-            assert_close(&format!("α(m) at α = {alpha}"), tip.alpha() / alpha, 1.0, 4e-15);
+            assert_close(
+                &format!("v_tip/δ at α = {alpha}"),
+                end.v / tip.tip_drop(),
+                1.0,
+                4e-15,
+            );
+            assert_close(
+                &format!("θ₀ at α = {alpha}"),
+                end.theta / tip.m.atan2(tip.cos()),
+                1.0,
+                4e-15,
+            );
+            assert_close(
+                &format!("α(m) at α = {alpha}"),
+                tip.alpha() / alpha,
+                1.0,
+                4e-15,
+            );
         }
     }
 
@@ -682,8 +912,14 @@ mod tests {
             let (d, _, t) = tip_values(3.0, alpha);
             let series = alpha / 3.0 - 4.0 / 105.0 * alpha.powi(3) + 0.0081385 * alpha.powi(5);
             assert_close(&format!("δ_v/L at α = {alpha}"), d / series, 1.0, tolerance);
-            let angle = alpha / 2.0 - 11.0 / 240.0 * alpha.powi(3) + 3601.0 / 403200.0 * alpha.powi(5);
-            assert_close(&format!("θ₀ at α = {alpha}"), t.to_radians() / angle, 1.0, tolerance);
+            let angle =
+                alpha / 2.0 - 11.0 / 240.0 * alpha.powi(3) + 3601.0 / 403200.0 * alpha.powi(5);
+            assert_close(
+                &format!("θ₀ at α = {alpha}"),
+                t.to_radians() / angle,
+                1.0,
+                tolerance,
+            );
         }
         // u/L = α²/15 − (4/315)α⁴ (+ 2126/675675 α⁶, same derivation) is a difference L − x,
         // so it is held absolutely, to 1e-15.
@@ -703,8 +939,12 @@ mod tests {
     fn shape_is_continuous_across_the_separatrix_switch() {
         // Just below the switch the table is integrated, just above the closed form is used.
         let below = Elastica::from_load_parameter(2.0, 2.0, SEPARATRIX_ALPHA);
-        let above = Elastica::from_load_parameter(2.0, 2.0, SEPARATRIX_ALPHA * (1.0 + f64::EPSILON));
-        assert!(matches!(below.segment, Segment::Table(_)) && matches!(above.segment, Segment::Separatrix { .. }));
+        let above =
+            Elastica::from_load_parameter(2.0, 2.0, SEPARATRIX_ALPHA * (1.0 + f64::EPSILON));
+        assert!(
+            matches!(below.segment, Segment::Table(_))
+                && matches!(above.segment, Segment::Separatrix { .. })
+        );
         for i in 0..=2000 {
             let s = 2.0 * i as f64 / 2000.0;
             let (p, q) = (below.at(s), above.at(s));
@@ -726,19 +966,41 @@ mod tests {
             (10.0, 311.0, 1.0),
         ] {
             let e = Elastica::from_load_parameter(1.0, 1.0, alpha);
-            assert_close(&format!("linear error at α = {alpha}"), 100.0 * e.linear_error(), percent, printed / 2.0);
+            assert_close(
+                &format!("linear error at α = {alpha}"),
+                100.0 * e.linear_error(),
+                percent,
+                printed / 2.0,
+            );
         }
         // §4.3: ≈ (4/35)α² for small α, to relative α².
         for alpha in [1e-6, 1e-3] {
             let e = Elastica::from_load_parameter(1.0, 1.0, alpha);
-            assert_close("small-α linear error", e.linear_error() / (4.0 / 35.0 * alpha * alpha), 1.0, alpha * alpha);
+            assert_close(
+                "small-α linear error",
+                e.linear_error() / (4.0 / 35.0 * alpha * alpha),
+                1.0,
+                alpha * alpha,
+            );
         }
         for (length, a) in [(1.0, 1.0), (1.0, 0.3), (4.0, 1e-6)] {
-            let series = Elastica::from_load_parameter(length, a, LINEAR_ERROR_SERIES_BELOW * (1.0 - f64::EPSILON));
+            let series = Elastica::from_load_parameter(
+                length,
+                a,
+                LINEAR_ERROR_SERIES_BELOW * (1.0 - f64::EPSILON),
+            );
             let direct = Elastica::from_load_parameter(length, a, LINEAR_ERROR_SERIES_BELOW);
-            assert_close(&format!("switch, a = {a}"), series.linear_error() / direct.linear_error(), 1.0, 1e-10);
+            assert_close(
+                &format!("switch, a = {a}"),
+                series.linear_error() / direct.linear_error(),
+                1.0,
+                1e-10,
+            );
         }
-        assert_eq!(Elastica::from_load_parameter(1.0, 0.5, 0.0).linear_error(), 0.0);
+        assert_eq!(
+            Elastica::from_load_parameter(1.0, 0.5, 0.0).linear_error(),
+            0.0
+        );
     }
 
     #[test]
@@ -758,8 +1020,18 @@ mod tests {
                     let dx = (p[0].x - 8.0 * p[1].x + 8.0 * p[2].x - p[3].x) / (12.0 * h);
                     let dv = (p[0].v - 8.0 * p[1].v + 8.0 * p[2].v - p[3].v) / (12.0 * h);
                     let theta = e.at(s).theta;
-                    assert_close(&format!("x′ at α = {alpha}, a = {a}, s = {s}"), dx, theta.cos(), 1e-9);
-                    assert_close(&format!("v′ at α = {alpha}, a = {a}, s = {s}"), dv, theta.sin(), 1e-9);
+                    assert_close(
+                        &format!("x′ at α = {alpha}, a = {a}, s = {s}"),
+                        dx,
+                        theta.cos(),
+                        1e-9,
+                    );
+                    assert_close(
+                        &format!("v′ at α = {alpha}, a = {a}, s = {s}"),
+                        dv,
+                        theta.sin(),
+                        1e-9,
+                    );
                 }
             }
         }
@@ -784,8 +1056,18 @@ mod tests {
                     // Exactly the continuation of the load point along θ₀.
                     let beyond = s - a;
                     assert_eq!(c.theta, end.theta);
-                    assert_close("straight x", c.x, end.x + beyond * end.theta.cos(), 1e-14 * length);
-                    assert_close("straight v", c.v, end.v + beyond * end.theta.sin(), 1e-14 * length);
+                    assert_close(
+                        "straight x",
+                        c.x,
+                        end.x + beyond * end.theta.cos(),
+                        1e-14 * length,
+                    );
+                    assert_close(
+                        "straight v",
+                        c.v,
+                        end.v + beyond * end.theta.sin(),
+                        1e-14 * length,
+                    );
                 }
             }
             let clamp = e.at(0.0);
@@ -803,7 +1085,10 @@ mod tests {
         let chords = |e: &Elastica, n: usize| -> f64 {
             (0..n)
                 .map(|i| {
-                    let (p, q) = (e.at(e.length * i as f64 / n as f64), e.at(e.length * (i + 1) as f64 / n as f64));
+                    let (p, q) = (
+                        e.at(e.length * i as f64 / n as f64),
+                        e.at(e.length * (i + 1) as f64 / n as f64),
+                    );
                     (q.x - p.x).hypot(q.v - p.v)
                 })
                 .sum()
@@ -812,7 +1097,12 @@ mod tests {
             for a in [3.0, 1.2] {
                 let e = Elastica::from_load_parameter(3.0, a, alpha);
                 let (coarse, fine) = (chords(&e, 20_000), chords(&e, 40_000));
-                assert_close(&format!("arc length at α = {alpha}, a = {a}"), (4.0 * fine - coarse) / 3.0, 3.0, 1e-11);
+                assert_close(
+                    &format!("arc length at α = {alpha}, a = {a}"),
+                    (4.0 * fine - coarse) / 3.0,
+                    3.0,
+                    1e-11,
+                );
             }
         }
     }
@@ -831,14 +1121,25 @@ mod tests {
                         let at = format!("L = {length}, a = {load_at}, δ = {target}");
                         assert_close(&at, e.at(length).v / target, 1.0, 1e-13);
                         assert_eq!(e.alpha().signum(), sign, "{at}");
-                        let again = Elastica::from_load_parameter(length, load_at, e.alpha()).at(length);
+                        let again =
+                            Elastica::from_load_parameter(length, load_at, e.alpha()).at(length);
                         assert_close(&format!("rebuilt {at}"), again.v / target, 1.0, 1e-13);
                     }
                 }
             }
         }
         let zero = Elastica::from_tip_deflection(2.0, 1.0, 0.0).unwrap();
-        assert_eq!((zero.alpha(), zero.at(2.0)), (0.0, Centreline { x: 2.0, v: 0.0, theta: 0.0 }));
+        assert_eq!(
+            (zero.alpha(), zero.at(2.0)),
+            (
+                0.0,
+                Centreline {
+                    x: 2.0,
+                    v: 0.0,
+                    theta: 0.0
+                }
+            )
+        );
     }
 
     #[test]
@@ -847,32 +1148,81 @@ mod tests {
             let message = Elastica::from_tip_deflection(2.0, 1.0, bad).unwrap_err();
             assert!(message.contains(&bad.to_string()), "{message}");
         }
-        assert!(Elastica::from_tip_deflection(0.0, 0.0, 0.1).unwrap_err().contains('0'));
-        assert!(Elastica::from_tip_deflection(-1.0, 0.5, 0.1).unwrap_err().contains("-1"));
+        assert!(
+            Elastica::from_tip_deflection(0.0, 0.0, 0.1)
+                .unwrap_err()
+                .contains('0')
+        );
+        assert!(
+            Elastica::from_tip_deflection(-1.0, 0.5, 0.1)
+                .unwrap_err()
+                .contains("-1")
+        );
     }
 
     #[test]
     fn no_load_is_the_straight_rod_and_an_upward_load_the_mirror_image() {
         let straight = Elastica::from_load_parameter(3.0, 1.0, 0.0);
         for s in [0.0, 0.5, 1.0, 2.9, 3.0] {
-            assert_eq!(straight.at(s), Centreline { x: s, v: 0.0, theta: 0.0 });
+            assert_eq!(
+                straight.at(s),
+                Centreline {
+                    x: s,
+                    v: 0.0,
+                    theta: 0.0
+                }
+            );
         }
-        let (down, up) = (Elastica::from_load_parameter(3.0, 1.0, 7.0), Elastica::from_load_parameter(3.0, 1.0, -7.0));
+        let (down, up) = (
+            Elastica::from_load_parameter(3.0, 1.0, 7.0),
+            Elastica::from_load_parameter(3.0, 1.0, -7.0),
+        );
         for s in [0.0, 0.5, 1.0, 2.9, 3.0] {
             let (d, u) = (down.at(s), up.at(s));
-            assert_eq!(u, Centreline { x: d.x, v: -d.v, theta: -d.theta });
+            assert_eq!(
+                u,
+                Centreline {
+                    x: d.x,
+                    v: -d.v,
+                    theta: -d.theta
+                }
+            );
         }
         assert_eq!(up.linear_error(), down.linear_error());
     }
 
     #[test]
     fn no_nan_or_infinity_anywhere() {
-        let alphas =
-            [0.0, -0.0, 1e-300, 5e-324, 1e4, 1e6, 1e12, 1e300, f64::MAX, f64::INFINITY, f64::NEG_INFINITY, f64::NAN]
-                .into_iter()
-                .chain(log_sweep(1e-12, 1e3, 90))
-                .chain(log_sweep(1e-12, 1e3, 15).map(|a| -a));
-        let loads = [1e-6, 1e-4, 0.01, 0.1, 0.5, 0.9, 1.0, 0.0, -1.0, 2.0, f64::NAN];
+        let alphas = [
+            0.0,
+            -0.0,
+            1e-300,
+            5e-324,
+            1e4,
+            1e6,
+            1e12,
+            1e300,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ]
+        .into_iter()
+        .chain(log_sweep(1e-12, 1e3, 90))
+        .chain(log_sweep(1e-12, 1e3, 15).map(|a| -a));
+        let loads = [
+            1e-6,
+            1e-4,
+            0.01,
+            0.1,
+            0.5,
+            0.9,
+            1.0,
+            0.0,
+            -1.0,
+            2.0,
+            f64::NAN,
+        ];
         for alpha in alphas {
             for load in loads {
                 let e = Elastica::from_load_parameter(2.0, 2.0 * load, alpha);
@@ -880,7 +1230,10 @@ mod tests {
             }
         }
         for length in [0.0, -1.0, f64::NAN, f64::INFINITY, 1e-300, 1e300] {
-            assert_finite(&Elastica::from_load_parameter(length, 0.5, 3.0), &format!("L = {length}"));
+            assert_finite(
+                &Elastica::from_load_parameter(length, 0.5, 3.0),
+                &format!("L = {length}"),
+            );
         }
         for fraction in log_sweep(1e-12, 1.0 - 1e-15, 40) {
             for load in [1e-6, 0.3, 1.0] {

@@ -15,10 +15,20 @@ use serde::Serialize;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Load {
-    Point { at: f64, force: f64 },
-    Distributed { from: f64, to: f64, intensity: f64 },
+    Point {
+        at: f64,
+        force: f64,
+    },
+    Distributed {
+        from: f64,
+        to: f64,
+        intensity: f64,
+    },
     /// End moments, sagging positive (M(0) = start, M(L) = end where the end can rotate).
-    EndMoments { start: f64, end: f64 },
+    EndMoments {
+        start: f64,
+        end: f64,
+    },
 }
 
 /// One station of a linear solution, for unit EI (divide by EI for physical values).
@@ -49,21 +59,42 @@ pub struct LinearBeam {
 
 impl LinearBeam {
     /// `shear_flexibility` = EI/(κGA) in m² (0 for Euler–Bernoulli). Loads must lie on the span.
-    pub fn solve(support: Support, length: f64, loads: &[Load], shear_flexibility: f64) -> LinearBeam {
+    pub fn solve(
+        support: Support,
+        length: f64,
+        loads: &[Load],
+        shear_flexibility: f64,
+    ) -> LinearBeam {
         let l = length;
-        let mut beam = LinearBeam { length, points: Vec::new(), udls: Vec::new(), shear: shear_flexibility / (l * l), constants: [0.0; 4], end_scale: 0.0 };
+        let mut beam = LinearBeam {
+            length,
+            points: Vec::new(),
+            udls: Vec::new(),
+            shear: shear_flexibility / (l * l),
+            constants: [0.0; 4],
+            end_scale: 0.0,
+        };
         // Loads exactly at the free end enter through its boundary condition, not as span terms.
         let (mut end_force, mut end_moments) = (0.0, (0.0, 0.0));
         for load in loads {
             match *load {
                 Load::Point { at, force } if at >= l => end_force += force,
                 Load::Point { at, force } => beam.points.push((at / l, force)),
-                Load::Distributed { from, to, intensity } => beam.udls.push((from / l, to / l, intensity * l)),
-                Load::EndMoments { start, end } => end_moments = (end_moments.0 + start / l, end_moments.1 + end / l),
+                Load::Distributed {
+                    from,
+                    to,
+                    intensity,
+                } => beam.udls.push((from / l, to / l, intensity * l)),
+                Load::EndMoments { start, end } => {
+                    end_moments = (end_moments.0 + start / l, end_moments.1 + end / l)
+                }
             }
         }
         beam.end_scale = end_force.abs() + end_moments.0.abs() + end_moments.1.abs();
-        let rows = [boundary(support, 0.0, &beam, 0.0, end_moments.0), boundary(support, 1.0, &beam, end_force, end_moments.1)];
+        let rows = [
+            boundary(support, 0.0, &beam, 0.0, end_moments.0),
+            boundary(support, 1.0, &beam, end_force, end_moments.1),
+        ];
         let mut m = [[0.0; 5]; 4];
         for (i, row) in rows.iter().flatten().enumerate() {
             m[i] = *row;
@@ -76,7 +107,10 @@ impl LinearBeam {
     /// far below it is round-off.
     pub fn natural_deflection(&self) -> f64 {
         let l3 = self.length.powi(3);
-        (self.points.iter().map(|p| p.1.abs()).sum::<f64>() + self.udls.iter().map(|u| u.2.abs()).sum::<f64>() + self.end_scale) * l3
+        (self.points.iter().map(|p| p.1.abs()).sum::<f64>()
+            + self.udls.iter().map(|u| u.2.abs()).sum::<f64>()
+            + self.end_scale)
+            * l3
     }
 
     /// Solution at x ∈ [0, L] for unit EI: v in m per (N·m²/EI) etc.
@@ -87,11 +121,18 @@ impl LinearBeam {
         let p = self.particular(xi);
         let moment = a + b * xi + p.m;
         let rotation = psi0 - (a * xi + b * xi * xi / 2.0 + p.im);
-        let v = v0 + psi0 * xi - (a * xi * xi / 2.0 + b * xi.powi(3) / 6.0 + p.iim) + self.shear * (b * xi + p.m - self.particular(0.0).m);
+        let v = v0 + psi0 * xi - (a * xi * xi / 2.0 + b * xi.powi(3) / 6.0 + p.iim)
+            + self.shear * (b * xi + p.m - self.particular(0.0).m);
         let shear = b + p.dm;
         let slope = rotation + self.shear * shear;
         // Back to physical units: ξ-space quantities carry powers of L.
-        Station { v: v * l.powi(3), slope: slope * l * l, rotation: rotation * l * l, moment: moment * l, shear }
+        Station {
+            v: v * l.powi(3),
+            slope: slope * l * l,
+            rotation: rotation * l * l,
+            moment: moment * l,
+            shear,
+        }
     }
 
     /// Macaulay terms of the span loads at ξ: M_p, ∫M_p, ∫∫M_p and dM_p/dξ (from the left).
@@ -126,18 +167,32 @@ struct Particular {
 }
 
 /// The two boundary-condition rows [A, B, ψ₀, v₀ | rhs] at the end ξ = e.
-fn boundary(support: Support, e: f64, beam: &LinearBeam, end_force: f64, end_moment: f64) -> [[f64; 5]; 2] {
+fn boundary(
+    support: Support,
+    e: f64,
+    beam: &LinearBeam,
+    end_force: f64,
+    end_moment: f64,
+) -> [[f64; 5]; 2] {
     let p = beam.particular(e);
     let p0 = beam.particular(0.0);
     let s = beam.shear;
-    let deflection = [-e * e / 2.0, -e.powi(3) / 6.0 + s * e, e, 1.0, p.iim - s * (p.m - p0.m)];
+    let deflection = [
+        -e * e / 2.0,
+        -e.powi(3) / 6.0 + s * e,
+        e,
+        1.0,
+        p.iim - s * (p.m - p0.m),
+    ];
     let rotation = [-e, -e * e / 2.0, 1.0, 0.0, p.im];
     let moment = [1.0, e, 0.0, 0.0, end_moment - p.m];
     let shear = [0.0, 1.0, 0.0, 0.0, end_force - p.dm];
     use Support::*;
     let start = e == 0.0;
     match (support, start) {
-        (Cantilever | FixedFixed | ProppedCantilever, true) | (FixedFixed, false) => [deflection, rotation],
+        (Cantilever | FixedFixed | ProppedCantilever, true) | (FixedFixed, false) => {
+            [deflection, rotation]
+        }
         (SimplySupported, _) | (ProppedCantilever, false) => [deflection, moment],
         (Cantilever, false) => [moment, shear],
     }
@@ -146,7 +201,9 @@ fn boundary(support: Support, e: f64, beam: &LinearBeam, end_force: f64, end_mom
 /// Gaussian elimination with partial pivoting on an augmented 4×5 matrix.
 fn solve4(mut m: [[f64; 5]; 4]) -> [f64; 4] {
     for col in 0..4 {
-        let pivot = (col..4).max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs())).unwrap();
+        let pivot = (col..4)
+            .max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))
+            .unwrap();
         m.swap(col, pivot);
         for row in col + 1..4 {
             let f = m[row][col] / m[col][col];
@@ -186,14 +243,36 @@ mod tests {
         let loads = [Load::Point { at: a, force: p }];
         for i in 0..=40 {
             let x = L * f64::from(i) / 40.0;
-            let ss = if x <= a { p * b * x * (L * L - b * b - x * x) / (6.0 * L) } else { let xb = L - x; p * a * xb * (L * L - a * a - xb * xb) / (6.0 * L) };
-            let cant = if x <= a { p * x * x * (3.0 * a - x) / 6.0 } else { p * a * a * (3.0 * x - a) / 6.0 };
-            let ff = if x <= a { p * b * b * x * x * (3.0 * a * L - (3.0 * a + b) * x) / (6.0 * L.powi(3)) } else { let (xb, aa, bb) = (L - x, b, a); p * bb * bb * xb * xb * (3.0 * aa * L - (3.0 * aa + bb) * xb) / (6.0 * L.powi(3)) };
+            let ss = if x <= a {
+                p * b * x * (L * L - b * b - x * x) / (6.0 * L)
+            } else {
+                let xb = L - x;
+                p * a * xb * (L * L - a * a - xb * xb) / (6.0 * L)
+            };
+            let cant = if x <= a {
+                p * x * x * (3.0 * a - x) / 6.0
+            } else {
+                p * a * a * (3.0 * x - a) / 6.0
+            };
+            let ff = if x <= a {
+                p * b * b * x * x * (3.0 * a * L - (3.0 * a + b) * x) / (6.0 * L.powi(3))
+            } else {
+                let (xb, aa, bb) = (L - x, b, a);
+                p * bb * bb * xb * xb * (3.0 * aa * L - (3.0 * aa + bb) * xb) / (6.0 * L.powi(3))
+            };
             let r = p * a * a * (3.0 * L - a) / (2.0 * L.powi(3));
             let propped = cant - r * x * x * (3.0 * L - x) / 6.0;
-            for (support, want) in [(SimplySupported, ss), (Cantilever, cant), (FixedFixed, ff), (ProppedCantilever, propped)] {
+            for (support, want) in [
+                (SimplySupported, ss),
+                (Cantilever, cant),
+                (FixedFixed, ff),
+                (ProppedCantilever, propped),
+            ] {
                 let got = v(support, &loads, x);
-                assert!((got - want).abs() < 1e-12 * p * L.powi(3), "{support:?} x={x}: {got} vs {want}");
+                assert!(
+                    (got - want).abs() < 1e-12 * p * L.powi(3),
+                    "{support:?} x={x}: {got} vs {want}"
+                );
             }
         }
     }
@@ -203,24 +282,43 @@ mod tests {
         let s = LinearBeam::solve(Cantilever, L, &[Load::Point { at: L, force: 2.0 }], 0.0);
         assert!(close(s.at(L).v, 2.0 * L.powi(3) / 3.0, 1e-13));
         assert!(close(s.at(L).slope, 2.0 * L * L / 2.0, 1e-13));
-        assert!(close(s.at(0.0).moment, -2.0 * L, 1e-13), "hogging moment at the clamp");
+        assert!(
+            close(s.at(0.0).moment, -2.0 * L, 1e-13),
+            "hogging moment at the clamp"
+        );
     }
 
     #[test]
     fn distributed_load_closed_forms() {
         let q = 1.7;
-        let udl = [Load::Distributed { from: 0.0, to: L, intensity: q }];
+        let udl = [Load::Distributed {
+            from: 0.0,
+            to: L,
+            intensity: q,
+        }];
         for i in 0..=20 {
             let x = L * f64::from(i) / 20.0;
             let cases = [
-                (SimplySupported, q * x * (L - x) * (L * L + L * x - x * x) / 24.0),
-                (Cantilever, q * x * x * (6.0 * L * L - 4.0 * L * x + x * x) / 24.0),
+                (
+                    SimplySupported,
+                    q * x * (L - x) * (L * L + L * x - x * x) / 24.0,
+                ),
+                (
+                    Cantilever,
+                    q * x * x * (6.0 * L * L - 4.0 * L * x + x * x) / 24.0,
+                ),
                 (FixedFixed, q * x * x * (L - x).powi(2) / 24.0),
-                (ProppedCantilever, q * x * x * (L - x) * (3.0 * L - 2.0 * x) / 48.0),
+                (
+                    ProppedCantilever,
+                    q * x * x * (L - x) * (3.0 * L - 2.0 * x) / 48.0,
+                ),
             ];
             for (support, want) in cases {
                 let got = v(support, &udl, x);
-                assert!((got - want).abs() < 1e-12 * q * L.powi(4), "{support:?} x={x}: {got} vs {want}");
+                assert!(
+                    (got - want).abs() < 1e-12 * q * L.powi(4),
+                    "{support:?} x={x}: {got} vs {want}"
+                );
             }
         }
     }
@@ -233,14 +331,43 @@ mod tests {
         for i in 0..=10 {
             let x = L * f64::from(i) / 10.0;
             let want = (ma * x * (L - x) * (2.0 * L - x) + mb * x * (L - x) * (L + x)) / (6.0 * L);
-            assert!((v(SimplySupported, &loads, x) - want).abs() < 1e-13, "x={x}");
+            assert!(
+                (v(SimplySupported, &loads, x) - want).abs() < 1e-13,
+                "x={x}"
+            );
         }
         // Cantilever tip moment: v = M x²/2, but with M sagging-positive at the free end the
         // beam curves upward: v = −M x²/2.
-        assert!(close(v(Cantilever, &[Load::EndMoments { start: 0.0, end: 2.0 }], L), -2.0 * L * L / 2.0, 1e-13));
+        assert!(close(
+            v(
+                Cantilever,
+                &[Load::EndMoments {
+                    start: 0.0,
+                    end: 2.0
+                }],
+                L
+            ),
+            -2.0 * L * L / 2.0,
+            1e-13
+        ));
         // A partial UDL equals the superposition of two full-span-from-s loads.
-        let part = [Load::Distributed { from: 1.0, to: 3.0, intensity: 2.0 }];
-        let diff = [Load::Distributed { from: 1.0, to: L, intensity: 2.0 }, Load::Distributed { from: 3.0, to: L, intensity: -2.0 }];
+        let part = [Load::Distributed {
+            from: 1.0,
+            to: 3.0,
+            intensity: 2.0,
+        }];
+        let diff = [
+            Load::Distributed {
+                from: 1.0,
+                to: L,
+                intensity: 2.0,
+            },
+            Load::Distributed {
+                from: 3.0,
+                to: L,
+                intensity: -2.0,
+            },
+        ];
         for support in [SimplySupported, Cantilever, FixedFixed, ProppedCantilever] {
             assert!((v(support, &part, 2.2) - v(support, &diff, 2.2)).abs() < 1e-12);
         }
@@ -251,20 +378,40 @@ mod tests {
         // Linear theory: the solution for several loads is the sum of the single-load solutions,
         // with and without shear flexibility.
         let loads = [
-            Load::Point { at: 0.9, force: 2.0 },
-            Load::Point { at: 3.2, force: -0.7 },
-            Load::Distributed { from: 0.5, to: 2.5, intensity: 1.3 },
-            Load::EndMoments { start: 0.4, end: -0.6 },
+            Load::Point {
+                at: 0.9,
+                force: 2.0,
+            },
+            Load::Point {
+                at: 3.2,
+                force: -0.7,
+            },
+            Load::Distributed {
+                from: 0.5,
+                to: 2.5,
+                intensity: 1.3,
+            },
+            Load::EndMoments {
+                start: 0.4,
+                end: -0.6,
+            },
         ];
         for support in [SimplySupported, Cantilever, FixedFixed, ProppedCantilever] {
             for flex in [0.0, 0.05] {
                 let all = LinearBeam::solve(support, L, &loads, flex);
-                let parts: Vec<LinearBeam> = loads.iter().map(|l| LinearBeam::solve(support, L, &[*l], flex)).collect();
+                let parts: Vec<LinearBeam> = loads
+                    .iter()
+                    .map(|l| LinearBeam::solve(support, L, &[*l], flex))
+                    .collect();
                 for i in 0..=16 {
                     let x = L * f64::from(i) / 16.0;
                     let sum: f64 = parts.iter().map(|b| b.at(x).v).sum();
                     let msum: f64 = parts.iter().map(|b| b.at(x).moment).sum();
-                    assert!((all.at(x).v - sum).abs() < 1e-12 && (all.at(x).moment - msum).abs() < 1e-12, "{support:?} x={x}");
+                    assert!(
+                        (all.at(x).v - sum).abs() < 1e-12
+                            && (all.at(x).moment - msum).abs() < 1e-12,
+                        "{support:?} x={x}"
+                    );
                 }
             }
         }
@@ -278,7 +425,10 @@ mod tests {
                 let vij = v(support, &[Load::Point { at: i, force: 1.0 }], j);
                 let vji = v(support, &[Load::Point { at: j, force: 1.0 }], i);
                 // f64 round-off of the Macaulay form near a support: ~1e-12 relative.
-                assert!((vij - vji).abs() < 1e-11 * vij.abs().max(1e-3), "{support:?} {i},{j}: {vij} vs {vji}");
+                assert!(
+                    (vij - vji).abs() < 1e-11 * vij.abs().max(1e-3),
+                    "{support:?} {i},{j}: {vij} vs {vji}"
+                );
             }
         }
     }
@@ -286,7 +436,17 @@ mod tests {
     #[test]
     fn equilibrium_and_symmetry() {
         // Shear jumps by the load; the moment is the integral of the shear.
-        let loads = [Load::Point { at: 1.5, force: 4.0 }, Load::Distributed { from: 0.0, to: L, intensity: 0.5 }];
+        let loads = [
+            Load::Point {
+                at: 1.5,
+                force: 4.0,
+            },
+            Load::Distributed {
+                from: 0.0,
+                to: L,
+                intensity: 0.5,
+            },
+        ];
         for support in [SimplySupported, Cantilever, FixedFixed, ProppedCantilever] {
             let s = LinearBeam::solve(support, L, &loads, 0.0);
             let jump = s.at(1.5 - 1e-9).shear - s.at(1.5 + 1e-9).shear;
@@ -297,7 +457,15 @@ mod tests {
         }
         // Symmetric beam, symmetric load: symmetric deflection.
         for support in [SimplySupported, FixedFixed] {
-            let s = LinearBeam::solve(support, L, &[Load::Point { at: L / 2.0, force: 1.0 }], 0.0);
+            let s = LinearBeam::solve(
+                support,
+                L,
+                &[Load::Point {
+                    at: L / 2.0,
+                    force: 1.0,
+                }],
+                0.0,
+            );
             for x in [0.3, 1.0, 1.7] {
                 assert!((s.at(x).v - s.at(L - x).v).abs() < 1e-14);
             }
@@ -311,15 +479,49 @@ mod tests {
         let flex = 0.02 * L * L; // EI/(κGA) = Φ L²/12 with Φ = 0.24
         let phi = 12.0 * 0.02;
         let cases = [
-            (SimplySupported, Load::Point { at: L / 2.0, force: 1.0 }, L / 2.0, 1.0 + phi),
-            (Cantilever, Load::Point { at: L, force: 1.0 }, L, 1.0 + phi / 4.0),
-            (SimplySupported, Load::Distributed { from: 0.0, to: L, intensity: 1.0 }, L / 2.0, 1.0 + 0.8 * phi),
-            (FixedFixed, Load::Point { at: L / 2.0, force: 1.0 }, L / 2.0, 1.0 + 4.0 * phi),
+            (
+                SimplySupported,
+                Load::Point {
+                    at: L / 2.0,
+                    force: 1.0,
+                },
+                L / 2.0,
+                1.0 + phi,
+            ),
+            (
+                Cantilever,
+                Load::Point { at: L, force: 1.0 },
+                L,
+                1.0 + phi / 4.0,
+            ),
+            (
+                SimplySupported,
+                Load::Distributed {
+                    from: 0.0,
+                    to: L,
+                    intensity: 1.0,
+                },
+                L / 2.0,
+                1.0 + 0.8 * phi,
+            ),
+            (
+                FixedFixed,
+                Load::Point {
+                    at: L / 2.0,
+                    force: 1.0,
+                },
+                L / 2.0,
+                1.0 + 4.0 * phi,
+            ),
         ];
         for (support, load, x, ratio) in cases {
             let eb = LinearBeam::solve(support, L, &[load], 0.0).at(x).v;
             let t = LinearBeam::solve(support, L, &[load], flex).at(x).v;
-            assert!(close(t / eb, ratio, 1e-12), "{support:?}: {} vs {ratio}", t / eb);
+            assert!(
+                close(t / eb, ratio, 1e-12),
+                "{support:?}: {} vs {ratio}",
+                t / eb
+            );
         }
         // Sections rotate by the bending rotation only: the clamp keeps ψ = 0 while the axis slopes.
         let s = LinearBeam::solve(Cantilever, L, &[Load::Point { at: L, force: 1.0 }], flex);

@@ -44,21 +44,44 @@ impl SectionFrame {
 /// Section frames at the given stations (which must include 0 and every kink). The axial
 /// shortening u(x) = ½∫₀ˣ v′² is integrated with 3-point Gauss–Legendre per interval, exact
 /// for the piecewise-quartic integrand of a piecewise-cubic deflection.
-pub fn section_frames(stations: &[f64], mapping: Mapping, axis: impl Fn(f64) -> AxisPoint) -> Vec<SectionFrame> {
-    const GAUSS: [(f64, f64); 3] = [(-0.774_596_669_241_483_4, 5.0 / 9.0), (0.0, 8.0 / 9.0), (0.774_596_669_241_483_4, 5.0 / 9.0)];
+pub fn section_frames(
+    stations: &[f64],
+    mapping: Mapping,
+    axis: impl Fn(f64) -> AxisPoint,
+) -> Vec<SectionFrame> {
+    const GAUSS: [(f64, f64); 3] = [
+        (-0.774_596_669_241_483_4, 5.0 / 9.0),
+        (0.0, 8.0 / 9.0),
+        (0.774_596_669_241_483_4, 5.0 / 9.0),
+    ];
     let mut shortening = 0.0;
     let mut frames = Vec::with_capacity(stations.len());
     for (i, &x) in stations.iter().enumerate() {
         if i > 0 && mapping == Mapping::RotateSections {
             let (mid, half) = (0.5 * (stations[i - 1] + x), 0.5 * (x - stations[i - 1]));
-            shortening += 0.5 * half * GAUSS.iter().map(|&(t, w)| w * axis(mid + half * t).slope.powi(2)).sum::<f64>();
+            shortening += 0.5
+                * half
+                * GAUSS
+                    .iter()
+                    .map(|&(t, w)| w * axis(mid + half * t).slope.powi(2))
+                    .sum::<f64>();
         }
         let p = axis(x);
         frames.push(match mapping {
-            Mapping::AddDeflection => SectionFrame { x, v: p.v, cos: 1.0, sin: 0.0 },
+            Mapping::AddDeflection => SectionFrame {
+                x,
+                v: p.v,
+                cos: 1.0,
+                sin: 0.0,
+            },
             Mapping::RotateSections => {
                 let inv = 1.0 / p.rotation.hypot(1.0);
-                SectionFrame { x: p.axial.unwrap_or(x - shortening), v: p.v, cos: inv, sin: p.rotation * inv }
+                SectionFrame {
+                    x: p.axial.unwrap_or(x - shortening),
+                    v: p.v,
+                    cos: inv,
+                    sin: p.rotation * inv,
+                }
             }
         });
     }
@@ -74,7 +97,12 @@ mod tests {
         move |x: f64| {
             let (xi, sign) = if x <= 0.5 { (x, 1.0) } else { (1.0 - x, -1.0) };
             let slope = sign * delta * (3.0 - 12.0 * xi * xi);
-            AxisPoint { v: delta * (3.0 * xi - 4.0 * xi.powi(3)), slope, rotation: slope, axial: None }
+            AxisPoint {
+                v: delta * (3.0 * xi - 4.0 * xi.powi(3)),
+                slope,
+                rotation: slope,
+                axial: None,
+            }
         }
     }
 
@@ -90,7 +118,10 @@ mod tests {
     fn sections_stay_plane_and_normal_to_the_axis() {
         let stations: Vec<f64> = (0..=10).map(|i| f64::from(i) / 10.0).collect();
         let axis = ss_centre(0.15);
-        for (f, &x) in section_frames(&stations, Mapping::RotateSections, &axis).iter().zip(&stations) {
+        for (f, &x) in section_frames(&stations, Mapping::RotateSections, &axis)
+            .iter()
+            .zip(&stations)
+        {
             let ((x0, z0), (x1, z1)) = (f.place(-0.2), f.place(0.3));
             assert!(((x1 - x0).hypot(z1 - z0) - 0.5).abs() < 1e-12);
             assert!(((x1 - x0) - axis(x).slope * (z1 - z0)).abs() < 1e-12);

@@ -16,13 +16,13 @@ mod modes;
 mod section;
 mod shell;
 
-pub use linear::{Load, LinearBeam, Station};
-pub use mapping::{section_frames, AxisPoint, Mapping, SectionFrame};
+pub use linear::{LinearBeam, Load, Station};
+pub use mapping::{AxisPoint, Mapping, SectionFrame, section_frames};
 pub use model::{BeamProblem, Deformation, Labels, Target, Theory};
 pub use modes::ModeShape;
-pub use shell::{Shell, ShellPattern};
-pub use section::{circle_segments, Section, SectionOutline, SectionProperties, PAPER_DIVISIONS};
+pub use section::{PAPER_DIVISIONS, Section, SectionOutline, SectionProperties, circle_segments};
 pub(crate) use section::{annulus, rectangle_grid};
+pub use shell::{Shell, ShellPattern};
 
 use serde::Serialize;
 

@@ -88,8 +88,14 @@ pub struct ModeLabel {
 impl Labels {
     /// Labels from the peaks; stress σ = |M| c / I and plausibility follow. Errors, loads and
     /// modes start empty for the caller to fill.
-    fn new(p: &BeamProblem, theory: Theory, (max_deflection, max_deflection_at): (f64, f64), (max_moment, max_moment_at): (f64, f64)) -> Labels {
-        let max_bending_stress = max_moment.abs() * p.section.extreme_fibre / p.section.second_moment;
+    fn new(
+        p: &BeamProblem,
+        theory: Theory,
+        (max_deflection, max_deflection_at): (f64, f64),
+        (max_moment, max_moment_at): (f64, f64),
+    ) -> Labels {
+        let max_bending_stress =
+            max_moment.abs() * p.section.extreme_fibre / p.section.second_moment;
         Labels {
             theory,
             estimated_error: 0.0,
@@ -112,12 +118,22 @@ impl Labels {
 /// What the axis follows: a static linear solution, or a sum of mode shapes.
 #[derive(Clone, Debug)]
 enum Axis {
-    Static { beam: LinearBeam, scale: f64 },
-    Modal { modes: Vec<(ModeShape, f64)>, length: f64 },
+    Static {
+        beam: LinearBeam,
+        scale: f64,
+    },
+    Modal {
+        modes: Vec<(ModeShape, f64)>,
+        length: f64,
+    },
     /// `sign` −1 mirrors an upward load. With `mirrored`, the rod is half of a simply
     /// supported beam with a centre load: clamped (by symmetry) at mid-span, its free end on
     /// the support, mirrored onto the other half.
-    Elastica { rod: Elastica, sign: f64, mirrored: Option<f64> },
+    Elastica {
+        rod: Elastica,
+        sign: f64,
+        mirrored: Option<f64>,
+    },
 }
 
 /// The solved beam: deflection of its axis in metres, and its labels.
@@ -134,7 +150,9 @@ impl Deformation {
     pub fn solve(p: &BeamProblem) -> Result<Deformation, String> {
         if !p.vibration.is_empty() {
             if !p.loads.is_empty() {
-                return Err("a beam takes either static loads or a vibration snapshot, not both".into());
+                return Err(
+                    "a beam takes either static loads or a vibration snapshot, not both".into(),
+                );
             }
             return Ok(modal(p));
         }
@@ -151,14 +169,25 @@ impl Deformation {
                     let (peak, _) = extreme(&xs, p.length, |x| beam.at(x).v);
                     reach(deflection, peak, beam.natural_deflection(), "anywhere").map(|f| f * ei)
                 }
-                Target::At { at, deflection } => reach(deflection, beam.at(at).v, beam.natural_deflection(), &format!("at x = {at} m")).map(|f| f * ei),
+                Target::At { at, deflection } => reach(
+                    deflection,
+                    beam.at(at).v,
+                    beam.natural_deflection(),
+                    &format!("at x = {at} m"),
+                )
+                .map(|f| f * ei),
             }
         };
         let (f_eb, f_t) = (factor(&eb)?, factor(&tim)?);
         let (peak_t, _) = extreme(&xs, p.length, |x| f_t * tim.at(x).v / ei);
-        let shear_error = xs.iter().map(|&x| (f_eb * eb.at(x).v - f_t * tim.at(x).v).abs() / ei).fold(0.0, f64::max) / peak_t.abs().max(f64::MIN_POSITIVE);
+        let shear_error = xs
+            .iter()
+            .map(|&x| (f_eb * eb.at(x).v - f_t * tim.at(x).v).abs() / ei)
+            .fold(0.0, f64::max)
+            / peak_t.abs().max(f64::MIN_POSITIVE);
         let nonlinearity_error = nonlinearity(p.support) * (peak_t / p.length).powi(2);
-        let wants_elastica = p.theory == Theory::Elastica || (p.theory == Theory::Auto && nonlinearity_error > p.tolerance);
+        let wants_elastica = p.theory == Theory::Elastica
+            || (p.theory == Theory::Auto && nonlinearity_error > p.tolerance);
         if wants_elastica {
             if let Some(d) = elastica(p, ei, shear_error)? {
                 return Ok(d);
@@ -169,17 +198,38 @@ impl Deformation {
             Theory::Auto => Theory::EulerBernoulli,
             pinned => pinned,
         };
-        let (beam, load_factor) = if theory == Theory::Timoshenko { (tim, f_t) } else { (eb, f_eb) };
-        let estimated_error = if theory == Theory::Timoshenko { nonlinearity_error } else { shear_error.max(nonlinearity_error) };
+        let (beam, load_factor) = if theory == Theory::Timoshenko {
+            (tim, f_t)
+        } else {
+            (eb, f_eb)
+        };
+        let estimated_error = if theory == Theory::Timoshenko {
+            nonlinearity_error
+        } else {
+            shear_error.max(nonlinearity_error)
+        };
         let scale = load_factor / ei;
         let (max_deflection, max_deflection_at) = extreme(&xs, p.length, |x| scale * beam.at(x).v);
-        let (max_moment, max_moment_at) = extreme(&xs, p.length, |x| load_factor * beam.at(x).moment);
-        let mut labels = Labels::new(p, theory, (max_deflection, max_deflection_at), (max_moment, max_moment_at));
+        let (max_moment, max_moment_at) =
+            extreme(&xs, p.length, |x| load_factor * beam.at(x).moment);
+        let mut labels = Labels::new(
+            p,
+            theory,
+            (max_deflection, max_deflection_at),
+            (max_moment, max_moment_at),
+        );
         labels.estimated_error = estimated_error;
-        labels.shear_error = if theory == Theory::Timoshenko { 0.0 } else { shear_error };
+        labels.shear_error = if theory == Theory::Timoshenko {
+            0.0
+        } else {
+            shear_error
+        };
         labels.nonlinearity_error = nonlinearity_error;
         labels.loads = p.loads.iter().map(|l| scaled(*l, load_factor)).collect();
-        Ok(Deformation { axis: Axis::Static { beam, scale }, labels })
+        Ok(Deformation {
+            axis: Axis::Static { beam, scale },
+            labels,
+        })
     }
 
     /// The deflected axis at x, in metres and radians-as-slopes.
@@ -187,25 +237,55 @@ impl Deformation {
         match &self.axis {
             Axis::Static { beam, scale } => {
                 let s = beam.at(x);
-                super::AxisPoint { v: scale * s.v, slope: scale * s.slope, rotation: scale * s.rotation, axial: None }
+                super::AxisPoint {
+                    v: scale * s.v,
+                    slope: scale * s.slope,
+                    rotation: scale * s.rotation,
+                    axial: None,
+                }
             }
             Axis::Modal { modes, length } => {
-                let (v, slope) = modes.iter().fold((0.0, 0.0), |(v, slope), (mode, amplitude)| {
-                    let (phi, dphi, _) = mode.at(x / length);
-                    (v + amplitude * phi, slope + amplitude * dphi / length)
-                });
-                super::AxisPoint { v, slope, rotation: slope, axial: None }
+                let (v, slope) = modes
+                    .iter()
+                    .fold((0.0, 0.0), |(v, slope), (mode, amplitude)| {
+                        let (phi, dphi, _) = mode.at(x / length);
+                        (v + amplitude * phi, slope + amplitude * dphi / length)
+                    });
+                super::AxisPoint {
+                    v,
+                    slope,
+                    rotation: slope,
+                    axial: None,
+                }
             }
-            Axis::Elastica { rod, sign, mirrored: None } => {
+            Axis::Elastica {
+                rod,
+                sign,
+                mirrored: None,
+            } => {
                 let c = rod.at(x);
                 let tangent = sign * c.theta.tan();
-                super::AxisPoint { v: sign * c.v, slope: tangent, rotation: tangent, axial: Some(c.x) }
+                super::AxisPoint {
+                    v: sign * c.v,
+                    slope: tangent,
+                    rotation: tangent,
+                    axial: Some(c.x),
+                }
             }
-            Axis::Elastica { rod, sign, mirrored: Some(half) } => {
+            Axis::Elastica {
+                rod,
+                sign,
+                mirrored: Some(half),
+            } => {
                 let (tip, c) = (rod.at(*half), rod.at((half - x).abs()));
                 let side = if x <= *half { 1.0 } else { -1.0 };
                 let tangent = side * sign * c.theta.tan();
-                super::AxisPoint { v: sign * (tip.v - c.v), slope: tangent, rotation: tangent, axial: Some(tip.x - side * c.x) }
+                super::AxisPoint {
+                    v: sign * (tip.v - c.v),
+                    slope: tangent,
+                    rotation: tangent,
+                    axial: Some(tip.x - side * c.x),
+                }
             }
         }
     }
@@ -213,13 +293,17 @@ impl Deformation {
     /// Largest |dψ/dx| (curvature of the sections' rotation), for tessellation.
     pub fn max_curvature(&self, length: f64) -> f64 {
         let highest_mode = match &self.axis {
-            Axis::Modal { modes, .. } => modes.iter().map(|(m, _)| m.beta_l()).fold(0.0, f64::max) as usize,
+            Axis::Modal { modes, .. } => {
+                modes.iter().map(|(m, _)| m.beta_l()).fold(0.0, f64::max) as usize
+            }
             Axis::Static { .. } | Axis::Elastica { .. } => 0,
         };
         let n = 256.max(16 * highest_mode);
         let h = length / n as f64;
         let angle = |x: f64| self.at(x).rotation.atan();
-        (0..n).map(|i| ((angle((i + 1) as f64 * h) - angle(i as f64 * h)) / h).abs()).fold(0.0, f64::max)
+        (0..n)
+            .map(|i| ((angle((i + 1) as f64 * h) - angle(i as f64 * h)) / h).abs())
+            .fold(0.0, f64::max)
     }
 }
 
@@ -229,8 +313,14 @@ fn elastica(p: &BeamProblem, ei: f64, shear_error: f64) -> Result<Option<Deforma
     let l = p.length;
     // (rod length, load position on the rod, share of the load the rod carries, half span)
     let case = match (p.support, p.loads.as_slice()) {
-        (Support::Cantilever, [Load::Point { at, force }]) if *at > 0.0 => Some((l, *at, *force, None)),
-        (Support::SimplySupported, [Load::Point { at, force }]) if (at - 0.5 * l).abs() <= 1e-12 * l => Some((0.5 * l, 0.5 * l, 0.5 * force, Some(0.5 * l))),
+        (Support::Cantilever, [Load::Point { at, force }]) if *at > 0.0 => {
+            Some((l, *at, *force, None))
+        }
+        (Support::SimplySupported, [Load::Point { at, force }])
+            if (at - 0.5 * l).abs() <= 1e-12 * l =>
+        {
+            Some((0.5 * l, 0.5 * l, 0.5 * force, Some(0.5 * l)))
+        }
         _ => None,
     };
     let Some((rod_length, a, force, mirrored)) = case else {
@@ -242,12 +332,23 @@ fn elastica(p: &BeamProblem, ei: f64, shear_error: f64) -> Result<Option<Deforma
     };
     let peak_at = mirrored.unwrap_or(l);
     let (rod, sign) = match p.target {
-        Target::Physical => (Elastica::from_load_parameter(rod_length, a, force.abs() * a * a / ei), force.signum()),
-        Target::Peak { deflection } => (Elastica::from_tip_deflection(rod_length, a, deflection.abs())?, deflection.signum()),
-        Target::At { at, deflection } if (at - peak_at).abs() <= 1e-12 * l => {
-            (Elastica::from_tip_deflection(rod_length, a, deflection.abs())?, deflection.signum())
+        Target::Physical => (
+            Elastica::from_load_parameter(rod_length, a, force.abs() * a * a / ei),
+            force.signum(),
+        ),
+        Target::Peak { deflection } => (
+            Elastica::from_tip_deflection(rod_length, a, deflection.abs())?,
+            deflection.signum(),
+        ),
+        Target::At { at, deflection } if (at - peak_at).abs() <= 1e-12 * l => (
+            Elastica::from_tip_deflection(rod_length, a, deflection.abs())?,
+            deflection.signum(),
+        ),
+        Target::At { .. } if p.theory == Theory::Elastica => {
+            return Err(format!(
+                "theory \"elastica\" takes a target deflection at x = {peak_at} m"
+            ));
         }
-        Target::At { .. } if p.theory == Theory::Elastica => return Err(format!("theory \"elastica\" takes a target deflection at x = {peak_at} m")),
         Target::At { .. } => return Ok(None),
     };
     let sign = if sign == 0.0 { 1.0 } else { sign };
@@ -259,23 +360,55 @@ fn elastica(p: &BeamProblem, ei: f64, shear_error: f64) -> Result<Option<Deforma
         None => (rod_load, -rod_load * rod.at(a).x, 0.0),
         Some(half) => (2.0 * rod_load, rod_load * tip.x, half),
     };
-    let mut labels = Labels::new(p, Theory::Elastica, (sign * tip.v, peak_at), (max_moment, max_moment_at));
+    let mut labels = Labels::new(
+        p,
+        Theory::Elastica,
+        (sign * tip.v, peak_at),
+        (max_moment, max_moment_at),
+    );
     labels.estimated_error = shear_error;
     labels.shear_error = shear_error;
-    labels.loads = vec![Load::Point { at: mirrored.unwrap_or(a), force: load }];
+    labels.loads = vec![Load::Point {
+        at: mirrored.unwrap_or(a),
+        force: load,
+    }];
     labels.linear_theory_error = Some(rod.linear_error());
-    Ok(Some(Deformation { axis: Axis::Elastica { rod, sign, mirrored }, labels }))
+    Ok(Some(Deformation {
+        axis: Axis::Elastica {
+            rod,
+            sign,
+            mirrored,
+        },
+        labels,
+    }))
 }
 
 /// A snapshot of free vibration: v(x) = Σ A_n φ_n(x/L), each φ_n normalised to max |φ_n| = 1.
 fn modal(p: &BeamProblem) -> Deformation {
-    let modes: Vec<(ModeShape, f64)> = p.vibration.iter().map(|&(n, a)| (ModeShape::new(p.support, n), a)).collect();
+    let modes: Vec<(ModeShape, f64)> = p
+        .vibration
+        .iter()
+        .map(|&(n, a)| (ModeShape::new(p.support, n), a))
+        .collect();
     let length = p.length;
     let highest_mode = p.vibration.iter().map(|m| m.0 as usize).max().unwrap_or(1);
     let points = SEARCH_POINTS.max(32 * highest_mode);
-    let xs: Vec<f64> = (0..=points).map(|i| length * i as f64 / points as f64).collect();
-    let curvature = |x: f64| modes.iter().map(|(m, a)| a * m.at(x / length).2).sum::<f64>() / (length * length);
-    let deflection = |x: f64| modes.iter().map(|(m, a)| a * m.at(x / length).0).sum::<f64>();
+    let xs: Vec<f64> = (0..=points)
+        .map(|i| length * i as f64 / points as f64)
+        .collect();
+    let curvature = |x: f64| {
+        modes
+            .iter()
+            .map(|(m, a)| a * m.at(x / length).2)
+            .sum::<f64>()
+            / (length * length)
+    };
+    let deflection = |x: f64| {
+        modes
+            .iter()
+            .map(|(m, a)| a * m.at(x / length).0)
+            .sum::<f64>()
+    };
     let (max_deflection, max_deflection_at) = extreme(&xs, length, deflection);
     let (max_curvature, max_moment_at) = extreme(&xs, length, curvature);
     let ei = p.elastic_modulus * p.section.second_moment;
@@ -285,18 +418,38 @@ fn modal(p: &BeamProblem) -> Deformation {
     let highest = modes.iter().map(|(m, _)| m.beta_l()).fold(0.0, f64::max);
     let shear_error = highest * highest * flexibility / (length * length);
     let nonlinearity_error = nonlinearity(p.support) * (max_deflection / length).powi(2);
-    let mut labels = Labels::new(p, Theory::EulerBernoulli, (max_deflection, max_deflection_at), (-ei * max_curvature, max_moment_at));
+    let mut labels = Labels::new(
+        p,
+        Theory::EulerBernoulli,
+        (max_deflection, max_deflection_at),
+        (-ei * max_curvature, max_moment_at),
+    );
     labels.estimated_error = shear_error.max(nonlinearity_error);
     labels.shear_error = shear_error;
     labels.nonlinearity_error = nonlinearity_error;
-    labels.modes = modes.iter().zip(&p.vibration).map(|((m, a), &(n, _))| ModeLabel { mode: n, beta_l: m.beta_l(), amplitude: *a }).collect();
-    Deformation { axis: Axis::Modal { modes, length }, labels }
+    labels.modes = modes
+        .iter()
+        .zip(&p.vibration)
+        .map(|((m, a), &(n, _))| ModeLabel {
+            mode: n,
+            beta_l: m.beta_l(),
+            amplitude: *a,
+        })
+        .collect();
+    Deformation {
+        axis: Axis::Modal { modes, length },
+        labels,
+    }
 }
 
 /// Linear theory's relative tip error ≈ k (δ/L)²: 1.03 for a cantilever, 4.1 for beams held at
 /// both ends (half-span analogue, mechanics.md §4.3).
 fn nonlinearity(support: Support) -> f64 {
-    if support == Support::Cantilever { 1.03 } else { 4.1 }
+    if support == Support::Cantilever {
+        1.03
+    } else {
+        4.1
+    }
 }
 
 /// Load factor per unit EI that turns `unit` into `target`.
@@ -311,14 +464,30 @@ fn reach(target: f64, unit: f64, natural: f64, place: &str) -> Result<f64, Strin
 
 fn scaled(load: Load, f: f64) -> Load {
     match load {
-        Load::Point { at, force } => Load::Point { at, force: force * f },
-        Load::Distributed { from, to, intensity } => Load::Distributed { from, to, intensity: intensity * f },
-        Load::EndMoments { start, end } => Load::EndMoments { start: start * f, end: end * f },
+        Load::Point { at, force } => Load::Point {
+            at,
+            force: force * f,
+        },
+        Load::Distributed {
+            from,
+            to,
+            intensity,
+        } => Load::Distributed {
+            from,
+            to,
+            intensity: intensity * f,
+        },
+        Load::EndMoments { start, end } => Load::EndMoments {
+            start: start * f,
+            end: end * f,
+        },
     }
 }
 
 fn search_points(p: &BeamProblem) -> Vec<f64> {
-    let mut xs: Vec<f64> = (0..=SEARCH_POINTS).map(|i| p.length * i as f64 / SEARCH_POINTS as f64).collect();
+    let mut xs: Vec<f64> = (0..=SEARCH_POINTS)
+        .map(|i| p.length * i as f64 / SEARCH_POINTS as f64)
+        .collect();
     for load in &p.loads {
         if let Load::Point { at, .. } = load {
             xs.push(*at);
@@ -342,10 +511,18 @@ fn extreme(xs: &[f64], length: f64, f: impl Fn(f64) -> f64) -> (f64, f64) {
     let g = 0.5 * (5f64.sqrt() - 1.0);
     for _ in 0..60 {
         let (c, d) = (b - g * (b - a), a + g * (b - a));
-        if f(c).abs() >= f(d).abs() { b = d } else { a = c }
+        if f(c).abs() >= f(d).abs() {
+            b = d
+        } else {
+            a = c
+        }
     }
     let x = 0.5 * (a + b);
-    if f(x).abs() > best.abs() { (f(x), x) } else { (best, best_x) }
+    if f(x).abs() > best.abs() {
+        (f(x), x)
+    } else {
+        (best, best_x)
+    }
 }
 
 #[cfg(test)]
@@ -360,7 +537,11 @@ mod tests {
             length: l_over_h * h,
             loads,
             target,
-            section: Section::Rectangle { width: 0.3, height: h }.properties(0.3),
+            section: Section::Rectangle {
+                width: 0.3,
+                height: h,
+            }
+            .properties(0.3),
             elastic_modulus: 210e9,
             poisson: 0.3,
             yield_strength: 355e6,
@@ -375,18 +556,32 @@ mod tests {
         // mechanics.md §2.2 (Cowper κ, ν = 0.3): (δ_EB − δ_T)/δ_T for SS centre load is
         // −25.4 % at L/h = 3, −2.97 % at 10, −0.03 % at 100; cantilever tip −7.83 %, −0.76 %, −0.01 %.
         for (support, at, table) in [
-            (Support::SimplySupported, 0.5, [(3.0, -25.4), (10.0, -2.97), (100.0, -0.03)]),
-            (Support::Cantilever, 1.0, [(3.0, -7.83), (10.0, -0.76), (100.0, -0.01)]),
+            (
+                Support::SimplySupported,
+                0.5,
+                [(3.0, -25.4), (10.0, -2.97), (100.0, -0.03)],
+            ),
+            (
+                Support::Cantilever,
+                1.0,
+                [(3.0, -7.83), (10.0, -0.76), (100.0, -0.01)],
+            ),
         ] {
             for (lh, percent) in table {
                 let mut p = problem(support, lh, vec![], Target::Physical);
-                p.loads = vec![Load::Point { at: at * p.length, force: 1e4 }];
+                p.loads = vec![Load::Point {
+                    at: at * p.length,
+                    force: 1e4,
+                }];
                 p.theory = Theory::EulerBernoulli;
                 let eb = Deformation::solve(&p).unwrap().labels.max_deflection;
                 p.theory = Theory::Timoshenko;
                 let t = Deformation::solve(&p).unwrap().labels.max_deflection;
                 let got = 100.0 * (eb - t) / t;
-                assert!((got - percent).abs() < 0.006 + 0.002 * percent.abs(), "{support:?} L/h={lh}: {got:.3} % vs {percent} %");
+                assert!(
+                    (got - percent).abs() < 0.006 + 0.002 * percent.abs(),
+                    "{support:?} L/h={lh}: {got:.3} % vs {percent} %"
+                );
             }
         }
     }
@@ -394,7 +589,12 @@ mod tests {
     #[test]
     fn auto_picks_timoshenko_for_stocky_beams_only() {
         let target = Target::Peak { deflection: 0.001 };
-        let load = |p: &BeamProblem| vec![Load::Point { at: 0.5 * p.length, force: 1.0 }];
+        let load = |p: &BeamProblem| {
+            vec![Load::Point {
+                at: 0.5 * p.length,
+                force: 1.0,
+            }]
+        };
         let mut stocky = problem(Support::SimplySupported, 3.0, vec![], target);
         stocky.loads = load(&stocky);
         let d = Deformation::solve(&stocky).unwrap();
@@ -406,25 +606,53 @@ mod tests {
         assert_eq!(d.labels.theory, Theory::EulerBernoulli);
         assert!(d.labels.estimated_error < 0.01);
         // Shape difference at L/h = 3 for a target peak: 4.88 % of δ (mechanics.md §2.3).
-        assert!((Deformation::solve(&{ let mut p = stocky.clone(); p.theory = Theory::EulerBernoulli; p }).unwrap().labels.shear_error - 0.0488).abs() < 0.001);
+        assert!(
+            (Deformation::solve(&{
+                let mut p = stocky.clone();
+                p.theory = Theory::EulerBernoulli;
+                p
+            })
+            .unwrap()
+            .labels
+            .shear_error
+                - 0.0488)
+                .abs()
+                < 0.001
+        );
     }
 
     #[test]
     fn targets_and_derived_loads() {
         // SS centre target δ: P = 48 EI δ/L³, M = PL/4, σ = M c/I.
-        let mut p = problem(Support::SimplySupported, 40.0, vec![], Target::Peak { deflection: 1.0 });
-        p.loads = vec![Load::Point { at: 10.0, force: 1.0 }];
+        let mut p = problem(
+            Support::SimplySupported,
+            40.0,
+            vec![],
+            Target::Peak { deflection: 1.0 },
+        );
+        p.loads = vec![Load::Point {
+            at: 10.0,
+            force: 1.0,
+        }];
         p.theory = Theory::EulerBernoulli;
         let d = Deformation::solve(&p).unwrap();
         let ei = 210e9 * p.section.second_moment;
         let want = 48.0 * ei * 1.0 / 20f64.powi(3);
-        let Load::Point { force, .. } = d.labels.loads[0] else { panic!() };
+        let Load::Point { force, .. } = d.labels.loads[0] else {
+            panic!()
+        };
         assert!((force / want - 1.0).abs() < 1e-12);
         assert!((d.labels.max_moment / (want * 5.0) - 1.0).abs() < 1e-9);
         assert!((d.labels.max_deflection_at - 10.0).abs() < 1e-6);
-        assert!(!d.labels.physically_plausible, "0.05 L at L/h = 40 exceeds yield (mechanics.md §4.5)");
+        assert!(
+            !d.labels.physically_plausible,
+            "0.05 L at L/h = 40 exceeds yield (mechanics.md §4.5)"
+        );
         // Target at a point.
-        p.target = Target::At { at: 5.0, deflection: 0.01 };
+        p.target = Target::At {
+            at: 5.0,
+            deflection: 0.01,
+        };
         assert!((Deformation::solve(&p).unwrap().at(5.0).v - 0.01).abs() < 1e-15);
     }
 
@@ -433,36 +661,66 @@ mod tests {
         // Bisshopp–Drucker, α = PL²/EI = 1: δ/L = 0.30172, shortening u/L = 0.05643 (mechanics.md §4.2).
         let mut p = problem(Support::Cantilever, 40.0, vec![], Target::Physical);
         let ei = 210e9 * p.section.second_moment;
-        p.loads = vec![Load::Point { at: p.length, force: ei / (p.length * p.length) }];
+        p.loads = vec![Load::Point {
+            at: p.length,
+            force: ei / (p.length * p.length),
+        }];
         let d = Deformation::solve(&p).unwrap();
         assert_eq!(d.labels.theory, Theory::Elastica);
         assert!((d.labels.max_deflection / p.length - 0.30172).abs() < 1e-5);
         assert!((d.at(p.length).axial.unwrap() / p.length - (1.0 - 0.05643)).abs() < 1e-5);
         // Moment at the clamp uses the deformed lever arm (1 − u/L)·L.
-        assert!((d.labels.max_moment / (-(ei / (p.length * p.length)) * p.length * (1.0 - 0.05643)) - 1.0).abs() < 1e-4);
+        assert!(
+            (d.labels.max_moment / (-(ei / (p.length * p.length)) * p.length * (1.0 - 0.05643))
+                - 1.0)
+                .abs()
+                < 1e-4
+        );
         // Linear theory would have said α/3 = 0.3333: +10.5 % (mechanics.md §4.2).
         assert!((d.labels.linear_theory_error.unwrap() - 0.105).abs() < 0.001);
         // Small deflections stay linear; an upward target mirrors.
-        p.loads = vec![Load::Point { at: p.length, force: 1.0 }];
-        p.target = Target::Peak { deflection: 0.001 * p.length };
-        assert_eq!(Deformation::solve(&p).unwrap().labels.theory, Theory::EulerBernoulli);
-        p.target = Target::Peak { deflection: -0.4 * p.length };
+        p.loads = vec![Load::Point {
+            at: p.length,
+            force: 1.0,
+        }];
+        p.target = Target::Peak {
+            deflection: 0.001 * p.length,
+        };
+        assert_eq!(
+            Deformation::solve(&p).unwrap().labels.theory,
+            Theory::EulerBernoulli
+        );
+        p.target = Target::Peak {
+            deflection: -0.4 * p.length,
+        };
         let d = Deformation::solve(&p).unwrap();
         assert_eq!(d.labels.theory, Theory::Elastica);
         assert!((d.at(p.length).v + 0.4 * p.length).abs() < 1e-9 * p.length);
         // A simply supported centre load is two half-span cantilevers with P/2: α_half = PL²/(8EI).
         p.support = Support::SimplySupported;
-        p.loads = vec![Load::Point { at: 0.5 * p.length, force: 8.0 * ei / (p.length * p.length) }];
+        p.loads = vec![Load::Point {
+            at: 0.5 * p.length,
+            force: 8.0 * ei / (p.length * p.length),
+        }];
         p.target = Target::Physical;
         let d = Deformation::solve(&p).unwrap();
         assert_eq!(d.labels.theory, Theory::Elastica);
         let half = 0.5 * p.length;
         assert!((d.labels.max_deflection / half - 0.30172).abs() < 1e-5);
-        assert!((d.at(p.length).axial.unwrap() - p.length * (1.0 - 0.05643)).abs() < 1e-5 * p.length, "roller moves in by 2u");
+        assert!(
+            (d.at(p.length).axial.unwrap() - p.length * (1.0 - 0.05643)).abs() < 1e-5 * p.length,
+            "roller moves in by 2u"
+        );
         assert!(d.at(0.0).v.abs() < 1e-12 && d.at(p.length).v.abs() < 1e-12);
-        assert!((d.at(0.3 * p.length).v - d.at(0.7 * p.length).v).abs() < 1e-12 * p.length, "symmetric");
+        assert!(
+            (d.at(0.3 * p.length).v - d.at(0.7 * p.length).v).abs() < 1e-12 * p.length,
+            "symmetric"
+        );
         // Pinned, on a case it cannot take: a clear error.
-        p.loads = vec![Load::Point { at: 0.3 * p.length, force: 1.0 }];
+        p.loads = vec![Load::Point {
+            at: 0.3 * p.length,
+            force: 1.0,
+        }];
         p.theory = Theory::Elastica;
         assert!(Deformation::solve(&p).unwrap_err().contains("elastica"));
     }
@@ -480,34 +738,79 @@ mod tests {
         p.support = Support::Cantilever;
         p.vibration = vec![(100, 0.001), (2, 0.01)];
         let d = Deformation::solve(&p).unwrap();
-        assert!(d.at(0.0).v.abs() < 1e-16 && d.at(0.0).slope.abs() < 1e-14, "clamp: {:?}", d.at(0.0));
+        assert!(
+            d.at(0.0).v.abs() < 1e-16 && d.at(0.0).slope.abs() < 1e-14,
+            "clamp: {:?}",
+            d.at(0.0)
+        );
         for i in 0..=10_000 {
             let a = d.at(10.0 * f64::from(i) / 10_000.0);
             assert!(a.v.is_finite() && a.slope.is_finite() && a.v.abs() <= 0.011 + 1e-12);
         }
         assert_eq!(d.labels.modes.len(), 2);
-        assert!(d.labels.shear_error > 0.1, "mode 100 on an L/h = 20 beam is far outside Euler–Bernoulli");
-        p.loads = vec![Load::Point { at: 1.0, force: 1.0 }];
+        assert!(
+            d.labels.shear_error > 0.1,
+            "mode 100 on an L/h = 20 beam is far outside Euler–Bernoulli"
+        );
+        p.loads = vec![Load::Point {
+            at: 1.0,
+            force: 1.0,
+        }];
         assert!(Deformation::solve(&p).is_err());
     }
 
     #[test]
     fn loads_at_supports() {
         // Physical load on a support: no deflection, no NaN. As a target: a clear error.
-        for support in [Support::SimplySupported, Support::Cantilever, Support::FixedFixed, Support::ProppedCantilever] {
-            let mut p = problem(support, 20.0, vec![Load::Point { at: 0.0, force: 1e5 }], Target::Physical);
+        for support in [
+            Support::SimplySupported,
+            Support::Cantilever,
+            Support::FixedFixed,
+            Support::ProppedCantilever,
+        ] {
+            let mut p = problem(
+                support,
+                20.0,
+                vec![Load::Point {
+                    at: 0.0,
+                    force: 1e5,
+                }],
+                Target::Physical,
+            );
             let d = Deformation::solve(&p).unwrap();
-            assert!(d.labels.max_deflection.abs() < 1e-15, "{support:?}: {}", d.labels.max_deflection);
+            assert!(
+                d.labels.max_deflection.abs() < 1e-15,
+                "{support:?}: {}",
+                d.labels.max_deflection
+            );
             p.target = Target::Peak { deflection: 0.01 };
             assert!(Deformation::solve(&p).unwrap_err().contains("on a support"));
             // Just inside the span, the shape is finite and reaches the target.
-            p.loads = vec![Load::Point { at: 1e-6 * p.length, force: 1.0 }];
+            p.loads = vec![Load::Point {
+                at: 1e-6 * p.length,
+                force: 1.0,
+            }];
             let d = Deformation::solve(&p).unwrap();
-            assert!((d.labels.max_deflection - 0.01).abs() < 1e-9, "{support:?}: {}", d.labels.max_deflection);
+            assert!(
+                (d.labels.max_deflection - 0.01).abs() < 1e-9,
+                "{support:?}: {}",
+                d.labels.max_deflection
+            );
         }
         // The roller end of a simply supported beam.
-        let mut p = problem(Support::SimplySupported, 20.0, vec![Load::Point { at: 10.0, force: 1.0 }], Target::Peak { deflection: 0.02 });
-        p.loads = vec![Load::Point { at: p.length, force: 1.0 }];
+        let mut p = problem(
+            Support::SimplySupported,
+            20.0,
+            vec![Load::Point {
+                at: 10.0,
+                force: 1.0,
+            }],
+            Target::Peak { deflection: 0.02 },
+        );
+        p.loads = vec![Load::Point {
+            at: p.length,
+            force: 1.0,
+        }];
         assert!(Deformation::solve(&p).is_err());
     }
 }

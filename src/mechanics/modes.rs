@@ -22,7 +22,6 @@
 use super::Support;
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
-
 /// One vibration mode, ready to be evaluated anywhere on the span.
 ///
 /// Normalisation: max |φ| over [0, 1] is 1. Sign: φ is positive just right of ξ = 0 (its first
@@ -46,7 +45,9 @@ impl ModeShape {
             Support::SimplySupported => 1.0,
             _ => peak_magnitude(&shape),
         };
-        ModeShape { terms: shape.scaled(1.0 / peak) }
+        ModeShape {
+            terms: shape.scaled(1.0 / peak),
+        }
     }
 
     /// The eigenvalue β_nL (ω_n = (β_nL)² √(EI/(ρA L⁴))).
@@ -108,7 +109,13 @@ impl Terms {
 /// The mode before normalisation: sin λξ, or the clamped-at-0 form of the module comment.
 fn unnormalised(ends: Support, lambda: f64) -> Terms {
     match ends {
-        Support::SimplySupported => Terms { lambda, p: 0.0, q: 0.0, c: 0.0, s: 1.0 },
+        Support::SimplySupported => Terms {
+            lambda,
+            p: 0.0,
+            q: 0.0,
+            c: 0.0,
+            s: 1.0,
+        },
         Support::Cantilever => clamped_at_zero(lambda, RightEnd::Free),
         Support::FixedFixed | Support::ProppedCantilever => {
             clamped_at_zero(lambda, RightEnd::Supported)
@@ -140,7 +147,13 @@ fn clamped_at_zero(lambda: f64, right_end: RightEnd) -> Terms {
     // den ≥ 1 − e² − 2e > 0.67 for every eigenvalue (λ ≥ 1.87).
     let den = 1.0 - e * e + 2.0 * sign * e * sin;
     let sigma = (1.0 + e * e + 2.0 * sign * e * cos) / den;
-    Terms { lambda, p: 0.5 * (1.0 + sigma), q: (sign * (sin - cos) - e) / den, c: -1.0, s: sigma }
+    Terms {
+        lambda,
+        p: 0.5 * (1.0 + sigma),
+        q: (sign * (sin - cos) - e) / den,
+        c: -1.0,
+        s: sigma,
+    }
 }
 
 /// λ_n = β_nL, the n-th positive root of the case's characteristic equation.
@@ -225,22 +238,32 @@ fn peak_magnitude(terms: &Terms) -> f64 {
     if 2.0 * zone >= 1.0 {
         return largest_magnitude_on(terms, 0.0, 1.0);
     }
-    let ends = largest_magnitude_on(terms, 0.0, zone).max(largest_magnitude_on(terms, 1.0 - zone, 1.0));
+    let ends =
+        largest_magnitude_on(terms, 0.0, zone).max(largest_magnitude_on(terms, 1.0 - zone, 1.0));
     let decayed = (-terms.lambda * zone).exp();
     let middle_bound = terms.c.hypot(terms.s) + (terms.p.abs() + terms.q.abs()) * decayed;
-    if ends >= middle_bound { ends } else { ends.max(largest_magnitude_on(terms, zone, 1.0 - zone)) }
+    if ends >= middle_bound {
+        ends
+    } else {
+        ends.max(largest_magnitude_on(terms, zone, 1.0 - zone))
+    }
 }
 
 /// max |φ| over [lo, hi]: dense samples, then every sampled local maximum refined to the
 /// stationary point it brackets.
 fn largest_magnitude_on(terms: &Terms, lo: f64, hi: f64) -> f64 {
-    let intervals = ((hi - lo) * terms.lambda / PI * SAMPLES_PER_HALF_WAVE).ceil().max(1.0) as usize;
-    let xs: Vec<f64> = (0..=intervals).map(|i| lo + (hi - lo) * i as f64 / intervals as f64).collect();
+    let intervals = ((hi - lo) * terms.lambda / PI * SAMPLES_PER_HALF_WAVE)
+        .ceil()
+        .max(1.0) as usize;
+    let xs: Vec<f64> = (0..=intervals)
+        .map(|i| lo + (hi - lo) * i as f64 / intervals as f64)
+        .collect();
     let magnitudes: Vec<f64> = xs.iter().map(|&x| terms.eval(x)[0].abs()).collect();
     let mut best = magnitudes.iter().copied().fold(0.0, f64::max);
     for i in 0..=intervals {
         let (before, after) = (i.saturating_sub(1), (i + 1).min(intervals));
-        let is_local_max = magnitudes[before] <= magnitudes[i] && magnitudes[after] <= magnitudes[i];
+        let is_local_max =
+            magnitudes[before] <= magnitudes[i] && magnitudes[after] <= magnitudes[i];
         if is_local_max {
             if let Some(x) = stationary_point(terms, xs[before], xs[after]) {
                 best = best.max(terms.eval(x)[0].abs());
@@ -266,7 +289,11 @@ fn stationary_point(terms: &Terms, mut a: f64, mut b: f64) -> Option<f64> {
             b = x;
         }
         let newton = x - slope / curvature;
-        let next = if newton > a.min(b) && newton < a.max(b) { newton } else { 0.5 * (a + b) };
+        let next = if newton > a.min(b) && newton < a.max(b) {
+            newton
+        } else {
+            0.5 * (a + b)
+        };
         let done = (next - x).abs() <= 4.0 * f64::EPSILON;
         x = next;
         if done {
@@ -286,8 +313,11 @@ mod tests {
         Support::FixedFixed,
         Support::ProppedCantilever,
     ];
-    const CLAMPED: [Support; 3] =
-        [Support::Cantilever, Support::FixedFixed, Support::ProppedCantilever];
+    const CLAMPED: [Support; 3] = [
+        Support::Cantilever,
+        Support::FixedFixed,
+        Support::ProppedCantilever,
+    ];
 
     /// Double-double arithmetic (≈ 32 significant digits): enough to evaluate the textbook
     /// cosh/sinh forms for λ ≤ 40 without their f64 cancellation, as independent truth.
@@ -393,8 +423,11 @@ mod tests {
         let l = Dd::new(lambda);
         let (ch_l, sh_l) = l.cosh_sinh();
         let (s_l, c_l) = l.sin_cos();
-        let sigma =
-            if free_right_end { ch_l.add(c_l).div(sh_l.add(s_l)) } else { ch_l.sub(c_l).div(sh_l.sub(s_l)) };
+        let sigma = if free_right_end {
+            ch_l.add(c_l).div(sh_l.add(s_l))
+        } else {
+            ch_l.sub(c_l).div(sh_l.sub(s_l))
+        };
         let t = l.mul(Dd::new(xi));
         let (ch, sh) = t.cosh_sinh();
         let (s, c) = t.sin_cos();
@@ -456,7 +489,10 @@ mod tests {
             let n = i as u32 + 1;
             let lambda = ModeShape::new(Support::Cantilever, n).beta_l();
             // Tolerance 1e-15 relative: the solver should land on the root's nearest double.
-            assert!(relative(lambda, root) <= 1e-15, "n = {n}: {lambda} vs {root}");
+            assert!(
+                relative(lambda, root) <= 1e-15,
+                "n = {n}: {lambda} vs {root}"
+            );
             // The quoted values themselves are roots to their 17 printed digits.
             assert!(root_error_dd(Support::Cantilever, root) <= 4e-15, "n = {n}");
         }
@@ -465,17 +501,30 @@ mod tests {
     #[test]
     fn fixed_fixed_and_propped_roots_match_published_values() {
         let published = [
-            (Support::FixedFixed, [4.730040744862704, 7.853204624095838, 10.99560783800167]),
-            (Support::ProppedCantilever, [3.926602312047919, 7.068582745628732, 10.21017612281303]),
+            (
+                Support::FixedFixed,
+                [4.730040744862704, 7.853204624095838, 10.99560783800167],
+            ),
+            (
+                Support::ProppedCantilever,
+                [3.926602312047919, 7.068582745628732, 10.21017612281303],
+            ),
         ];
         for (ends, roots) in published {
             for (i, &root) in roots.iter().enumerate() {
                 // Verify the published value from the characteristic equation itself (double-double,
                 // so cos x cosh x ∓ 1 does not cancel): it is a root to its 16 printed digits.
-                assert!(root_error_dd(ends, root) <= 1e-14, "{ends:?} published root {root}");
+                assert!(
+                    root_error_dd(ends, root) <= 1e-14,
+                    "{ends:?} published root {root}"
+                );
                 let lambda = ModeShape::new(ends, i as u32 + 1).beta_l();
                 // Tolerance 1e-14 relative: the published digits limit the comparison.
-                assert!(relative(lambda, root) <= 1e-14, "{ends:?} n = {}: {lambda} vs {root}", i + 1);
+                assert!(
+                    relative(lambda, root) <= 1e-14,
+                    "{ends:?} n = {}: {lambda} vs {root}",
+                    i + 1
+                );
             }
         }
     }
@@ -488,7 +537,10 @@ mod tests {
             for n in (1..=20).chain([50, 99, 100, 150, 200]) {
                 let lambda = ModeShape::new(ends, n).beta_l();
                 let error = root_error_dd(ends, lambda);
-                assert!(error <= 2.0 * f64::EPSILON * lambda, "{ends:?} n = {n}: {error:e}");
+                assert!(
+                    error <= 2.0 * f64::EPSILON * lambda,
+                    "{ends:?} n = {n}: {error:e}"
+                );
             }
         }
     }
@@ -521,7 +573,10 @@ mod tests {
                 let lambda = ModeShape::new(ends, n).beta_l();
                 let (expected, delta) = asymptote(ends, n);
                 let tolerance = 4.0 * f64::EPSILON * expected + 10.0 * delta * delta;
-                assert!((lambda - expected).abs() <= tolerance, "{ends:?} n = {n}: {lambda} vs {expected}");
+                assert!(
+                    (lambda - expected).abs() <= tolerance,
+                    "{ends:?} n = {n}: {lambda} vs {expected}"
+                );
             }
         }
     }
@@ -529,7 +584,10 @@ mod tests {
     /// Largest |value| of the named derivatives, each divided by λ^k so that all are O(1).
     fn boundary_residual(mode: &ModeShape, xi: f64, orders: &[usize]) -> f64 {
         let values = mode.terms.eval(xi);
-        orders.iter().map(|&k| (values[k] / mode.beta_l().powi(k as i32)).abs()).fold(0.0, f64::max)
+        orders
+            .iter()
+            .map(|&k| (values[k] / mode.beta_l().powi(k as i32)).abs())
+            .fold(0.0, f64::max)
     }
 
     #[test]
@@ -548,13 +606,18 @@ mod tests {
             let (left, right) = conditions(ends);
             for n in [1, 2, 10, 50, 100] {
                 let mode = ModeShape::new(ends, n);
-                let residual = boundary_residual(&mode, 0.0, left).max(boundary_residual(&mode, 1.0, right));
+                let residual =
+                    boundary_residual(&mode, 0.0, left).max(boundary_residual(&mode, 1.0, right));
                 assert!(residual <= 1e-12, "{ends:?} n = {n}: residual {residual:e}");
             }
             // Beyond n = 100 the rounding of λξ (ulp(λ) ≈ 2e-13 λ/1000) dominates; still small.
             let mode = ModeShape::new(ends, 1000);
-            let residual = boundary_residual(&mode, 0.0, left).max(boundary_residual(&mode, 1.0, right));
-            assert!(residual <= 1e-11, "{ends:?} n = 1000: residual {residual:e}");
+            let residual =
+                boundary_residual(&mode, 0.0, left).max(boundary_residual(&mode, 1.0, right));
+            assert!(
+                residual <= 1e-11,
+                "{ends:?} n = 1000: residual {residual:e}"
+            );
         }
     }
 
@@ -575,7 +638,11 @@ mod tests {
                     for k in 0..3 {
                         let difference = (m2[k] - 8.0 * m1[k] + 8.0 * p1[k] - p2[k]) / (12.0 * h);
                         let error = (difference - exact[k + 1]).abs() / lambda.powi(k as i32 + 1);
-                        assert!(error <= 1e-10, "{ends:?} n = {n} ξ = {xi} order {}: {error:e}", k + 1);
+                        assert!(
+                            error <= 1e-10,
+                            "{ends:?} n = {n} ξ = {xi} order {}: {error:e}",
+                            k + 1
+                        );
                     }
                 }
             }
@@ -639,7 +706,9 @@ mod tests {
         (0..panels)
             .map(|p| {
                 let start = p as f64 * width;
-                rule.iter().map(|&(x, w)| 0.5 * width * w * f(start + 0.5 * width * (x + 1.0))).sum::<f64>()
+                rule.iter()
+                    .map(|&(x, w)| 0.5 * width * w * f(start + 0.5 * width * (x + 1.0)))
+                    .sum::<f64>()
             })
             .sum()
     }
@@ -649,12 +718,23 @@ mod tests {
         // 4(m + n) panels of 16 points resolve both the waves and the boundary layers of width 1/λ
         // far beyond 1e-15. Tolerance 1e-12 on ∫φ_m φ_n, against ∫φ_n² of order 0.3–0.5.
         for ends in ALL {
-            for (m, n) in [(1, 2), (1, 3), (3, 7), (10, 11), (1, 100), (49, 50), (99, 100)] {
+            for (m, n) in [
+                (1, 2),
+                (1, 3),
+                (3, 7),
+                (10, 11),
+                (1, 100),
+                (49, 50),
+                (99, 100),
+            ] {
                 let (a, b) = (ModeShape::new(ends, m), ModeShape::new(ends, n));
                 let panels = 4 * (m + n) as usize;
                 let cross = integrate(|x| a.at(x).0 * b.at(x).0, panels);
                 let norm = integrate(|x| b.at(x).0.powi(2), panels);
-                assert!(cross.abs() <= 1e-12, "{ends:?} ({m}, {n}): ∫φmφn = {cross:e}");
+                assert!(
+                    cross.abs() <= 1e-12,
+                    "{ends:?} ({m}, {n}): ∫φmφn = {cross:e}"
+                );
                 assert!(norm > 0.2, "{ends:?} n = {n}: ∫φ² = {norm}");
             }
         }
@@ -695,7 +775,10 @@ mod tests {
         let lambda = eigenvalue(Support::Cantilever, 13);
         let naive_tip = textbook_f64(lambda, 1.0);
         let stable_tip = unnormalised(Support::Cantilever, lambda).eval(1.0)[0];
-        assert!((naive_tip - stable_tip).abs() > 0.1, "n = 13: {naive_tip} vs {stable_tip}");
+        assert!(
+            (naive_tip - stable_tip).abs() > 0.1,
+            "n = 13: {naive_tip} vs {stable_tip}"
+        );
     }
 
     #[test]
@@ -709,7 +792,11 @@ mod tests {
                 for i in 0..=points {
                     let (phi, slope, curvature) = mode.at(i as f64 / points as f64);
                     assert!(phi.is_finite() && slope.is_finite() && curvature.is_finite());
-                    assert!(phi.abs() <= 1.0 + 1e-12, "{ends:?} n = {n}: |φ| = {}", phi.abs());
+                    assert!(
+                        phi.abs() <= 1.0 + 1e-12,
+                        "{ends:?} n = {n}: |φ| = {}",
+                        phi.abs()
+                    );
                 }
                 if ends == Support::Cantilever {
                     assert!((mode.at(1.0).0.abs() - 1.0).abs() <= 1e-12, "n = {n}");
@@ -730,7 +817,10 @@ mod tests {
             let whole = ModeShape::new(Support::FixedFixed, 2 * k);
             let half = ModeShape::new(Support::ProppedCantilever, k);
             let lambda = whole.beta_l();
-            assert!((lambda - 2.0 * half.beta_l()).abs() <= 4.0 * f64::EPSILON * lambda, "k = {k}");
+            assert!(
+                (lambda - 2.0 * half.beta_l()).abs() <= 4.0 * f64::EPSILON * lambda,
+                "k = {k}"
+            );
             for i in 0..=400 {
                 let xi = i as f64 / 400.0;
                 let error = (whole.at(0.5 * xi).0 - half.at(xi).0).abs();
@@ -745,8 +835,8 @@ mod tests {
         let points = 64 * (mode.beta_l() / PI).ceil() as usize;
         let step = 1.0 / points as f64;
         let magnitude = |x: f64| mode.at(x.clamp(0.0, 1.0)).0.abs();
-        let best =
-            (0..=points).max_by(|&i, &j| magnitude(i as f64 * step).total_cmp(&magnitude(j as f64 * step)));
+        let best = (0..=points)
+            .max_by(|&i, &j| magnitude(i as f64 * step).total_cmp(&magnitude(j as f64 * step)));
         let centre = best.unwrap() as f64 * step;
         let (mut a, mut b) = (centre - step, centre + step);
         let golden = 0.5 * (5f64.sqrt() - 1.0);
@@ -768,7 +858,10 @@ mod tests {
         for ends in ALL {
             for n in [1, 2, 3, 5, 7, 8, 10, 25, 50, 100] {
                 let peak = sampled_peak(&ModeShape::new(ends, n));
-                assert!((peak - 1.0).abs() <= 1e-12, "{ends:?} n = {n}: max |φ| = {peak}");
+                assert!(
+                    (peak - 1.0).abs() <= 1e-12,
+                    "{ends:?} n = {n}: max |φ| = {peak}"
+                );
             }
         }
     }

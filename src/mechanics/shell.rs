@@ -16,17 +16,32 @@ pub enum ShellPattern {
     HoopExpansion { amplitude: f64 },
     /// Wind-type ovalisation (lobing): A sin(πz/H) cos(n(θ − θ₀)), ends kept circular by the
     /// base and the roof.
-    Ovalisation { amplitude: f64, n: u32, towards: f64 },
+    Ovalisation {
+        amplitude: f64,
+        n: u32,
+        towards: f64,
+    },
     /// A local inward dimple (positive amplitude = inward): −A cos²(πd/(2R)) within surface
     /// distance d < R of the point (θ₀, z₀).
-    Dimple { amplitude: f64, angle: f64, height: f64, radius: f64 },
+    Dimple {
+        amplitude: f64,
+        angle: f64,
+        height: f64,
+        radius: f64,
+    },
     /// Elephant's-foot bulge just above the base: A (z/z₀) e^{1 − z/z₀}, peak A at z₀, zero at
     /// the base.
     ElephantFoot { amplitude: f64, height: f64 },
     /// A buckle patch: a checkerboard of inward and outward half-waves of length `wavelength / 2`
     /// in both directions, centred inward at (θ₀, z₀), under a cos² window of radius R
     /// (the Koiter-circle eigenshapes of axial buckling, confined to a patch).
-    Buckle { amplitude: f64, angle: f64, height: f64, radius: f64, wavelength: f64 },
+    Buckle {
+        amplitude: f64,
+        angle: f64,
+        height: f64,
+        radius: f64,
+        wavelength: f64,
+    },
 }
 
 /// The shell the patterns act on: radius, wall thickness, height; steel.
@@ -42,29 +57,83 @@ const NU: f64 = super::STEEL_NU;
 
 impl ShellPattern {
     pub fn validate(&self, shell: &Shell) -> Result<(), String> {
-        let finite = |name: &str, x: f64| if x.is_finite() { Ok(()) } else { Err(format!("{name} = {x} is not a finite number")) };
+        let finite = |name: &str, x: f64| {
+            if x.is_finite() {
+                Ok(())
+            } else {
+                Err(format!("{name} = {x} is not a finite number"))
+            }
+        };
         match *self {
-            ShellPattern::HoopExpansion { amplitude } => finite("hoop_expansion amplitude", amplitude),
-            ShellPattern::Ovalisation { amplitude, n, towards } => {
+            ShellPattern::HoopExpansion { amplitude } => {
+                finite("hoop_expansion amplitude", amplitude)
+            }
+            ShellPattern::Ovalisation {
+                amplitude,
+                n,
+                towards,
+            } => {
                 finite("ovalisation amplitude", amplitude)?;
                 finite("ovalisation towards", towards)?;
-                if (1..=64).contains(&n) { Ok(()) } else { Err(format!("ovalisation n = {n} must be between 1 and 64")) }
+                if (1..=64).contains(&n) {
+                    Ok(())
+                } else {
+                    Err(format!("ovalisation n = {n} must be between 1 and 64"))
+                }
             }
-            ShellPattern::Dimple { amplitude, angle, height, radius } => {
+            ShellPattern::Dimple {
+                amplitude,
+                angle,
+                height,
+                radius,
+            } => {
                 finite("dimple amplitude", amplitude)?;
                 finite("dimple angle", angle)?;
                 if !(0.0..=shell.height).contains(&height) {
-                    return Err(format!("dimple height = {height} m lies outside the shell (0 to {} m)", shell.height));
+                    return Err(format!(
+                        "dimple height = {height} m lies outside the shell (0 to {} m)",
+                        shell.height
+                    ));
                 }
-                if radius > 0.0 && radius < PI * shell.radius { Ok(()) } else { Err(format!("dimple radius = {radius} m must be positive and less than half the circumference")) }
+                if radius > 0.0 && radius < PI * shell.radius {
+                    Ok(())
+                } else {
+                    Err(format!(
+                        "dimple radius = {radius} m must be positive and less than half the circumference"
+                    ))
+                }
             }
             ShellPattern::ElephantFoot { amplitude, height } => {
                 finite("elephant_foot amplitude", amplitude)?;
-                if height > 0.0 && height < shell.height { Ok(()) } else { Err(format!("elephant_foot height = {height} m must lie inside the shell")) }
+                if height > 0.0 && height < shell.height {
+                    Ok(())
+                } else {
+                    Err(format!(
+                        "elephant_foot height = {height} m must lie inside the shell"
+                    ))
+                }
             }
-            ShellPattern::Buckle { amplitude, angle, height, radius, wavelength } => {
-                ShellPattern::Dimple { amplitude, angle, height, radius }.validate(shell)?;
-                if wavelength > 0.0 && wavelength <= 2.0 * radius { Ok(()) } else { Err(format!("buckle wavelength = {wavelength} m must be positive and at most the patch diameter")) }
+            ShellPattern::Buckle {
+                amplitude,
+                angle,
+                height,
+                radius,
+                wavelength,
+            } => {
+                ShellPattern::Dimple {
+                    amplitude,
+                    angle,
+                    height,
+                    radius,
+                }
+                .validate(shell)?;
+                if wavelength > 0.0 && wavelength <= 2.0 * radius {
+                    Ok(())
+                } else {
+                    Err(format!(
+                        "buckle wavelength = {wavelength} m must be positive and at most the patch diameter"
+                    ))
+                }
             }
         }
     }
@@ -73,26 +142,48 @@ impl ShellPattern {
     pub fn at(&self, shell: &Shell, theta: f64, z: f64) -> f64 {
         match *self {
             ShellPattern::HoopExpansion { amplitude } => amplitude,
-            ShellPattern::Ovalisation { amplitude, n, towards } => {
+            ShellPattern::Ovalisation {
+                amplitude,
+                n,
+                towards,
+            } => {
                 amplitude * (PI * z / shell.height).sin() * (f64::from(n) * (theta - towards)).cos()
             }
-            ShellPattern::Dimple { amplitude, angle, height, radius } => {
+            ShellPattern::Dimple {
+                amplitude,
+                angle,
+                height,
+                radius,
+            } => {
                 let arc = shell.radius * angle_between(theta, angle);
                 let d = arc.hypot(z - height);
-                if d < radius { -amplitude * (PI * d / (2.0 * radius)).cos().powi(2) } else { 0.0 }
+                if d < radius {
+                    -amplitude * (PI * d / (2.0 * radius)).cos().powi(2)
+                } else {
+                    0.0
+                }
             }
             ShellPattern::ElephantFoot { amplitude, height } => {
                 let s = z / height;
                 amplitude * s * (1.0 - s).exp()
             }
-            ShellPattern::Buckle { amplitude, angle, height, radius, wavelength } => {
+            ShellPattern::Buckle {
+                amplitude,
+                angle,
+                height,
+                radius,
+                wavelength,
+            } => {
                 let arc = shell.radius * signed_angle(theta, angle);
                 let d = arc.hypot(z - height);
                 if d >= radius {
                     return 0.0;
                 }
                 let k = 2.0 * PI / wavelength;
-                -amplitude * (k * arc).cos() * (k * (z - height)).cos() * (PI * d / (2.0 * radius)).cos().powi(2)
+                -amplitude
+                    * (k * arc).cos()
+                    * (k * (z - height)).cos()
+                    * (PI * d / (2.0 * radius)).cos().powi(2)
             }
         }
     }
@@ -102,15 +193,24 @@ impl ShellPattern {
     pub fn curvatures(&self, shell: &Shell) -> (f64, f64) {
         match *self {
             ShellPattern::HoopExpansion { .. } => (0.0, 0.0),
-            ShellPattern::Ovalisation { amplitude, n, .. } => {
-                (amplitude.abs() * (PI / shell.height).powi(2), amplitude.abs() * (f64::from(n) / shell.radius).powi(2))
-            }
-            ShellPattern::Dimple { amplitude, radius, .. } => {
+            ShellPattern::Ovalisation { amplitude, n, .. } => (
+                amplitude.abs() * (PI / shell.height).powi(2),
+                amplitude.abs() * (f64::from(n) / shell.radius).powi(2),
+            ),
+            ShellPattern::Dimple {
+                amplitude, radius, ..
+            } => {
                 let k = amplitude.abs() * 0.5 * (PI / radius).powi(2);
                 (k, k)
             }
-            ShellPattern::ElephantFoot { amplitude, height } => (amplitude.abs() / (height * height), 0.0),
-            ShellPattern::Buckle { amplitude, wavelength, .. } => {
+            ShellPattern::ElephantFoot { amplitude, height } => {
+                (amplitude.abs() / (height * height), 0.0)
+            }
+            ShellPattern::Buckle {
+                amplitude,
+                wavelength,
+                ..
+            } => {
                 let k = amplitude.abs() * (2.0 * PI / wavelength).powi(2);
                 (k, k)
             }
@@ -121,14 +221,22 @@ impl ShellPattern {
     pub fn plausible(&self, shell: &Shell) -> (f64, &'static str) {
         let (r, t, h) = (shell.radius, shell.wall, shell.height);
         match *self {
-            ShellPattern::HoopExpansion { .. } => {
-                (9810.0 * h * r * r / (E * t), "membrane hoop expansion p r²/(E t) at the base of a full water silo (p = ρ g H)")
-            }
-            ShellPattern::Ovalisation { n, .. } => (wind_harmonic(shell, n), "shell response to 1 kPa peak wind pressure, AS/NZS 1170.2 Fourier harmonic n, ends held circular"),
-            ShellPattern::Dimple { .. } => (0.010 * 4.0 * (r * t).sqrt(), "EN 1993-1-6 class B dimple tolerance U₀ = 0.010 over the gauge 4√(rt)"),
-            ShellPattern::ElephantFoot { .. } | ShellPattern::Buckle { .. } => {
-                ((r / t).sqrt() * t / 25.0, "EN 1993-1-6 class B characteristic imperfection √(r/t)·t/Q, Q = 25")
-            }
+            ShellPattern::HoopExpansion { .. } => (
+                9810.0 * h * r * r / (E * t),
+                "membrane hoop expansion p r²/(E t) at the base of a full water silo (p = ρ g H)",
+            ),
+            ShellPattern::Ovalisation { n, .. } => (
+                wind_harmonic(shell, n),
+                "shell response to 1 kPa peak wind pressure, AS/NZS 1170.2 Fourier harmonic n, ends held circular",
+            ),
+            ShellPattern::Dimple { .. } => (
+                0.010 * 4.0 * (r * t).sqrt(),
+                "EN 1993-1-6 class B dimple tolerance U₀ = 0.010 over the gauge 4√(rt)",
+            ),
+            ShellPattern::ElephantFoot { .. } | ShellPattern::Buckle { .. } => (
+                (r / t).sqrt() * t / 25.0,
+                "EN 1993-1-6 class B characteristic imperfection √(r/t)·t/Q, Q = 25",
+            ),
         }
     }
 }
@@ -136,7 +244,9 @@ impl ShellPattern {
 /// Harmonic n of the wind pressure coefficient for a silo of height/diameter ≈ 1.
 fn wind_harmonic(shell: &Shell, n: u32) -> f64 {
     let c = [0.4, 0.8, 0.3, -0.1, -0.05];
-    let Some(&cn) = c.get(n as usize - 1) else { return 0.0 };
+    let Some(&cn) = c.get(n as usize - 1) else {
+        return 0.0;
+    };
     let (r, t) = (shell.radius, shell.wall);
     let p = 1000.0 * cn;
     if n == 1 {
@@ -146,7 +256,8 @@ fn wind_harmonic(shell: &Shell, n: u32) -> f64 {
     let d = E * t.powi(3) / (12.0 * (1.0 - NU * NU));
     let lambda2 = (PI / shell.height).powi(2);
     let mu2 = (f64::from(n * n) - 1.0) / (r * r);
-    p * (lambda2 + mu2).powi(2) / (d * (lambda2 + mu2).powi(4) + E * t / (r * r) * lambda2 * lambda2)
+    p * (lambda2 + mu2).powi(2)
+        / (d * (lambda2 + mu2).powi(4) + E * t / (r * r) * lambda2 * lambda2)
 }
 
 fn angle_between(a: f64, b: f64) -> f64 {
@@ -163,39 +274,112 @@ fn signed_angle(a: f64, b: f64) -> f64 {
 mod tests {
     use super::*;
 
-    const SILO: Shell = Shell { radius: 3.0, wall: 0.006, height: 15.0 };
+    const SILO: Shell = Shell {
+        radius: 3.0,
+        wall: 0.006,
+        height: 15.0,
+    };
 
     #[test]
     fn plausible_amplitudes_match_the_worked_examples() {
         // mechanics.md §6.2 (r = 3 m, t = 6 mm, H = 15 m, q = 1 kPa): W₂ = 0.42 mm, W₃ = 0.96 mm,
         // W₄ = −0.96 mm, W₅ = −0.74 mm, global sway 0.21 mm; §6.3: dimple tolerance 5.4 mm and
         // Δw_k = 5.4 mm for class B.
-        let oval = |n| ShellPattern::Ovalisation { amplitude: 0.0, n, towards: 0.0 }.plausible(&SILO).0 * 1e3;
+        let oval = |n| {
+            ShellPattern::Ovalisation {
+                amplitude: 0.0,
+                n,
+                towards: 0.0,
+            }
+            .plausible(&SILO)
+            .0 * 1e3
+        };
         for (n, mm) in [(2, 0.42), (3, 0.96), (4, -0.96), (5, -0.74), (1, 0.21)] {
-            assert!((oval(n) - mm).abs() < 0.01 + 0.02 * mm.abs(), "n = {n}: {} mm", oval(n));
+            assert!(
+                (oval(n) - mm).abs() < 0.01 + 0.02 * mm.abs(),
+                "n = {n}: {} mm",
+                oval(n)
+            );
         }
-        let dimple = ShellPattern::Dimple { amplitude: 0.0, angle: 0.0, height: 1.0, radius: 0.3 }.plausible(&SILO).0;
+        let dimple = ShellPattern::Dimple {
+            amplitude: 0.0,
+            angle: 0.0,
+            height: 1.0,
+            radius: 0.3,
+        }
+        .plausible(&SILO)
+        .0;
         assert!((dimple * 1e3 - 5.4).abs() < 0.05);
-        let foot = ShellPattern::ElephantFoot { amplitude: 0.0, height: 0.5 }.plausible(&SILO).0;
+        let foot = ShellPattern::ElephantFoot {
+            amplitude: 0.0,
+            height: 0.5,
+        }
+        .plausible(&SILO)
+        .0;
         assert!((foot * 1e3 - 5.4).abs() < 0.05);
     }
 
     #[test]
     fn patterns_reach_their_amplitude_where_they_should() {
-        let oval = ShellPattern::Ovalisation { amplitude: 0.05, n: 3, towards: 0.4 };
+        let oval = ShellPattern::Ovalisation {
+            amplitude: 0.05,
+            n: 3,
+            towards: 0.4,
+        };
         assert!((oval.at(&SILO, 0.4, 7.5) - 0.05).abs() < 1e-15);
-        assert!(oval.at(&SILO, 0.4, 0.0).abs() < 1e-15 && oval.at(&SILO, 0.4, 15.0).abs() < 1e-15, "ends stay circular");
-        let dimple = ShellPattern::Dimple { amplitude: 0.02, angle: 6.2, height: 4.0, radius: 0.5 };
+        assert!(
+            oval.at(&SILO, 0.4, 0.0).abs() < 1e-15 && oval.at(&SILO, 0.4, 15.0).abs() < 1e-15,
+            "ends stay circular"
+        );
+        let dimple = ShellPattern::Dimple {
+            amplitude: 0.02,
+            angle: 6.2,
+            height: 4.0,
+            radius: 0.5,
+        };
         assert_eq!(dimple.at(&SILO, 6.2, 4.0), -0.02);
         assert_eq!(dimple.at(&SILO, 6.2 + 0.5, 4.0), 0.0);
-        assert!(dimple.at(&SILO, 6.2 - 2.0 * PI, 4.1) < 0.0, "the angle wraps around");
-        let foot = ShellPattern::ElephantFoot { amplitude: 0.03, height: 0.4 };
+        assert!(
+            dimple.at(&SILO, 6.2 - 2.0 * PI, 4.1) < 0.0,
+            "the angle wraps around"
+        );
+        let foot = ShellPattern::ElephantFoot {
+            amplitude: 0.03,
+            height: 0.4,
+        };
         assert!((foot.at(&SILO, 1.0, 0.4) - 0.03).abs() < 1e-15 && foot.at(&SILO, 1.0, 0.0) == 0.0);
-        let buckle = ShellPattern::Buckle { amplitude: 0.04, angle: 1.0, height: 6.0, radius: 1.0, wavelength: 0.5 };
+        let buckle = ShellPattern::Buckle {
+            amplitude: 0.04,
+            angle: 1.0,
+            height: 6.0,
+            radius: 1.0,
+            wavelength: 0.5,
+        };
         assert_eq!(buckle.at(&SILO, 1.0, 6.0), -0.04, "inward at the centre");
-        assert!((buckle.at(&SILO, 1.0, 6.25) - 0.04 * (PI * 0.25 / 2.0).cos().powi(2)).abs() < 1e-15, "outward half a wave up");
+        assert!(
+            (buckle.at(&SILO, 1.0, 6.25) - 0.04 * (PI * 0.25 / 2.0).cos().powi(2)).abs() < 1e-15,
+            "outward half a wave up"
+        );
         assert_eq!(buckle.at(&SILO, 1.0, 7.1), 0.0, "nothing outside the patch");
-        assert!(ShellPattern::Ovalisation { amplitude: 0.1, n: 0, towards: 0.0 }.validate(&SILO).is_err());
-        assert!(ShellPattern::Dimple { amplitude: 0.1, angle: 0.0, height: 20.0, radius: 0.3 }.validate(&SILO).unwrap_err().contains("height = 20"));
+        assert!(
+            ShellPattern::Ovalisation {
+                amplitude: 0.1,
+                n: 0,
+                towards: 0.0
+            }
+            .validate(&SILO)
+            .is_err()
+        );
+        assert!(
+            ShellPattern::Dimple {
+                amplitude: 0.1,
+                angle: 0.0,
+                height: 20.0,
+                radius: 0.3
+            }
+            .validate(&SILO)
+            .unwrap_err()
+            .contains("height = 20")
+        );
     }
 }

@@ -6,7 +6,13 @@ use std::io::Cursor;
 
 pub const DEPTH_CHANNEL: &str = "Z";
 
-fn png(width: u32, height: u32, colour: ::png::ColorType, depth: ::png::BitDepth, data: &[u8]) -> Vec<u8> {
+fn png(
+    width: u32,
+    height: u32,
+    colour: ::png::ColorType,
+    depth: ::png::BitDepth,
+    data: &[u8],
+) -> Vec<u8> {
     let mut out = Vec::with_capacity(data.len() / 4 + 1024);
     let mut encoder = ::png::Encoder::new(&mut out, width, height);
     encoder.set_color(colour);
@@ -20,12 +26,24 @@ fn png(width: u32, height: u32, colour: ::png::ColorType, depth: ::png::BitDepth
 
 /// RGB8, row-major.
 pub fn rgb_png(width: u32, height: u32, rgb: &[u8]) -> Vec<u8> {
-    png(width, height, ::png::ColorType::Rgb, ::png::BitDepth::Eight, rgb)
+    png(
+        width,
+        height,
+        ::png::ColorType::Rgb,
+        ::png::BitDepth::Eight,
+        rgb,
+    )
 }
 
 /// 8-bit grey, row-major (255 = structure, 0 = background for the mask).
 pub fn mask_png(width: u32, height: u32, mask: &[u8]) -> Vec<u8> {
-    png(width, height, ::png::ColorType::Grayscale, ::png::BitDepth::Eight, mask)
+    png(
+        width,
+        height,
+        ::png::ColorType::Grayscale,
+        ::png::BitDepth::Eight,
+        mask,
+    )
 }
 
 /// Id image (0 = background): 8-bit grey when every id fits, else 16-bit (big-endian, as PNG
@@ -33,10 +51,22 @@ pub fn mask_png(width: u32, height: u32, mask: &[u8]) -> Vec<u8> {
 pub fn id_png(width: u32, height: u32, ids: &[u16]) -> Vec<u8> {
     if ids.iter().all(|&i| i <= 255) {
         let bytes: Vec<u8> = ids.iter().map(|&i| i as u8).collect();
-        return png(width, height, ::png::ColorType::Grayscale, ::png::BitDepth::Eight, &bytes);
+        return png(
+            width,
+            height,
+            ::png::ColorType::Grayscale,
+            ::png::BitDepth::Eight,
+            &bytes,
+        );
     }
     let bytes: Vec<u8> = ids.iter().flat_map(|i| i.to_be_bytes()).collect();
-    png(width, height, ::png::ColorType::Grayscale, ::png::BitDepth::Sixteen, &bytes)
+    png(
+        width,
+        height,
+        ::png::ColorType::Grayscale,
+        ::png::BitDepth::Sixteen,
+        &bytes,
+    )
 }
 
 /// Planar depth in metres, 0 where no surface was hit.
@@ -45,13 +75,28 @@ pub fn depth_exr(width: u32, height: u32, depth: &[f32]) -> Vec<u8> {
     let mut attributes = LayerAttributes::default();
     attributes.other.insert(
         Text::from("shmgen_depth"),
-        AttributeValue::Text(Text::from("planar z along the optical axis, metres, 0 = no surface")),
+        AttributeValue::Text(Text::from(
+            "planar z along the optical axis, metres, 0 = no surface",
+        )),
     );
-    let encoding = Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
+    let encoding = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
     let channels = AnyChannels::sort(SmallVec::from_vec(vec![channel]));
-    let layer = Layer::new((width as usize, height as usize), attributes, encoding, channels);
+    let layer = Layer::new(
+        (width as usize, height as usize),
+        attributes,
+        encoding,
+        channels,
+    );
     let mut out = Cursor::new(Vec::new());
-    Image::from_layer(layer).write().non_parallel().to_buffered(&mut out).expect("EXR into memory");
+    Image::from_layer(layer)
+        .write()
+        .non_parallel()
+        .to_buffered(&mut out)
+        .expect("EXR into memory");
     out.into_inner()
 }
 
@@ -74,20 +119,38 @@ mod tests {
         assert_eq!(layer.channel_data.list.len(), 1);
         let channel = &layer.channel_data.list[0];
         assert_eq!(channel.name, Text::from(DEPTH_CHANNEL));
-        let FlatSamples::F32(values) = &channel.sample_data else { panic!("depth must be f32") };
+        let FlatSamples::F32(values) = &channel.sample_data else {
+            panic!("depth must be f32")
+        };
         (layer.size.width(), layer.size.height(), values.clone())
     }
 
     #[test]
     fn depth_round_trips_exactly_and_deterministically() {
         let (w, h) = (37, 23);
-        let depth: Vec<f32> = (0..w * h).map(|i| if i % 5 == 0 { 0.0 } else { 1.0 + i as f32 * 1.234_567e-3 }).collect();
+        let depth: Vec<f32> = (0..w * h)
+            .map(|i| {
+                if i % 5 == 0 {
+                    0.0
+                } else {
+                    1.0 + i as f32 * 1.234_567e-3
+                }
+            })
+            .collect();
         let bytes = depth_exr(w as u32, h as u32, &depth);
-        assert_eq!(bytes, depth_exr(w as u32, h as u32, &depth), "same input, same bytes");
+        assert_eq!(
+            bytes,
+            depth_exr(w as u32, h as u32, &depth),
+            "same input, same bytes"
+        );
         let (rw, rh, back) = read_depth(&bytes);
         assert_eq!((rw, rh), (w, h));
         assert_eq!(back, depth);
-        assert_eq!(&bytes[..4], &[0x76, 0x2f, 0x31, 0x01], "OpenEXR magic number");
+        assert_eq!(
+            &bytes[..4],
+            &[0x76, 0x2f, 0x31, 0x01],
+            "OpenEXR magic number"
+        );
     }
 
     #[test]
@@ -99,8 +162,14 @@ mod tests {
             buf.truncate(info.buffer_size());
             (info.bit_depth, buf)
         };
-        assert_eq!(decode(id_png(3, 1, &[0, 7, 255])), (::png::BitDepth::Eight, vec![0, 7, 255]));
-        assert_eq!(decode(id_png(2, 1, &[1, 300])), (::png::BitDepth::Sixteen, vec![0, 1, 1, 44]));
+        assert_eq!(
+            decode(id_png(3, 1, &[0, 7, 255])),
+            (::png::BitDepth::Eight, vec![0, 7, 255])
+        );
+        assert_eq!(
+            decode(id_png(2, 1, &[1, 300])),
+            (::png::BitDepth::Sixteen, vec![0, 1, 1, 44])
+        );
     }
 
     #[test]
@@ -112,7 +181,10 @@ mod tests {
         let mut reader = decoder.read_info().unwrap();
         let mut buf = vec![0; reader.output_buffer_size().unwrap()];
         let info = reader.next_frame(&mut buf).unwrap();
-        assert_eq!((info.width, info.height, info.color_type), (w, h, ::png::ColorType::Rgb));
+        assert_eq!(
+            (info.width, info.height, info.color_type),
+            (w, h, ::png::ColorType::Rgb)
+        );
         assert_eq!(&buf[..info.buffer_size()], &rgb[..]);
     }
 }

@@ -1,6 +1,6 @@
 //! The dataset folder: run.json, manifest.jsonl, staging and commit of samples.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result, bail};
 use std::collections::BTreeSet;
 use std::fs::{self, OpenOptions};
 use std::io::Write;
@@ -39,8 +39,11 @@ impl DatasetFolder {
     /// dataset (different run.json) is refused unless `force`, which clears what shmgen wrote
     /// there before; files shmgen did not write are never touched.
     pub fn open(root: &Path, run_json: &[u8], force: bool) -> Result<DatasetFolder> {
-        let folder = DatasetFolder { root: root.to_path_buf() };
-        fs::create_dir_all(root).with_context(|| format!("creating output folder {}", root.display()))?;
+        let folder = DatasetFolder {
+            root: root.to_path_buf(),
+        };
+        fs::create_dir_all(root)
+            .with_context(|| format!("creating output folder {}", root.display()))?;
         match fs::read(folder.path(RUN_JSON)) {
             Ok(existing) if existing == run_json => {
                 folder.terminate_torn_line()?;
@@ -53,12 +56,20 @@ impl DatasetFolder {
             ),
             Ok(_) => folder.clear()?,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                let foreign = fs::read_dir(root)?.filter_map(|e| e.ok()).any(|e| e.file_name() != STAGING);
+                let foreign = fs::read_dir(root)?
+                    .filter_map(|e| e.ok())
+                    .any(|e| e.file_name() != STAGING);
                 if foreign && !force {
-                    bail!("{} is not empty and holds no shmgen dataset; choose another --out or pass --force to write into it", root.display());
+                    bail!(
+                        "{} is not empty and holds no shmgen dataset; choose another --out or pass --force to write into it",
+                        root.display()
+                    );
                 }
             }
-            Err(e) => return Err(e).with_context(|| format!("reading {}", folder.path(RUN_JSON).display())),
+            Err(e) => {
+                return Err(e)
+                    .with_context(|| format!("reading {}", folder.path(RUN_JSON).display()));
+            }
         }
         write_atomic(&folder.path(RUN_JSON), run_json)?;
         Ok(folder)
@@ -70,7 +81,10 @@ impl DatasetFolder {
         let path = self.path(MANIFEST);
         match fs::read(&path) {
             Ok(bytes) if bytes.last().is_some_and(|&b| b != b'\n') => {
-                OpenOptions::new().append(true).open(&path)?.write_all(b"\n")?;
+                OpenOptions::new()
+                    .append(true)
+                    .open(&path)?
+                    .write_all(b"\n")?;
             }
             _ => {}
         }
@@ -105,7 +119,11 @@ impl DatasetFolder {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(BTreeSet::new()),
             Err(e) => return Err(e.into()),
         };
-        Ok(text.split_inclusive('\n').filter(|l| l.ends_with('\n')).filter_map(manifest_sample).collect())
+        Ok(text
+            .split_inclusive('\n')
+            .filter(|l| l.ends_with('\n'))
+            .filter_map(manifest_sample)
+            .collect())
     }
 
     /// A fresh staging area for `sample`, discarding leftovers of an interrupted attempt.
@@ -115,7 +133,12 @@ impl DatasetFolder {
             fs::remove_dir_all(&dir)?;
         }
         fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-        Ok(SampleStage { sample, dir, files: Vec::new(), bytes: 0 })
+        Ok(SampleStage {
+            sample,
+            dir,
+            files: Vec::new(),
+            bytes: 0,
+        })
     }
 
     /// Moves the staged files into place, then records the sample in the manifest.
@@ -125,13 +148,18 @@ impl DatasetFolder {
             if let Some(parent) = target.parent() {
                 fs::create_dir_all(parent)?;
             }
-            fs::rename(stage.dir.join(i.to_string()), &target).with_context(|| format!("moving {} into place", target.display()))?;
+            fs::rename(stage.dir.join(i.to_string()), &target)
+                .with_context(|| format!("moving {} into place", target.display()))?;
         }
-        let line = serde_json::json!({ "sample": stage.sample, "views": views, "files": stage.files });
+        let line =
+            serde_json::json!({ "sample": stage.sample, "views": views, "files": stage.files });
         let mut line = serde_json::to_vec(&line)?;
         line.push(b'\n');
         // One write of a whole line in append mode: concurrent shards never interleave lines.
-        let mut manifest = OpenOptions::new().create(true).append(true).open(self.path(MANIFEST))?;
+        let mut manifest = OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(self.path(MANIFEST))?;
         manifest.write_all(&line)?;
         fs::remove_dir(&stage.dir)?;
         Ok(())
@@ -142,7 +170,12 @@ impl DatasetFolder {
     /// dataset is complete.
     pub fn finalize(&self, total: u64) -> Result<bool> {
         let done = self.completed()?;
-        if done.len() as u64 != total || done.iter().next_back().is_some_and(|&last| last + 1 != total) {
+        if done.len() as u64 != total
+            || done
+                .iter()
+                .next_back()
+                .is_some_and(|&last| last + 1 != total)
+        {
             return Ok(false);
         }
         let text = fs::read_to_string(self.path(MANIFEST))?;
@@ -163,7 +196,10 @@ impl DatasetFolder {
 }
 
 fn manifest_sample(line: &str) -> Option<u64> {
-    serde_json::from_str::<serde_json::Value>(line).ok()?.get("sample")?.as_u64()
+    serde_json::from_str::<serde_json::Value>(line)
+        .ok()?
+        .get("sample")?
+        .as_u64()
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
@@ -171,7 +207,8 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("file");
     let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
     fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-    fs::rename(&tmp, path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
+    fs::rename(&tmp, path)
+        .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
     Ok(())
 }
 
@@ -185,7 +222,10 @@ mod tests {
         let root = dir.path().join("ds");
         DatasetFolder::open(&root, b"{\"a\":1}", false).unwrap();
         DatasetFolder::open(&root, b"{\"a\":1}", false).unwrap();
-        let err = DatasetFolder::open(&root, b"{\"a\":2}", false).err().unwrap().to_string();
+        let err = DatasetFolder::open(&root, b"{\"a\":2}", false)
+            .err()
+            .unwrap()
+            .to_string();
         assert!(err.contains("different dataset"), "{err}");
         DatasetFolder::open(&root, b"{\"a\":2}", true).unwrap();
         assert_eq!(fs::read(root.join(RUN_JSON)).unwrap(), b"{\"a\":2}");
@@ -200,7 +240,10 @@ mod tests {
             stage.write(format!("samples/x{s}.txt"), b"data").unwrap();
             folder.commit(stage, 1).unwrap();
         }
-        let mut f = OpenOptions::new().append(true).open(dir.path().join(MANIFEST)).unwrap();
+        let mut f = OpenOptions::new()
+            .append(true)
+            .open(dir.path().join(MANIFEST))
+            .unwrap();
         f.write_all(b"{\"sample\": 7, \"vie").unwrap();
         assert_eq!(folder.completed().unwrap(), BTreeSet::from([0, 1, 2]));
         assert!(!folder.finalize(4).unwrap());

@@ -9,7 +9,7 @@
 mod encode;
 mod folder;
 
-pub use encode::{depth_exr, id_png, mask_png, rgb_png, DEPTH_CHANNEL};
+pub use encode::{DEPTH_CHANNEL, depth_exr, id_png, mask_png, rgb_png};
 pub use folder::{DatasetFolder, SampleStage};
 
 /// Relative path of one view's file of the given kind (`rgb.png`, `depth.exr`, ...):

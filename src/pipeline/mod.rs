@@ -8,11 +8,11 @@
 mod progress;
 mod sample;
 
-pub use sample::{prepare, render, view_camera, PreparedSample, VIEW_SCHEMA};
+pub use sample::{PreparedSample, VIEW_SCHEMA, prepare, render, view_camera};
 
 use crate::output::DatasetFolder;
 use crate::recipe::Recipe;
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result, bail};
 use progress::Progress;
 use rayon::prelude::*;
 use serde_json::json;
@@ -44,7 +44,10 @@ impl FromStr for Shard {
     fn from_str(s: &str) -> Result<Self, String> {
         let bad = || format!("--shard {s}: expected K/N with 0 ≤ K < N, e.g. 0/4");
         let (k, n) = s.split_once('/').ok_or_else(bad)?;
-        let (index, count) = (k.trim().parse::<u64>().map_err(|_| bad())?, n.trim().parse::<u64>().map_err(|_| bad())?);
+        let (index, count) = (
+            k.trim().parse::<u64>().map_err(|_| bad())?,
+            n.trim().parse::<u64>().map_err(|_| bad())?,
+        );
         if count == 0 || index >= count {
             return Err(bad());
         }
@@ -74,7 +77,11 @@ pub struct RunSummary {
 /// Everything that identifies a dataset, and nothing about how it was run (threads, shard,
 /// output path), so every shard and every resumed run agrees on it byte for byte.
 pub fn run_json(recipe: &Recipe) -> Result<Vec<u8>> {
-    let file = recipe.path.file_name().map(|f| f.to_string_lossy().to_string()).unwrap_or_default();
+    let file = recipe
+        .path
+        .file_name()
+        .map(|f| f.to_string_lossy().to_string())
+        .unwrap_or_default();
     let value = json!({
         "schema": RUN_SCHEMA,
         "tool": { "name": "shmgen", "version": env!("CARGO_PKG_VERSION") },
@@ -93,7 +100,9 @@ pub fn run_json(recipe: &Recipe) -> Result<Vec<u8>> {
 /// Renders this shard's unfinished samples of `recipe` into `options.out`.
 pub fn run(recipe: &Recipe, options: &RunOptions) -> Result<RunSummary> {
     let start = Instant::now();
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(options.threads.unwrap_or(0)).build()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(options.threads.unwrap_or(0))
+        .build()?;
     pool.install(|| run_in_pool(recipe, options, start))
 }
 
@@ -113,7 +122,9 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
             let mut stage = folder.stage(index)?;
             let views = render(recipe, &sample, &mut stage)?;
             let bytes = stage.bytes;
-            folder.commit(stage, views).with_context(|| format!("committing sample {index}"))?;
+            folder
+                .commit(stage, views)
+                .with_context(|| format!("committing sample {index}"))?;
             progress.sample_done();
             Ok(bytes)
         })
@@ -135,12 +146,18 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
 /// fails for some sample fails before it leaves partial files. Reports the lowest failing
 /// sample, whatever the thread scheduling.
 fn validate(recipe: &Recipe, samples: &[u64]) -> Result<()> {
-    let results: Vec<Result<()>> = samples.par_iter().map(|&s| prepare(recipe, s).map(drop)).collect();
+    let results: Vec<Result<()>> = samples
+        .par_iter()
+        .map(|&s| prepare(recipe, s).map(drop))
+        .collect();
     if let Some(Err(e)) = results.into_iter().find(Result::is_err) {
         return Err(e);
     }
     if samples.is_empty() {
-        bail!("this shard has no samples (the dataset has {} samples)", recipe.dataset.samples);
+        bail!(
+            "this shard has no samples (the dataset has {} samples)",
+            recipe.dataset.samples
+        );
     }
     Ok(())
 }

@@ -2,13 +2,18 @@
 
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 pub enum Progress {
     Bar(ProgressBar),
-    Lines { total: u64, done: AtomicU64, start: Instant, last: Mutex<Instant> },
+    Lines {
+        total: u64,
+        done: AtomicU64,
+        start: Instant,
+        last: Mutex<Instant>,
+    },
     Quiet,
 }
 
@@ -27,21 +32,34 @@ impl Progress {
             Progress::Bar(bar)
         } else {
             let now = Instant::now();
-            Progress::Lines { total, done: AtomicU64::new(0), start: now, last: Mutex::new(now) }
+            Progress::Lines {
+                total,
+                done: AtomicU64::new(0),
+                start: now,
+                last: Mutex::new(now),
+            }
         }
     }
 
     pub fn sample_done(&self) {
         match self {
             Progress::Bar(bar) => bar.inc(1),
-            Progress::Lines { total, done, start, last } => {
+            Progress::Lines {
+                total,
+                done,
+                start,
+                last,
+            } => {
                 let done = done.fetch_add(1, Ordering::Relaxed) + 1;
                 let mut last = last.lock().unwrap();
                 if done == *total || last.elapsed() >= Duration::from_secs(5) {
                     *last = Instant::now();
                     let secs = start.elapsed().as_secs_f64();
                     let eta = secs / done as f64 * (total - done) as f64;
-                    eprintln!("progress: {done}/{total} samples ({:.0}%), {secs:.1} s elapsed, ETA {eta:.0} s", 100.0 * done as f64 / *total as f64);
+                    eprintln!(
+                        "progress: {done}/{total} samples ({:.0}%), {secs:.1} s elapsed, ETA {eta:.0} s",
+                        100.0 * done as f64 / *total as f64
+                    );
                 }
             }
             Progress::Quiet => {}

@@ -1,16 +1,16 @@
 //! One sample, end to end: scene → deformed mesh → BVH → views → encoded files + JSON.
 
-use crate::cameras::{rows4, Camera, ViewDraw};
+use crate::cameras::{Camera, ViewDraw, rows4};
 use crate::geometry::Mesh;
 use crate::mechanics::Labels;
-use crate::output::{depth_exr, id_png, mask_png, rgb_png, view_file, SampleStage};
+use crate::output::{SampleStage, depth_exr, id_png, mask_png, rgb_png, view_file};
 use crate::recipe::Recipe;
-use crate::render::{shade, GBuffer, Lighting, TraceMesh, NO_HIT};
+use crate::render::{GBuffer, Lighting, NO_HIT, TraceMesh, shade};
 use crate::scene::{DatasetSpec, SceneSpec, Structure};
 use crate::seeds::{Scope, Stream};
-use anyhow::{bail, Result};
+use anyhow::{Result, bail};
 use glam::DVec3;
-use serde_json::{json, Value};
+use serde_json::{Value, json};
 
 /// Identifies the per-view JSON layout; bump when fields change meaning.
 pub const VIEW_SCHEMA: &str = "shmgen.view/1";
@@ -48,7 +48,8 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
                 labels.push(Some((built.deformation.labels, built.segments)));
             }
             Structure::Assembly(a) => {
-                let tolerance = TOLERANCE_PX * recipe.dataset.camera.nearest_pixel_footprint(a.radius());
+                let tolerance =
+                    TOLERANCE_PX * recipe.dataset.camera.nearest_pixel_footprint(a.radius());
                 for (mesh, part) in a.build(tolerance).map_err(failed)? {
                     assembled.add(&mesh, i, part);
                 }
@@ -56,17 +57,38 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
             }
         }
     }
-    let Assembled { mesh, owner, part, parts } = assembled;
+    let Assembled {
+        mesh,
+        owner,
+        part,
+        parts,
+    } = assembled;
     if !mesh.is_finite() {
-        bail!("sample {index}: the deformed mesh has non-finite vertices (check the structure's dimensions and loads)");
+        bail!(
+            "sample {index}: the deformed mesh has non-finite vertices (check the structure's dimensions and loads)"
+        );
     }
     let (lo, hi) = mesh.bounds().expect("a scene has at least one structure");
     let centre = 0.5 * (lo + hi);
-    let radius = mesh.positions.iter().map(|p| p.distance(centre)).fold(0.0, f64::max);
+    let radius = mesh
+        .positions
+        .iter()
+        .map(|p| p.distance(centre))
+        .fold(0.0, f64::max);
     if !(radius > 0.0 && radius.is_finite()) {
         bail!("sample {index}: the scene has no extent (radius {radius})");
     }
-    Ok(PreparedSample { index, scene, labels, mesh, owner, part, parts, centre, radius })
+    Ok(PreparedSample {
+        index,
+        scene,
+        labels,
+        mesh,
+        owner,
+        part,
+        parts,
+        centre,
+        radius,
+    })
 }
 
 /// Chord tolerance of primitives, as a fraction of a pixel at the nearest camera (the beams'
@@ -91,23 +113,36 @@ impl Assembled {
                 self.parts.len() - 1
             }
         };
-        self.owner.extend(std::iter::repeat_n(structure as u32, mesh.triangles.len()));
-        self.part.extend(std::iter::repeat_n(id as u32, mesh.triangles.len()));
+        self.owner
+            .extend(std::iter::repeat_n(structure as u32, mesh.triangles.len()));
+        self.part
+            .extend(std::iter::repeat_n(id as u32, mesh.triangles.len()));
         self.mesh.append(mesh);
     }
 }
 
 /// The camera of view `view` of a prepared sample.
-pub fn view_camera(dataset: &DatasetSpec, sample: &PreparedSample, view: u32) -> (Camera, ViewDraw) {
+pub fn view_camera(
+    dataset: &DatasetSpec,
+    sample: &PreparedSample,
+    view: u32,
+) -> (Camera, ViewDraw) {
     let mut stream = Stream::new(dataset.seed, Scope::View(sample.index, view), "camera");
-    dataset.camera.draw(&mut stream, sample.centre, sample.radius)
+    dataset
+        .camera
+        .draw(&mut stream, sample.centre, sample.radius)
 }
 
 /// Renders and stages every view of the sample. Returns the number of views written.
 pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage) -> Result<u32> {
     let dataset = &recipe.dataset;
     let trace_mesh = TraceMesh::build(&sample.mesh);
-    let albedo: Vec<[f64; 3]> = sample.scene.structures.iter().map(|s| s.material().albedo()).collect();
+    let albedo: Vec<[f64; 3]> = sample
+        .scene
+        .structures
+        .iter()
+        .map(|s| s.material().albedo())
+        .collect();
     let background = dataset.background.map(|c| (c * 255.0).round() as u8);
     let lighting = Lighting::default();
     for view in 0..dataset.views {
@@ -115,13 +150,22 @@ pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage)
         let g = trace_mesh.trace(&camera);
         let (w, h) = (g.width, g.height);
         let mut files = serde_json::Map::new();
-        let mut put = |stage: &mut SampleStage, kind: &str, ext: &str, bytes: Vec<u8>| -> Result<()> {
-            let path = view_file(sample.index, view, &format!("{kind}.{ext}"));
-            files.insert(kind.to_string(), json!(path));
-            stage.write(path, &bytes)
-        };
+        let mut put =
+            |stage: &mut SampleStage, kind: &str, ext: &str, bytes: Vec<u8>| -> Result<()> {
+                let path = view_file(sample.index, view, &format!("{kind}.{ext}"));
+                files.insert(kind.to_string(), json!(path));
+                stage.write(path, &bytes)
+            };
         if dataset.outputs.rgb {
-            let rgb = shade(&g, &trace_mesh, &camera, &lighting, |t| albedo[sample.owner[t as usize] as usize], background, dataset.antialias);
+            let rgb = shade(
+                &g,
+                &trace_mesh,
+                &camera,
+                &lighting,
+                |t| albedo[sample.owner[t as usize] as usize],
+                background,
+                dataset.antialias,
+            );
             put(stage, "rgb", "png", rgb_png(w, h, &rgb))?;
         }
         if dataset.outputs.depth {
@@ -134,7 +178,12 @@ pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage)
             put(stage, "parts", "png", id_png(w, h, &ids(&g, &sample.part)))?;
         }
         if dataset.outputs.instances {
-            put(stage, "instances", "png", id_png(w, h, &ids(&g, &sample.owner)))?;
+            put(
+                stage,
+                "instances",
+                "png",
+                id_png(w, h, &ids(&g, &sample.owner)),
+            )?;
         }
         let meta = view_json(recipe, sample, view, &camera, &draw, &g, files);
         let path = view_file(sample.index, view, "json");
@@ -147,11 +196,23 @@ pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage)
 
 /// Per-pixel id + 1 of what each triangle belongs to (0 = background).
 fn ids(g: &GBuffer, of_triangle: &[u32]) -> Vec<u16> {
-    g.triangle.iter().map(|&t| if t == NO_HIT { 0 } else { of_triangle[t as usize] as u16 + 1 }).collect()
+    g.triangle
+        .iter()
+        .map(|&t| {
+            if t == NO_HIT {
+                0
+            } else {
+                of_triangle[t as usize] as u16 + 1
+            }
+        })
+        .collect()
 }
 
 fn mask(g: &GBuffer) -> Vec<u8> {
-    g.triangle.iter().map(|&t| if t == NO_HIT { 0 } else { 255 }).collect()
+    g.triangle
+        .iter()
+        .map(|&t| if t == NO_HIT { 0 } else { 255 })
+        .collect()
 }
 
 fn view_json(
@@ -182,10 +243,19 @@ fn view_json(
     let mut part_ids = vec![json!("background")];
     part_ids.extend(sample.parts.iter().map(|p| json!(p)));
     let mut instance_ids = vec![json!(null)];
-    instance_ids.extend(sample.scene.structures.iter().enumerate().map(|(i, s)| match s {
-        Structure::Beam(_) => json!({ "structure": i, "kind": "beam" }),
-        Structure::Assembly(a) => json!({ "structure": i, "kind": "assembly", "name": a.name }),
-    }));
+    instance_ids.extend(
+        sample
+            .scene
+            .structures
+            .iter()
+            .enumerate()
+            .map(|(i, s)| match s {
+                Structure::Beam(_) => json!({ "structure": i, "kind": "beam" }),
+                Structure::Assembly(a) => {
+                    json!({ "structure": i, "kind": "assembly", "name": a.name })
+                }
+            }),
+    );
     let hits = g.triangle.iter().filter(|&&t| t != NO_HIT).count();
     json!({
         "schema": VIEW_SCHEMA,

@@ -1,7 +1,7 @@
 //! The functions and types a recipe can call. Each builds or edits plain scene data and
 //! validates what it is given; none does per-vertex or per-pixel work.
 
-use super::options::{self, number, OptResult, Options};
+use super::options::{self, OptResult, Options, number};
 use crate::cameras::{CameraRig, Distance};
 use crate::scene::{DatasetSpec, Outputs};
 use crate::seeds::Stream;
@@ -43,10 +43,16 @@ impl ScriptRng {
 }
 
 pub fn register(engine: &mut Engine, params: Arc<Params>, files: Arc<super::shape_api::MeshFiles>) {
-    engine.register_fn("param", move |name: ImmutableString, default: Dynamic| param(&params, &name, default));
-    engine.register_fn("deg", |x: Dynamic| -> Fallible<f64> { Ok(number(&x, "deg(x)")?.to_radians()) });
+    engine.register_fn("param", move |name: ImmutableString, default: Dynamic| {
+        param(&params, &name, default)
+    });
+    engine.register_fn("deg", |x: Dynamic| -> Fallible<f64> {
+        Ok(number(&x, "deg(x)")?.to_radians())
+    });
     engine.register_type_with_name::<Dataset>("Dataset");
-    engine.register_fn("dataset", |map: Map| -> Fallible<Dataset> { Ok(dataset(map)?) });
+    engine.register_fn("dataset", |map: Map| -> Fallible<Dataset> {
+        Ok(dataset(map)?)
+    });
     super::beam_api::register(engine);
     super::shape_api::register(engine, files);
     register_rng(engine);
@@ -69,23 +75,38 @@ fn param(params: &Params, name: &str, default: Dynamic) -> Fallible<Dynamic> {
     } else if value.is_string() {
         serde_json::json!(value.to_string())
     } else {
-        return fail(format!("param \"{name}\": the default must be a number, a bool or a string, not {}", default.type_name()));
+        return fail(format!(
+            "param \"{name}\": the default must be a number, a bool or a string, not {}",
+            default.type_name()
+        ));
     };
-    params.resolved.lock().unwrap().insert(name.to_string(), json);
+    params
+        .resolved
+        .lock()
+        .unwrap()
+        .insert(name.to_string(), json);
     Ok(value)
 }
 
 fn parse_override(name: &str, text: &str, default: &Dynamic) -> Fallible<Dynamic> {
-    let bad = |kind: &str| format!("--set {name}={text}: expected {kind} (the recipe's default is {default})");
+    let bad = |kind: &str| {
+        format!("--set {name}={text}: expected {kind} (the recipe's default is {default})")
+    };
     if default.is_int() {
-        text.trim().parse::<i64>().map(Dynamic::from).map_err(|_| bad("a whole number").into())
+        text.trim()
+            .parse::<i64>()
+            .map(Dynamic::from)
+            .map_err(|_| bad("a whole number").into())
     } else if default.is_float() {
         match text.trim().parse::<f64>() {
             Ok(f) if f.is_finite() => Ok(Dynamic::from(f)),
             _ => fail(bad("a finite number")),
         }
     } else if default.is_bool() {
-        text.trim().parse::<bool>().map(Dynamic::from).map_err(|_| bad("true or false").into())
+        text.trim()
+            .parse::<bool>()
+            .map(Dynamic::from)
+            .map_err(|_| bad("true or false").into())
     } else {
         Ok(Dynamic::from(text.to_string()))
     }
@@ -100,7 +121,9 @@ fn dataset(map: Map) -> OptResult<Dataset> {
     let background = o.colour("background", [0.0; 3])?;
     let antialias = match o.take("antialias") {
         None => true,
-        Some(v) => v.as_bool().map_err(|_| format!("dataset.antialias = {v} must be true or false"))?,
+        Some(v) => v
+            .as_bool()
+            .map_err(|_| format!("dataset.antialias = {v} must be true or false"))?,
     };
     let outputs = outputs(o.take("outputs"))?;
     let camera = match o.sub("camera")? {
@@ -112,13 +135,41 @@ fn dataset(map: Map) -> OptResult<Dataset> {
         .try_cast::<FnPtr>()
         .ok_or("dataset.scene must be a function of the random source, like |rng| { ... }")?;
     o.finish()?;
-    Ok(Dataset { spec: DatasetSpec { name, seed, samples, views, camera, outputs, background, antialias }, scene })
+    Ok(Dataset {
+        spec: DatasetSpec {
+            name,
+            seed,
+            samples,
+            views,
+            camera,
+            outputs,
+            background,
+            antialias,
+        },
+        scene,
+    })
 }
 
 fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {
-    let Some(value) = value else { return Ok(Outputs { rgb: true, depth: true, mask: true, parts: false, instances: false }) };
-    let list = value.try_cast::<Array>().ok_or("dataset.outputs must be a list like [\"rgb\", \"depth\", \"mask\"]")?;
-    let mut out = Outputs { rgb: false, depth: false, mask: false, parts: false, instances: false };
+    let Some(value) = value else {
+        return Ok(Outputs {
+            rgb: true,
+            depth: true,
+            mask: true,
+            parts: false,
+            instances: false,
+        });
+    };
+    let list = value
+        .try_cast::<Array>()
+        .ok_or("dataset.outputs must be a list like [\"rgb\", \"depth\", \"mask\"]")?;
+    let mut out = Outputs {
+        rgb: false,
+        depth: false,
+        mask: false,
+        parts: false,
+        instances: false,
+    };
     for item in list {
         let name = item.to_string();
         match name.as_str() {
@@ -128,8 +179,12 @@ fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {
             "parts" => out.parts = true,
             "instances" => out.instances = true,
             _ => {
-                let hint = options::nearest(&name, &Outputs::NAMES).map(|k| format!("; did you mean \"{k}\"?")).unwrap_or_default();
-                return Err(format!("unknown output \"{name}\" in dataset.outputs{hint} (known: rgb, depth, mask, parts, instances)"));
+                let hint = options::nearest(&name, &Outputs::NAMES)
+                    .map(|k| format!("; did you mean \"{k}\"?"))
+                    .unwrap_or_default();
+                return Err(format!(
+                    "unknown output \"{name}\" in dataset.outputs{hint} (known: rgb, depth, mask, parts, instances)"
+                ));
             }
         }
     }
@@ -142,13 +197,18 @@ fn camera(mut o: Options) -> OptResult<CameraRig> {
     let height = o.integer("height", i64::from(d.height), 1, 16_384)? as u32;
     let fov_y = o.number("fov_y", d.fov_y)?;
     if !(fov_y > 0.0 && fov_y < std::f64::consts::PI) {
-        return Err(format!("dataset.camera.fov_y = {fov_y} must lie strictly between 0 and π radians"));
+        return Err(format!(
+            "dataset.camera.fov_y = {fov_y} must lie strictly between 0 and π radians"
+        ));
     }
     let yaw = o.range("yaw", d.yaw)?;
     let pitch = o.range("pitch", d.pitch)?;
     let half_pi = std::f64::consts::FRAC_PI_2;
     if pitch[0] < -half_pi - 1e-12 || pitch[1] > half_pi + 1e-12 {
-        return Err(format!("dataset.camera.pitch = [{}, {}] must lie within [-π/2, π/2]", pitch[0], pitch[1]));
+        return Err(format!(
+            "dataset.camera.pitch = [{}, {}] must lie within [-π/2, π/2]",
+            pitch[0], pitch[1]
+        ));
     }
     let roll = o.range("roll", d.roll)?;
     let margin = o.number("margin", 1.05)?;
@@ -160,7 +220,9 @@ fn camera(mut o: Options) -> OptResult<CameraRig> {
             wrap.insert("distance".into(), v);
             let [min, max] = Options::new(wrap, "dataset.camera").range("distance", [0.0, 0.0])?;
             if min <= 0.0 {
-                return Err(format!("dataset.camera.distance = {min} must be positive (metres) or \"frame\""));
+                return Err(format!(
+                    "dataset.camera.distance = {min} must be positive (metres) or \"frame\""
+                ));
             }
             Distance::Range { min, max }
         }
@@ -169,37 +231,61 @@ fn camera(mut o: Options) -> OptResult<CameraRig> {
         return Err(format!("dataset.camera.margin = {margin} must be positive"));
     }
     o.finish()?;
-    Ok(CameraRig { width, height, fov_y, yaw, pitch, roll, distance })
+    Ok(CameraRig {
+        width,
+        height,
+        fov_y,
+        yaw,
+        pitch,
+        roll,
+        distance,
+    })
 }
 
 fn register_rng(engine: &mut Engine) {
     engine.register_type_with_name::<ScriptRng>("Rng");
     engine.register_get("sample", |r: &mut ScriptRng| r.1 as i64);
-    engine.register_fn("uniform", |r: &mut ScriptRng, lo: Dynamic, hi: Dynamic| -> Fallible<f64> {
-        let (lo, hi) = (number(&lo, "uniform low")?, number(&hi, "uniform high")?);
-        if lo > hi {
-            return fail(format!("uniform({lo}, {hi}): the low end exceeds the high end"));
-        }
-        Ok(r.0.lock().unwrap().uniform(lo, hi))
-    });
-    engine.register_fn("integer", |r: &mut ScriptRng, lo: i64, hi: i64| -> Fallible<i64> {
-        if lo > hi {
-            return fail(format!("integer({lo}, {hi}): the low end exceeds the high end"));
-        }
-        Ok(r.0.lock().unwrap().integer(lo, hi))
-    });
-    engine.register_fn("chance", |r: &mut ScriptRng, p: Dynamic| -> Fallible<bool> {
-        let p = number(&p, "chance probability")?;
-        if !(0.0..=1.0).contains(&p) {
-            return fail(format!("chance({p}): the probability must lie in 0..1"));
-        }
-        Ok(r.0.lock().unwrap().unit() < p)
-    });
-    engine.register_fn("choice", |r: &mut ScriptRng, items: Array| -> Fallible<Dynamic> {
-        if items.is_empty() {
-            return fail("choice([]): cannot choose from an empty list".to_string());
-        }
-        let i = r.0.lock().unwrap().integer(0, items.len() as i64 - 1);
-        Ok(items[i as usize].clone())
-    });
+    engine.register_fn(
+        "uniform",
+        |r: &mut ScriptRng, lo: Dynamic, hi: Dynamic| -> Fallible<f64> {
+            let (lo, hi) = (number(&lo, "uniform low")?, number(&hi, "uniform high")?);
+            if lo > hi {
+                return fail(format!(
+                    "uniform({lo}, {hi}): the low end exceeds the high end"
+                ));
+            }
+            Ok(r.0.lock().unwrap().uniform(lo, hi))
+        },
+    );
+    engine.register_fn(
+        "integer",
+        |r: &mut ScriptRng, lo: i64, hi: i64| -> Fallible<i64> {
+            if lo > hi {
+                return fail(format!(
+                    "integer({lo}, {hi}): the low end exceeds the high end"
+                ));
+            }
+            Ok(r.0.lock().unwrap().integer(lo, hi))
+        },
+    );
+    engine.register_fn(
+        "chance",
+        |r: &mut ScriptRng, p: Dynamic| -> Fallible<bool> {
+            let p = number(&p, "chance probability")?;
+            if !(0.0..=1.0).contains(&p) {
+                return fail(format!("chance({p}): the probability must lie in 0..1"));
+            }
+            Ok(r.0.lock().unwrap().unit() < p)
+        },
+    );
+    engine.register_fn(
+        "choice",
+        |r: &mut ScriptRng, items: Array| -> Fallible<Dynamic> {
+            if items.is_empty() {
+                return fail("choice([]): cannot choose from an empty list".to_string());
+            }
+            let i = r.0.lock().unwrap().integer(0, items.len() as i64 - 1);
+            Ok(items[i as usize].clone())
+        },
+    );
 }

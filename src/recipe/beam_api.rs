@@ -1,8 +1,8 @@
 //! The beam part of the recipe API: sections, supports, loads, theory, tessellation.
 //! Every method edits the beam in place and returns it, so calls chain.
 
-use super::api::{fail, Fallible};
-use super::options::{number, positive, OptResult, Options};
+use super::api::{Fallible, fail};
+use super::options::{OptResult, Options, number, positive};
 use crate::mechanics::{Load, Mapping, Section, Support, Target, Theory};
 use crate::scene::{BeamSpec, Tessellation};
 use rhai::{Array, Dynamic, Engine, ImmutableString, Map};
@@ -10,7 +10,9 @@ use rhai::{Array, Dynamic, Engine, ImmutableString, Map};
 pub fn register(engine: &mut Engine) {
     register_sections(engine);
     engine.register_type_with_name::<BeamSpec>("Beam");
-    engine.register_fn("beam", |map: Map| -> Fallible<BeamSpec> { Ok(beam_from_map(map)?) });
+    engine.register_fn("beam", |map: Map| -> Fallible<BeamSpec> {
+        Ok(beam_from_map(map)?)
+    });
     engine.register_get("length", |b: &mut BeamSpec| b.length);
     engine.register_get("width", |b: &mut BeamSpec| b.section.width());
     engine.register_get("height", |b: &mut BeamSpec| b.section.height());
@@ -24,8 +26,13 @@ fn beam_from_map(map: Map) -> OptResult<BeamSpec> {
     let mut o = Options::new(map, "beam");
     let length = o.positive("length", "metres")?;
     let section = match o.take("section") {
-        Some(s) => s.try_cast::<Section>().ok_or("beam.section must be a section, e.g. rectangle(0.2, 0.4) or tube(0.3, 0.01)")?,
-        None => Section::Rectangle { width: o.positive("width", "metres")?, height: o.positive("height", "metres")? },
+        Some(s) => s
+            .try_cast::<Section>()
+            .ok_or("beam.section must be a section, e.g. rectangle(0.2, 0.4) or tube(0.3, 0.01)")?,
+        None => Section::Rectangle {
+            width: o.positive("width", "metres")?,
+            height: o.positive("height", "metres")?,
+        },
     };
     section.validate()?;
     let mut beam = BeamSpec::new(length, section);
@@ -39,29 +46,50 @@ fn beam_from_map(map: Map) -> OptResult<BeamSpec> {
 fn segments(n: &Dynamic) -> OptResult<u32> {
     match n.as_int() {
         Ok(i) if (1..=100_000).contains(&i) => Ok(i as u32),
-        _ => Err(format!("segments = {n} must be a whole number between 1 and 100000")),
+        _ => Err(format!(
+            "segments = {n} must be a whole number between 1 and 100000"
+        )),
     }
 }
 
 fn register_sections(engine: &mut Engine) {
     engine.register_type_with_name::<Section>("Section");
     let check = |s: Section| -> Fallible<Section> { s.validate().map(|()| s).or_else(fail) };
-    engine.register_fn("rectangle", move |w: Dynamic, h: Dynamic| -> Fallible<Section> {
-        check(Section::Rectangle { width: number(&w, "rectangle width")?, height: number(&h, "rectangle height")? })
-    });
-    engine.register_fn("i_section", move |w: Dynamic, h: Dynamic, tf: Dynamic, tw: Dynamic| -> Fallible<Section> {
-        check(Section::ISection {
-            width: number(&w, "i_section width")?,
-            height: number(&h, "i_section height")?,
-            flange: number(&tf, "i_section flange")?,
-            web: number(&tw, "i_section web")?,
-        })
-    });
-    engine.register_fn("hollow_box", move |w: Dynamic, h: Dynamic, t: Dynamic| -> Fallible<Section> {
-        check(Section::HollowBox { width: number(&w, "hollow_box width")?, height: number(&h, "hollow_box height")?, wall: number(&t, "hollow_box wall")? })
-    });
+    engine.register_fn(
+        "rectangle",
+        move |w: Dynamic, h: Dynamic| -> Fallible<Section> {
+            check(Section::Rectangle {
+                width: number(&w, "rectangle width")?,
+                height: number(&h, "rectangle height")?,
+            })
+        },
+    );
+    engine.register_fn(
+        "i_section",
+        move |w: Dynamic, h: Dynamic, tf: Dynamic, tw: Dynamic| -> Fallible<Section> {
+            check(Section::ISection {
+                width: number(&w, "i_section width")?,
+                height: number(&h, "i_section height")?,
+                flange: number(&tf, "i_section flange")?,
+                web: number(&tw, "i_section web")?,
+            })
+        },
+    );
+    engine.register_fn(
+        "hollow_box",
+        move |w: Dynamic, h: Dynamic, t: Dynamic| -> Fallible<Section> {
+            check(Section::HollowBox {
+                width: number(&w, "hollow_box width")?,
+                height: number(&h, "hollow_box height")?,
+                wall: number(&t, "hollow_box wall")?,
+            })
+        },
+    );
     engine.register_fn("tube", move |d: Dynamic, t: Dynamic| -> Fallible<Section> {
-        check(Section::CircularHollow { diameter: number(&d, "tube diameter")?, wall: number(&t, "tube wall")? })
+        check(Section::CircularHollow {
+            diameter: number(&d, "tube diameter")?,
+            wall: number(&t, "tube wall")?,
+        })
     });
 }
 
@@ -83,67 +111,146 @@ fn on_span(b: &BeamSpec, what: &str, x: f64) -> Fallible<f64> {
     if (0.0..=b.length).contains(&x) {
         Ok(x)
     } else {
-        let from = if matches!(b.support, Support::SimplySupported) { "pinned" } else { "clamped" };
-        fail(format!("{what} = {x} m lies outside the span [0, {}] m (measured from the {from} end)", b.length))
+        let from = if matches!(b.support, Support::SimplySupported) {
+            "pinned"
+        } else {
+            "clamped"
+        };
+        fail(format!(
+            "{what} = {x} m lies outside the span [0, {}] m (measured from the {from} end)",
+            b.length
+        ))
     }
 }
 
 fn register_loads(engine: &mut Engine) {
     // Shape form: a unit load, scaled so that the beam's largest deflection is `deflection`.
-    engine.register_fn("point_load", |b: &mut BeamSpec, at: Dynamic, deflection: Dynamic| -> Fallible<BeamSpec> {
-        let at = on_span(b, "point_load position", number(&at, "point_load position")?)?;
-        let deflection = number(&deflection, "point_load deflection")?;
-        b.loads.push(Load::Point { at, force: 1.0 });
-        b.target = Target::Peak { deflection };
-        Ok(b.clone())
-    });
-    engine.register_fn("point_force", |b: &mut BeamSpec, at: Dynamic, force: Dynamic| -> Fallible<BeamSpec> {
-        let at = on_span(b, "point_force position", number(&at, "point_force position")?)?;
-        b.loads.push(Load::Point { at, force: number(&force, "point_force force")? });
-        Ok(b.clone())
-    });
-    engine.register_fn("distributed_load", |b: &mut BeamSpec, q: Dynamic| -> Fallible<BeamSpec> {
-        b.loads.push(Load::Distributed { from: 0.0, to: b.length, intensity: number(&q, "distributed_load intensity")? });
-        Ok(b.clone())
-    });
-    engine.register_fn("distributed_load", |b: &mut BeamSpec, from: Dynamic, to: Dynamic, q: Dynamic| -> Fallible<BeamSpec> {
-        let from = on_span(b, "distributed_load from", number(&from, "distributed_load from")?)?;
-        let to = on_span(b, "distributed_load to", number(&to, "distributed_load to")?)?;
-        if from >= to {
-            return fail(format!("distributed_load from = {from} m must be less than to = {to} m"));
-        }
-        b.loads.push(Load::Distributed { from, to, intensity: number(&q, "distributed_load intensity")? });
-        Ok(b.clone())
-    });
-    engine.register_fn("end_moments", |b: &mut BeamSpec, start: Dynamic, end: Dynamic| -> Fallible<BeamSpec> {
-        b.loads.push(Load::EndMoments { start: number(&start, "end_moments start")?, end: number(&end, "end_moments end")? });
-        Ok(b.clone())
-    });
+    engine.register_fn(
+        "point_load",
+        |b: &mut BeamSpec, at: Dynamic, deflection: Dynamic| -> Fallible<BeamSpec> {
+            let at = on_span(
+                b,
+                "point_load position",
+                number(&at, "point_load position")?,
+            )?;
+            let deflection = number(&deflection, "point_load deflection")?;
+            b.loads.push(Load::Point { at, force: 1.0 });
+            b.target = Target::Peak { deflection };
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "point_force",
+        |b: &mut BeamSpec, at: Dynamic, force: Dynamic| -> Fallible<BeamSpec> {
+            let at = on_span(
+                b,
+                "point_force position",
+                number(&at, "point_force position")?,
+            )?;
+            b.loads.push(Load::Point {
+                at,
+                force: number(&force, "point_force force")?,
+            });
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "distributed_load",
+        |b: &mut BeamSpec, q: Dynamic| -> Fallible<BeamSpec> {
+            b.loads.push(Load::Distributed {
+                from: 0.0,
+                to: b.length,
+                intensity: number(&q, "distributed_load intensity")?,
+            });
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "distributed_load",
+        |b: &mut BeamSpec, from: Dynamic, to: Dynamic, q: Dynamic| -> Fallible<BeamSpec> {
+            let from = on_span(
+                b,
+                "distributed_load from",
+                number(&from, "distributed_load from")?,
+            )?;
+            let to = on_span(
+                b,
+                "distributed_load to",
+                number(&to, "distributed_load to")?,
+            )?;
+            if from >= to {
+                return fail(format!(
+                    "distributed_load from = {from} m must be less than to = {to} m"
+                ));
+            }
+            b.loads.push(Load::Distributed {
+                from,
+                to,
+                intensity: number(&q, "distributed_load intensity")?,
+            });
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "end_moments",
+        |b: &mut BeamSpec, start: Dynamic, end: Dynamic| -> Fallible<BeamSpec> {
+            b.loads.push(Load::EndMoments {
+                start: number(&start, "end_moments start")?,
+                end: number(&end, "end_moments end")?,
+            });
+            Ok(b.clone())
+        },
+    );
     // A snapshot of free vibration: [[mode, amplitude], ...], amplitudes in metres.
-    engine.register_fn("vibration", |b: &mut BeamSpec, modes: Array| -> Fallible<BeamSpec> {
-        let mut snapshot = Vec::with_capacity(modes.len());
-        for m in &modes {
-            let pair = m.clone().try_cast::<Array>().filter(|p| p.len() == 2);
-            let Some(pair) = pair else { return fail(format!("vibration: {m} must be [mode, amplitude]")) };
-            let mode = pair[0].as_int().ok().filter(|n| (1..=10_000).contains(n));
-            let Some(mode) = mode else { return fail(format!("vibration: mode {} must be a whole number from 1 to 10000", pair[0])) };
-            snapshot.push((mode as u32, number(&pair[1], "vibration amplitude")?));
-        }
-        if snapshot.is_empty() {
-            return fail("vibration([]) needs at least one [mode, amplitude]".to_string());
-        }
-        b.vibration = snapshot;
-        Ok(b.clone())
-    });
-    engine.register_fn("target_deflection", |b: &mut BeamSpec, deflection: Dynamic| -> Fallible<BeamSpec> {
-        b.target = Target::Peak { deflection: number(&deflection, "target_deflection")? };
-        Ok(b.clone())
-    });
-    engine.register_fn("target_deflection_at", |b: &mut BeamSpec, at: Dynamic, deflection: Dynamic| -> Fallible<BeamSpec> {
-        let at = on_span(b, "target_deflection_at position", number(&at, "target_deflection_at position")?)?;
-        b.target = Target::At { at, deflection: number(&deflection, "target_deflection_at deflection")? };
-        Ok(b.clone())
-    });
+    engine.register_fn(
+        "vibration",
+        |b: &mut BeamSpec, modes: Array| -> Fallible<BeamSpec> {
+            let mut snapshot = Vec::with_capacity(modes.len());
+            for m in &modes {
+                let pair = m.clone().try_cast::<Array>().filter(|p| p.len() == 2);
+                let Some(pair) = pair else {
+                    return fail(format!("vibration: {m} must be [mode, amplitude]"));
+                };
+                let mode = pair[0].as_int().ok().filter(|n| (1..=10_000).contains(n));
+                let Some(mode) = mode else {
+                    return fail(format!(
+                        "vibration: mode {} must be a whole number from 1 to 10000",
+                        pair[0]
+                    ));
+                };
+                snapshot.push((mode as u32, number(&pair[1], "vibration amplitude")?));
+            }
+            if snapshot.is_empty() {
+                return fail("vibration([]) needs at least one [mode, amplitude]".to_string());
+            }
+            b.vibration = snapshot;
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "target_deflection",
+        |b: &mut BeamSpec, deflection: Dynamic| -> Fallible<BeamSpec> {
+            b.target = Target::Peak {
+                deflection: number(&deflection, "target_deflection")?,
+            };
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "target_deflection_at",
+        |b: &mut BeamSpec, at: Dynamic, deflection: Dynamic| -> Fallible<BeamSpec> {
+            let at = on_span(
+                b,
+                "target_deflection_at position",
+                number(&at, "target_deflection_at position")?,
+            )?;
+            b.target = Target::At {
+                at,
+                deflection: number(&deflection, "target_deflection_at deflection")?,
+            };
+            Ok(b.clone())
+        },
+    );
 }
 
 fn register_settings(engine: &mut Engine) {
@@ -157,10 +264,14 @@ fn register_settings(engine: &mut Engine) {
         };
         Ok(b.clone())
     });
-    engine.register_fn("model_tolerance", |b: &mut BeamSpec, t: Dynamic| -> Fallible<BeamSpec> {
-        b.model_tolerance = positive(&t, "model_tolerance", "a fraction of the peak deflection")?;
-        Ok(b.clone())
-    });
+    engine.register_fn(
+        "model_tolerance",
+        |b: &mut BeamSpec, t: Dynamic| -> Fallible<BeamSpec> {
+            b.model_tolerance =
+                positive(&t, "model_tolerance", "a fraction of the peak deflection")?;
+            Ok(b.clone())
+        },
+    );
     engine.register_fn("mapping", |b: &mut BeamSpec, name: ImmutableString| -> Fallible<BeamSpec> {
         b.mapping = match name.as_str() {
             "rotate_sections" => Mapping::RotateSections,
@@ -169,51 +280,85 @@ fn register_settings(engine: &mut Engine) {
         };
         Ok(b.clone())
     });
-    engine.register_fn("segments", |b: &mut BeamSpec, n: Dynamic| -> Fallible<BeamSpec> {
-        b.tessellation = Tessellation::Segments(segments(&n)?);
-        Ok(b.clone())
-    });
-    engine.register_fn("chord_tolerance", |b: &mut BeamSpec, metres: Dynamic| -> Fallible<BeamSpec> {
-        b.tessellation = Tessellation::Chord(positive(&metres, "chord_tolerance", "metres")?);
-        Ok(b.clone())
-    });
-    engine.register_fn("pixel_tolerance", |b: &mut BeamSpec, pixels: Dynamic| -> Fallible<BeamSpec> {
-        b.tessellation = Tessellation::Pixels(positive(&pixels, "pixel_tolerance", "pixels")?);
-        Ok(b.clone())
-    });
+    engine.register_fn(
+        "segments",
+        |b: &mut BeamSpec, n: Dynamic| -> Fallible<BeamSpec> {
+            b.tessellation = Tessellation::Segments(segments(&n)?);
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "chord_tolerance",
+        |b: &mut BeamSpec, metres: Dynamic| -> Fallible<BeamSpec> {
+            b.tessellation = Tessellation::Chord(positive(&metres, "chord_tolerance", "metres")?);
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "pixel_tolerance",
+        |b: &mut BeamSpec, pixels: Dynamic| -> Fallible<BeamSpec> {
+            b.tessellation = Tessellation::Pixels(positive(&pixels, "pixel_tolerance", "pixels")?);
+            Ok(b.clone())
+        },
+    );
     engine.register_fn("paper_mesh", |b: &mut BeamSpec| -> Fallible<BeamSpec> {
         if !matches!(b.section, Section::Rectangle { .. }) {
-            return fail("paper_mesh: the paper's 12,288-face mesh exists only for the rectangular section".to_string());
+            return fail(
+                "paper_mesh: the paper's 12,288-face mesh exists only for the rectangular section"
+                    .to_string(),
+            );
         }
         b.tessellation = Tessellation::Paper;
         Ok(b.clone())
     });
-    engine.register_fn("elastic_modulus", |b: &mut BeamSpec, e: Dynamic| -> Fallible<BeamSpec> {
-        b.elastic_modulus = positive(&e, "elastic_modulus", "pascals")?;
-        Ok(b.clone())
-    });
-    engine.register_fn("poisson", |b: &mut BeamSpec, nu: Dynamic| -> Fallible<BeamSpec> {
-        let nu = number(&nu, "poisson")?;
-        if !(0.0..0.5).contains(&nu) {
-            return fail(format!("poisson = {nu} must lie in [0, 0.5)"));
-        }
-        b.poisson = nu;
-        Ok(b.clone())
-    });
-    engine.register_fn("yield_strength", |b: &mut BeamSpec, fy: Dynamic| -> Fallible<BeamSpec> {
-        b.yield_strength = positive(&fy, "yield_strength", "pascals")?;
-        Ok(b.clone())
-    });
-    engine.register_fn("colour", |b: &mut BeamSpec, rgb: Array| -> Fallible<BeamSpec> {
-        b.material.colour = super::options::colour(&Dynamic::from(rgb), "colour")?;
-        Ok(b.clone())
-    });
-    engine.register_fn("at", |b: &mut BeamSpec, x: Dynamic, y: Dynamic, z: Dynamic| -> Fallible<BeamSpec> {
-        b.centre = [number(&x, "at x")?, number(&y, "at y")?, number(&z, "at z")?];
-        Ok(b.clone())
-    });
-    engine.register_fn("yaw", |b: &mut BeamSpec, angle: Dynamic| -> Fallible<BeamSpec> {
-        b.yaw = number(&angle, "yaw")?;
-        Ok(b.clone())
-    });
+    engine.register_fn(
+        "elastic_modulus",
+        |b: &mut BeamSpec, e: Dynamic| -> Fallible<BeamSpec> {
+            b.elastic_modulus = positive(&e, "elastic_modulus", "pascals")?;
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "poisson",
+        |b: &mut BeamSpec, nu: Dynamic| -> Fallible<BeamSpec> {
+            let nu = number(&nu, "poisson")?;
+            if !(0.0..0.5).contains(&nu) {
+                return fail(format!("poisson = {nu} must lie in [0, 0.5)"));
+            }
+            b.poisson = nu;
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "yield_strength",
+        |b: &mut BeamSpec, fy: Dynamic| -> Fallible<BeamSpec> {
+            b.yield_strength = positive(&fy, "yield_strength", "pascals")?;
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "colour",
+        |b: &mut BeamSpec, rgb: Array| -> Fallible<BeamSpec> {
+            b.material.colour = super::options::colour(&Dynamic::from(rgb), "colour")?;
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "at",
+        |b: &mut BeamSpec, x: Dynamic, y: Dynamic, z: Dynamic| -> Fallible<BeamSpec> {
+            b.centre = [
+                number(&x, "at x")?,
+                number(&y, "at y")?,
+                number(&z, "at z")?,
+            ];
+            Ok(b.clone())
+        },
+    );
+    engine.register_fn(
+        "yaw",
+        |b: &mut BeamSpec, angle: Dynamic| -> Fallible<BeamSpec> {
+            b.yaw = number(&angle, "yaw")?;
+            Ok(b.clone())
+        },
+    );
 }

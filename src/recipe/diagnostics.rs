@@ -1,7 +1,7 @@
 //! Turning Rhai errors into messages that point into the user's files:
 //! `error: ...` then `--> file:line:col`, the source line and a caret, then the call chain.
 
-use super::engine::{Sources, MAX_OPERATIONS};
+use super::engine::{MAX_OPERATIONS, Sources};
 use rhai::{EvalAltResult, ParseError, Position};
 use std::fmt;
 
@@ -28,12 +28,20 @@ impl RecipeError {
     }
 
     pub fn parse(err: &ParseError, label: &str, sources: &Sources) -> Self {
-        let at = Located { label: label.to_string(), pos: err.1 };
+        let at = Located {
+            label: label.to_string(),
+            pos: err.1,
+        };
         RecipeError(render(&err.0.to_string(), &at, &[], None, sources))
     }
 
     /// `context` says what was being evaluated, e.g. "while drawing the scene of sample 3".
-    pub fn eval(err: &EvalAltResult, main_label: &str, sources: &Sources, context: Option<&str>) -> Self {
+    pub fn eval(
+        err: &EvalAltResult,
+        main_label: &str,
+        sources: &Sources,
+        context: Option<&str>,
+    ) -> Self {
         let mut chain = Vec::new();
         let (message, at) = innermost(err, main_label, &mut chain);
         RecipeError(render(&message, &at, &chain, context, sources))
@@ -41,40 +49,99 @@ impl RecipeError {
 }
 
 /// Follows calls and imports down to the error itself, collecting where each step happened.
-fn innermost(err: &EvalAltResult, label: &str, chain: &mut Vec<(String, Located)>) -> (String, Located) {
+fn innermost(
+    err: &EvalAltResult,
+    label: &str,
+    chain: &mut Vec<(String, Located)>,
+) -> (String, Located) {
     match err {
         EvalAltResult::ErrorInFunctionCall(name, source, inner, pos) => {
-            let what = if name.starts_with("anon$") { "in the closure".to_string() } else { format!("in call to `{name}`") };
-            chain.push((what, Located { label: label.to_string(), pos: *pos }));
-            let inner_label = if source.is_empty() { label } else { source.as_str() };
+            let what = if name.starts_with("anon$") {
+                "in the closure".to_string()
+            } else {
+                format!("in call to `{name}`")
+            };
+            chain.push((
+                what,
+                Located {
+                    label: label.to_string(),
+                    pos: *pos,
+                },
+            ));
+            let inner_label = if source.is_empty() {
+                label
+            } else {
+                source.as_str()
+            };
             innermost(inner, inner_label, chain)
         }
         EvalAltResult::ErrorInModule(module, inner, pos) => {
-            chain.push((format!("while importing {module}"), Located { label: label.to_string(), pos: *pos }));
+            chain.push((
+                format!("while importing {module}"),
+                Located {
+                    label: label.to_string(),
+                    pos: *pos,
+                },
+            ));
             innermost(inner, module, chain)
         }
-        EvalAltResult::ErrorParsing(kind, pos) => (kind.to_string(), Located { label: label.to_string(), pos: *pos }),
-        EvalAltResult::ErrorRuntime(value, pos) => (value.to_string(), Located { label: label.to_string(), pos: *pos }),
+        EvalAltResult::ErrorParsing(kind, pos) => (
+            kind.to_string(),
+            Located {
+                label: label.to_string(),
+                pos: *pos,
+            },
+        ),
+        EvalAltResult::ErrorRuntime(value, pos) => (
+            value.to_string(),
+            Located {
+                label: label.to_string(),
+                pos: *pos,
+            },
+        ),
         EvalAltResult::ErrorTooManyOperations(pos) => (
-            format!("the script ran more than {MAX_OPERATIONS} operations; is there an endless loop?"),
-            Located { label: label.to_string(), pos: *pos },
+            format!(
+                "the script ran more than {MAX_OPERATIONS} operations; is there an endless loop?"
+            ),
+            Located {
+                label: label.to_string(),
+                pos: *pos,
+            },
         ),
         other => {
             let pos = other.position();
             let text = other.to_string();
-            let message = text.strip_suffix(&format!(" ({pos})")).unwrap_or(&text).to_string();
-            (message, Located { label: label.to_string(), pos })
+            let message = text
+                .strip_suffix(&format!(" ({pos})"))
+                .unwrap_or(&text)
+                .to_string();
+            (
+                message,
+                Located {
+                    label: label.to_string(),
+                    pos,
+                },
+            )
         }
     }
 }
 
-fn render(message: &str, at: &Located, chain: &[(String, Located)], context: Option<&str>, sources: &Sources) -> String {
+fn render(
+    message: &str,
+    at: &Located,
+    chain: &[(String, Located)],
+    context: Option<&str>,
+    sources: &Sources,
+) -> String {
     let mut out = format!("error: {message}\n");
     out += &format!("  --> {}\n", place(at));
     if let (Some(line), Some(col)) = (at.pos.line(), at.pos.position()) {
         if let Some(text) = sources.line(&at.label, line) {
             let gutter = line.to_string().len();
-            out += &format!("{:gutter$} |\n{line} | {text}\n{:gutter$} | {:>col$}\n", "", "", "^");
+            out += &format!(
+                "{:gutter$} |\n{line} | {text}\n{:gutter$} | {:>col$}\n",
+                "", "", "^"
+            );
         }
     }
     for (what, site) in chain.iter().rev().filter(|(_, l)| !l.pos.is_none()) {

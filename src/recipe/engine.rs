@@ -17,7 +17,10 @@ pub const MAX_OPERATIONS: u64 = 20_000_000;
 const EMBEDDED_STDLIB: &[(&str, &str)] = &[
     ("beam", include_str!("../../stdlib/beam.rhai")),
     ("column", include_str!("../../stdlib/column.rhai")),
-    ("portal_frame", include_str!("../../stdlib/portal_frame.rhai")),
+    (
+        "portal_frame",
+        include_str!("../../stdlib/portal_frame.rhai"),
+    ),
     ("silo", include_str!("../../stdlib/silo.rhai")),
 ];
 
@@ -34,18 +37,29 @@ pub struct Sources(Mutex<BTreeMap<String, String>>);
 
 impl Sources {
     pub fn insert(&self, label: &str, text: &str) {
-        self.0.lock().unwrap().insert(label.to_string(), text.to_string());
+        self.0
+            .lock()
+            .unwrap()
+            .insert(label.to_string(), text.to_string());
     }
 
     pub fn line(&self, label: &str, line: usize) -> Option<String> {
-        self.0.lock().unwrap().get(label)?.lines().nth(line.checked_sub(1)?).map(str::to_string)
+        self.0
+            .lock()
+            .unwrap()
+            .get(label)?
+            .lines()
+            .nth(line.checked_sub(1)?)
+            .map(str::to_string)
     }
 
     /// Content hash over every file, in label order.
     pub fn hash(&self) -> String {
         let mut h = blake3::Hasher::new();
         for (label, text) in self.0.lock().unwrap().iter() {
-            let name = Path::new(label).file_name().map_or(label.as_str(), |n| n.to_str().unwrap_or(label));
+            let name = Path::new(label)
+                .file_name()
+                .map_or(label.as_str(), |n| n.to_str().unwrap_or(label));
             for part in [name, text] {
                 h.update(&(part.len() as u64).to_le_bytes());
                 h.update(part.as_bytes());
@@ -96,7 +110,12 @@ impl Resolver {
         }
     }
 
-    pub fn resolve(&self, engine: &Engine, path: &str, pos: Position) -> Result<Shared<Module>, Box<EvalAltResult>> {
+    pub fn resolve(
+        &self,
+        engine: &Engine,
+        path: &str,
+        pos: Position,
+    ) -> Result<Shared<Module>, Box<EvalAltResult>> {
         let runtime = |msg: String| Box::new(EvalAltResult::ErrorRuntime(msg.into(), pos));
         if !is_module_name(path) {
             return Err(runtime(format!(
@@ -107,18 +126,30 @@ impl Resolver {
             return Ok(m.clone());
         }
         let (label, text) = self.find(path).ok_or_else(|| {
-            let searched: Vec<String> = self.folders.iter().map(|f| f.display().to_string()).collect();
-            runtime(format!("module \"{path}\" not found: looked for {path}.rhai in {}", searched.join(" and ")))
+            let searched: Vec<String> = self
+                .folders
+                .iter()
+                .map(|f| f.display().to_string())
+                .collect();
+            runtime(format!(
+                "module \"{path}\" not found: looked for {path}.rhai in {}",
+                searched.join(" and ")
+            ))
         })?;
         let key = (std::thread::current().id(), path.to_string());
         if !self.loading.lock().unwrap().insert(key.clone()) {
-            return Err(runtime(format!("module \"{path}\" imports itself (circular import)")));
+            return Err(runtime(format!(
+                "module \"{path}\" imports itself (circular import)"
+            )));
         }
         self.sources.insert(&label, &text);
         let result = compile_module(engine, &label, &text, pos);
         self.loading.lock().unwrap().remove(&key);
         let module = result?;
-        self.cache.lock().unwrap().insert(path.to_string(), module.clone());
+        self.cache
+            .lock()
+            .unwrap()
+            .insert(path.to_string(), module.clone());
         Ok(module)
     }
 
@@ -136,8 +167,15 @@ impl Resolver {
     }
 }
 
-fn compile_module(engine: &Engine, label: &str, text: &str, pos: Position) -> Result<Shared<Module>, Box<EvalAltResult>> {
-    let in_module = |inner: Box<EvalAltResult>| Box::new(EvalAltResult::ErrorInModule(label.into(), inner, pos));
+fn compile_module(
+    engine: &Engine,
+    label: &str,
+    text: &str,
+    pos: Position,
+) -> Result<Shared<Module>, Box<EvalAltResult>> {
+    let in_module = |inner: Box<EvalAltResult>| {
+        Box::new(EvalAltResult::ErrorInModule(label.into(), inner, pos))
+    };
     let mut ast = engine.compile(text).map_err(|e| in_module(e.into()))?;
     ast.set_source(label);
     let mut module = Module::eval_ast_as_new(Scope::new(), &ast, engine).map_err(in_module)?;
@@ -148,14 +186,25 @@ fn compile_module(engine: &Engine, label: &str, text: &str, pos: Position) -> Re
 fn is_module_name(path: &str) -> bool {
     !path.is_empty()
         && path.split('/').all(|seg| {
-            !seg.is_empty() && seg != "." && seg != ".." && seg.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+            !seg.is_empty()
+                && seg != "."
+                && seg != ".."
+                && seg
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
         })
 }
 
 struct SharedResolver(Arc<Resolver>);
 
 impl rhai::ModuleResolver for SharedResolver {
-    fn resolve(&self, engine: &Engine, _source: Option<&str>, path: &str, pos: Position) -> Result<Shared<Module>, Box<EvalAltResult>> {
+    fn resolve(
+        &self,
+        engine: &Engine,
+        _source: Option<&str>,
+        path: &str,
+        pos: Position,
+    ) -> Result<Shared<Module>, Box<EvalAltResult>> {
         self.0.resolve(engine, path, pos)
     }
 }
@@ -166,7 +215,15 @@ mod tests {
 
     #[test]
     fn module_names_cannot_escape_the_search_folders() {
-        for bad in ["../secret", "/etc/passwd", "a/../../b", "", "beam.rhai", "a//b", "C:\\x"] {
+        for bad in [
+            "../secret",
+            "/etc/passwd",
+            "a/../../b",
+            "",
+            "beam.rhai",
+            "a//b",
+            "C:\\x",
+        ] {
             assert!(!is_module_name(bad), "{bad}");
         }
         for good in ["beam", "frames/portal", "my-silo_2"] {

@@ -21,7 +21,7 @@ use crate::scene::{AssemblySpec, BeamSpec, DatasetSpec, SceneSpec, Structure};
 use crate::seeds::{Scope as StreamScope, Stream};
 use api::{Dataset, Params, ScriptRng};
 use engine::{Resolver, Sources};
-use rhai::{ASTNode, Array, Dynamic, Engine, FnPtr, Position, Scope, Stmt, AST};
+use rhai::{AST, ASTNode, Array, Dynamic, Engine, FnPtr, Position, Scope, Stmt};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -44,20 +44,32 @@ pub struct Recipe {
 impl Recipe {
     /// Compiles and evaluates the recipe at `path` with `--set` overrides.
     pub fn load(path: &Path, overrides: &[(String, String)]) -> Result<Recipe, RecipeError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| RecipeError::plain(format!("cannot read recipe {}: {e}", path.display())))?;
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            RecipeError::plain(format!("cannot read recipe {}: {e}", path.display()))
+        })?;
         let label = path.display().to_string();
         let sources = Arc::new(Sources::default());
         sources.insert(&label, &text);
-        let folder = path.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf);
-        let folder = if folder.as_os_str().is_empty() { PathBuf::from(".") } else { folder };
+        let folder = path
+            .parent()
+            .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+        let folder = if folder.as_os_str().is_empty() {
+            PathBuf::from(".")
+        } else {
+            folder
+        };
         let resolver = Arc::new(Resolver::new(&folder, sources.clone()));
-        let params = Arc::new(Params { overrides: overrides.iter().cloned().collect(), ..Params::default() });
+        let params = Arc::new(Params {
+            overrides: overrides.iter().cloned().collect(),
+            ..Params::default()
+        });
         let files = Arc::new(shape_api::MeshFiles::new(&folder, sources.clone()));
 
         let mut engine = engine::sandboxed(resolver.clone());
         api::register(&mut engine, params.clone(), files.clone());
-        let mut ast = engine.compile(&text).map_err(|e| RecipeError::parse(&e, &label, &sources))?;
+        let mut ast = engine
+            .compile(&text)
+            .map_err(|e| RecipeError::parse(&e, &label, &sources))?;
         ast.set_source(label.as_str());
         let result: Dynamic = engine
             .eval_ast_with_scope(&mut Scope::new(), &ast)
@@ -101,7 +113,10 @@ impl Recipe {
     /// Draws the scene of one sample.
     pub fn scene(&self, sample: u64) -> Result<SceneSpec, RecipeError> {
         let context = format!("while drawing the scene of sample {sample}");
-        let rng = ScriptRng::new(Stream::new(self.dataset.seed, StreamScope::Sample(sample), "scene"), sample);
+        let rng = ScriptRng::new(
+            Stream::new(self.dataset.seed, StreamScope::Sample(sample), "scene"),
+            sample,
+        );
         // Captured variables are shared cells; give each call private copies so that a scene
         // function that mutates them cannot make one sample depend on another.
         let mut scene = self.scene.clone();
@@ -110,7 +125,8 @@ impl Recipe {
         let value: Dynamic = scene
             .call(&self.engine, &self.ast, (rng,))
             .map_err(|e| RecipeError::eval(&e, &self.label, &self.sources, Some(&context)))?;
-        let structures = structures(value).map_err(|m| RecipeError::plain(format!("{}: {m} ({context})", self.label)))?;
+        let structures = structures(value)
+            .map_err(|m| RecipeError::plain(format!("{}: {m} ({context})", self.label)))?;
         Ok(SceneSpec { structures })
     }
 }
@@ -118,7 +134,11 @@ impl Recipe {
 /// The structures a scene function returned: one structure, or a list of them.
 fn structures(value: Dynamic) -> Result<Vec<Structure>, String> {
     let type_name = value.type_name().to_string();
-    let list = if value.is_array() { value.cast::<Array>() } else { vec![value] };
+    let list = if value.is_array() {
+        value.cast::<Array>()
+    } else {
+        vec![value]
+    };
     if list.is_empty() {
         return Err("the scene function returned an empty list; it must return a structure or a list of them".into());
     }
@@ -137,15 +157,24 @@ fn structures(value: Dynamic) -> Result<Vec<Structure>, String> {
         .collect()
 }
 
-fn resolved_params(params: &Params, overrides: &[(String, String)]) -> Result<BTreeMap<String, serde_json::Value>, RecipeError> {
+fn resolved_params(
+    params: &Params,
+    overrides: &[(String, String)],
+) -> Result<BTreeMap<String, serde_json::Value>, RecipeError> {
     let resolved = params.resolved.lock().unwrap().clone();
     for (name, value) in overrides {
         if !resolved.contains_key(name) {
             let known: Vec<&str> = resolved.keys().map(String::as_str).collect();
-            let hint = options::nearest(name, &known).map(|k| format!("; did you mean `{k}`?")).unwrap_or_default();
+            let hint = options::nearest(name, &known)
+                .map(|k| format!("; did you mean `{k}`?"))
+                .unwrap_or_default();
             return Err(RecipeError::plain(format!(
                 "--set {name}={value}: the recipe declares no parameter `{name}`{hint} (it declares: {})",
-                if known.is_empty() { "none".to_string() } else { known.join(", ") }
+                if known.is_empty() {
+                    "none".to_string()
+                } else {
+                    known.join(", ")
+                }
             )));
         }
     }
@@ -157,7 +186,9 @@ fn imports(ast: &AST) -> Vec<(String, String)> {
     let mut found = Vec::new();
     ast.walk(&mut |path: &[ASTNode]| {
         if let [ASTNode::Stmt(Stmt::Import(x, _))] = path {
-            let module = x.0.get_literal_value(None).and_then(|v| v.into_immutable_string().ok());
+            let module =
+                x.0.get_literal_value(None)
+                    .and_then(|v| v.into_immutable_string().ok());
             if let (Some(module), alias) = (module, &x.1.name) {
                 if !alias.is_empty() {
                     found.push((module.to_string(), alias.to_string()));

@@ -21,23 +21,42 @@ pub fn number(value: &Dynamic, name: &str) -> OptResult<f64> {
     } else if let Ok(i) = value.as_int() {
         i as f64
     } else {
-        return Err(format!("{name} = {value} ({}) must be a number", value.type_name()));
+        return Err(format!(
+            "{name} = {value} ({}) must be a number",
+            value.type_name()
+        ));
     };
-    if x.is_finite() { Ok(x) } else { Err(format!("{name} = {x} is not a finite number")) }
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(format!("{name} = {x} is not a finite number"))
+    }
 }
 
 pub fn positive(value: &Dynamic, name: &str, unit: &str) -> OptResult<f64> {
     let x = number(value, name)?;
-    if x > 0.0 { Ok(x) } else { Err(format!("{name} = {x} must be positive ({unit})")) }
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{name} = {x} must be positive ({unit})"))
+    }
 }
 
 impl Options {
     pub fn new(map: Map, context: impl Into<String>) -> Self {
-        Options { map, context: context.into(), known: Vec::new() }
+        Options {
+            map,
+            context: context.into(),
+            known: Vec::new(),
+        }
     }
 
     fn path(&self, key: &str) -> String {
-        if self.context.is_empty() { key.to_string() } else { format!("{}.{key}", self.context) }
+        if self.context.is_empty() {
+            key.to_string()
+        } else {
+            format!("{}.{key}", self.context)
+        }
     }
 
     /// Removes and returns an option, recording its name as known.
@@ -48,7 +67,8 @@ impl Options {
 
     pub fn required(&mut self, key: &'static str) -> OptResult<Dynamic> {
         let path = self.path(key);
-        self.take(key).ok_or_else(|| format!("missing option `{path}`"))
+        self.take(key)
+            .ok_or_else(|| format!("missing option `{path}`"))
     }
 
     pub fn number(&mut self, key: &'static str, default: f64) -> OptResult<f64> {
@@ -62,35 +82,65 @@ impl Options {
     }
 
     /// An integer in [min, max].
-    pub fn integer(&mut self, key: &'static str, default: i64, min: i64, max: i64) -> OptResult<i64> {
+    pub fn integer(
+        &mut self,
+        key: &'static str,
+        default: i64,
+        min: i64,
+        max: i64,
+    ) -> OptResult<i64> {
         let path = self.path(key);
-        let Some(v) = self.take(key) else { return Ok(default) };
-        let i = v.as_int().map_err(|_| format!("{path} = {v} must be a whole number"))?;
-        if (min..=max).contains(&i) { Ok(i) } else { Err(format!("{path} = {i} must be between {min} and {max}")) }
+        let Some(v) = self.take(key) else {
+            return Ok(default);
+        };
+        let i = v
+            .as_int()
+            .map_err(|_| format!("{path} = {v} must be a whole number"))?;
+        if (min..=max).contains(&i) {
+            Ok(i)
+        } else {
+            Err(format!("{path} = {i} must be between {min} and {max}"))
+        }
     }
 
     pub fn string(&mut self, key: &'static str, default: &str) -> OptResult<String> {
         let path = self.path(key);
         match self.take(key) {
             None => Ok(default.to_string()),
-            Some(v) => v.into_immutable_string().map(|s| s.to_string()).map_err(|t| format!("{path} must be a string, not {t}")),
+            Some(v) => v
+                .into_immutable_string()
+                .map(|s| s.to_string())
+                .map_err(|t| format!("{path} must be a string, not {t}")),
         }
     }
 
     /// A range `[lo, hi]` (lo ≤ hi), or a single number meaning `[x, x]`.
     pub fn range(&mut self, key: &'static str, default: [f64; 2]) -> OptResult<[f64; 2]> {
         let path = self.path(key);
-        let Some(v) = self.take(key) else { return Ok(default) };
+        let Some(v) = self.take(key) else {
+            return Ok(default);
+        };
         let r = if let Some(arr) = v.clone().try_cast::<rhai::Array>() {
             match arr.as_slice() {
                 [lo, hi] => [number(lo, &path)?, number(hi, &path)?],
-                _ => return Err(format!("{path} = {v} must be a number or a range [low, high]")),
+                _ => {
+                    return Err(format!(
+                        "{path} = {v} must be a number or a range [low, high]"
+                    ));
+                }
             }
         } else {
             let x = number(&v, &path)?;
             [x, x]
         };
-        if r[0] <= r[1] { Ok(r) } else { Err(format!("{path} = [{}, {}]: the low end exceeds the high end", r[0], r[1])) }
+        if r[0] <= r[1] {
+            Ok(r)
+        } else {
+            Err(format!(
+                "{path} = [{}, {}]: the low end exceeds the high end",
+                r[0], r[1]
+            ))
+        }
     }
 
     /// A colour `[r, g, b]`, sRGB components in [0, 1].
@@ -112,18 +162,30 @@ impl Options {
 
     /// Fails on any option that was never asked for.
     pub fn finish(self) -> OptResult<()> {
-        let Some((key, _)) = self.map.iter().next() else { return Ok(()) };
+        let Some((key, _)) = self.map.iter().next() else {
+            return Ok(());
+        };
         let mut known = self.known.clone();
         known.sort_unstable();
         known.dedup();
-        let hint = nearest(key, &known).map(|k| format!("; did you mean `{k}`?")).unwrap_or_default();
-        Err(format!("unknown option `{}`{hint} (known: {})", self.path(key), known.join(", ")))
+        let hint = nearest(key, &known)
+            .map(|k| format!("; did you mean `{k}`?"))
+            .unwrap_or_default();
+        Err(format!(
+            "unknown option `{}`{hint} (known: {})",
+            self.path(key),
+            known.join(", ")
+        ))
     }
 }
 
 pub fn colour(v: &Dynamic, path: &str) -> OptResult<[f64; 3]> {
     let arr = v.clone().try_cast::<rhai::Array>().filter(|a| a.len() == 3);
-    let Some(arr) = arr else { return Err(format!("{path} = {v} must be [red, green, blue] with components in 0..1")) };
+    let Some(arr) = arr else {
+        return Err(format!(
+            "{path} = {v} must be [red, green, blue] with components in 0..1"
+        ));
+    };
     let mut c = [0.0; 3];
     for (slot, x) in c.iter_mut().zip(&arr) {
         *slot = number(x, path)?;
@@ -151,7 +213,9 @@ fn edit_distance(a: &str, b: &str) -> usize {
         let mut prev = row[0];
         row[0] = i + 1;
         for (j, &cb) in b.iter().enumerate() {
-            let next = (prev + usize::from(ca != cb)).min(row[j] + 1).min(row[j + 1] + 1);
+            let next = (prev + usize::from(ca != cb))
+                .min(row[j] + 1)
+                .min(row[j + 1] + 1);
             prev = row[j + 1];
             row[j + 1] = next;
         }
@@ -176,9 +240,15 @@ mod tests {
         map.insert("widht".into(), Dynamic::from(0.2));
         map.insert("height".into(), Dynamic::from(f64::NAN));
         let mut o = Options::new(map, "beam");
-        assert_eq!(o.number("height", 1.0).unwrap_err(), "beam.height = NaN is not a finite number");
+        assert_eq!(
+            o.number("height", 1.0).unwrap_err(),
+            "beam.height = NaN is not a finite number"
+        );
         assert_eq!(o.number("width", 1.0), Ok(1.0));
         let e = o.finish().unwrap_err();
-        assert!(e.starts_with("unknown option `beam.widht`; did you mean `width`?"), "{e}");
+        assert!(
+            e.starts_with("unknown option `beam.widht`; did you mean `width`?"),
+            "{e}"
+        );
     }
 }

@@ -2,19 +2,21 @@
 //! and `assembly(name, [...])`, which gathers shapes (and merges other assemblies) into one
 //! structure. Descriptions only: tessellation happens in Rust when the scene is built.
 
-use super::api::{fail, Fallible};
+use super::api::{Fallible, fail};
 use super::engine::Sources;
-use super::options::{number, Options};
-use crate::geometry::import::{import_mesh, ImportOptions};
-use crate::geometry::primitives::Primitive;
+use super::options::{Options, number};
 use crate::geometry::Mesh;
-use std::collections::BTreeMap;
-use std::path::{Component, Path, PathBuf};
-use std::sync::{Arc, Mutex};
+use crate::geometry::import::{ImportOptions, import_mesh};
+use crate::geometry::primitives::Primitive;
 use crate::mechanics::ShellPattern;
 use crate::scene::{AssemblySpec, BeamSpec, Bending, LabelledPattern, ShapeSpec};
 use glam::{DAffine3, DVec3};
-use rhai::{Array, Dynamic, Engine, EvalAltResult, ImmutableString, Map, Module, NativeCallContext};
+use rhai::{
+    Array, Dynamic, Engine, EvalAltResult, ImmutableString, Map, Module, NativeCallContext,
+};
+use std::collections::BTreeMap;
+use std::path::{Component, Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 /// Mesh files a recipe imports: read once per recipe, only from inside the recipe's folder.
 pub struct MeshFiles {
@@ -25,7 +27,11 @@ pub struct MeshFiles {
 
 impl MeshFiles {
     pub fn new(folder: &Path, sources: Arc<Sources>) -> Self {
-        MeshFiles { folder: folder.to_path_buf(), sources, cache: Mutex::default() }
+        MeshFiles {
+            folder: folder.to_path_buf(),
+            sources,
+            cache: Mutex::default(),
+        }
     }
 
     fn load(&self, file: &str, normalize: bool) -> Result<Arc<Mesh>, String> {
@@ -34,8 +40,14 @@ impl MeshFiles {
             return Ok(mesh.clone());
         }
         let relative = Path::new(file);
-        if file.is_empty() || !relative.components().all(|c| matches!(c, Component::Normal(_))) {
-            return Err(format!("shape::mesh(\"{file}\"): mesh files are named relative to the recipe's folder, without '..' or absolute paths"));
+        if file.is_empty()
+            || !relative
+                .components()
+                .all(|c| matches!(c, Component::Normal(_)))
+        {
+            return Err(format!(
+                "shape::mesh(\"{file}\"): mesh files are named relative to the recipe's folder, without '..' or absolute paths"
+            ));
         }
         let path = self.folder.join(relative);
         let imported = import_mesh(&path, ImportOptions { normalize })?;
@@ -43,7 +55,10 @@ impl MeshFiles {
             eprintln!("warning: {}: {warning}", path.display());
         }
         let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-        self.sources.insert(&path.display().to_string(), &format!("mesh file, blake3 {}", blake3::hash(&bytes).to_hex()));
+        self.sources.insert(
+            &path.display().to_string(),
+            &format!("mesh file, blake3 {}", blake3::hash(&bytes).to_hex()),
+        );
         let mesh = Arc::new(imported.mesh);
         self.cache.lock().unwrap().insert(key, mesh.clone());
         Ok(mesh)
@@ -55,8 +70,18 @@ pub fn register(engine: &mut Engine, files: Arc<MeshFiles>) {
     engine.register_type_with_name::<AssemblySpec>("Assembly");
     let mut shapes = primitives();
     let one = files.clone();
-    shapes.set_native_fn("mesh", move |ctx: NativeCallContext, file: ImmutableString| imported(&ctx, &one, &file, Map::new()));
-    shapes.set_native_fn("mesh", move |ctx: NativeCallContext, file: ImmutableString, options: Map| imported(&ctx, &files, &file, options));
+    shapes.set_native_fn(
+        "mesh",
+        move |ctx: NativeCallContext, file: ImmutableString| {
+            imported(&ctx, &one, &file, Map::new())
+        },
+    );
+    shapes.set_native_fn(
+        "mesh",
+        move |ctx: NativeCallContext, file: ImmutableString, options: Map| {
+            imported(&ctx, &files, &file, options)
+        },
+    );
     engine.register_static_module("shape", shapes.into());
     register_placement(engine);
     // Bend a shape (an imported mesh, say) as a beam: along `axis`, deflecting `towards`.
@@ -69,83 +94,159 @@ pub fn register(engine: &mut Engine, files: Arc<MeshFiles>) {
         Ok(s.clone())
     });
     register_shell_patterns(engine);
-    engine.register_fn("detail", |s: &mut ShapeSpec, segments: i64, rings: i64| -> Fallible<ShapeSpec> {
-        if !(3..=100_000).contains(&segments) || !(1..=100_000).contains(&rings) {
-            return fail(format!("detail({segments}, {rings}): segments must be 3–100000 and rings 1–100000"));
-        }
-        s.detail = Some([segments as u32, rings as u32]);
-        Ok(s.clone())
-    });
+    engine.register_fn(
+        "detail",
+        |s: &mut ShapeSpec, segments: i64, rings: i64| -> Fallible<ShapeSpec> {
+            if !(3..=100_000).contains(&segments) || !(1..=100_000).contains(&rings) {
+                return fail(format!(
+                    "detail({segments}, {rings}): segments must be 3–100000 and rings 1–100000"
+                ));
+            }
+            s.detail = Some([segments as u32, rings as u32]);
+            Ok(s.clone())
+        },
+    );
     engine.register_fn("part", |s: &mut ShapeSpec, name: ImmutableString| {
         s.part = name.to_string();
         s.clone()
     });
-    engine.register_fn("assembly", |name: ImmutableString, items: Array| -> Fallible<AssemblySpec> {
-        let mut assembly = AssemblySpec { name: name.to_string(), shapes: Vec::new(), material: Default::default() };
-        for item in items {
-            let item = match item.try_cast_result::<ShapeSpec>() {
-                Ok(shape) => {
-                    assembly.shapes.push(shape);
-                    continue;
-                }
-                Err(other) => other,
+    engine.register_fn(
+        "assembly",
+        |name: ImmutableString, items: Array| -> Fallible<AssemblySpec> {
+            let mut assembly = AssemblySpec {
+                name: name.to_string(),
+                shapes: Vec::new(),
+                material: Default::default(),
             };
-            match item.try_cast_result::<AssemblySpec>() {
-                Ok(other) => assembly.shapes.extend(other.shapes),
-                Err(other) => return fail(format!("assembly \"{name}\": {other} ({}) is neither a shape nor an assembly", other.type_name())),
+            for item in items {
+                let item = match item.try_cast_result::<ShapeSpec>() {
+                    Ok(shape) => {
+                        assembly.shapes.push(shape);
+                        continue;
+                    }
+                    Err(other) => other,
+                };
+                match item.try_cast_result::<AssemblySpec>() {
+                    Ok(other) => assembly.shapes.extend(other.shapes),
+                    Err(other) => {
+                        return fail(format!(
+                            "assembly \"{name}\": {other} ({}) is neither a shape nor an assembly",
+                            other.type_name()
+                        ));
+                    }
+                }
             }
-        }
-        if assembly.shapes.is_empty() {
-            return fail(format!("assembly \"{name}\" has no shapes"));
-        }
-        Ok(assembly)
-    });
-    engine.register_fn("colour", |a: &mut AssemblySpec, rgb: Array| -> Fallible<AssemblySpec> {
-        a.material.colour = super::options::colour(&Dynamic::from(rgb), "colour")?;
-        Ok(a.clone())
-    });
+            if assembly.shapes.is_empty() {
+                return fail(format!("assembly \"{name}\" has no shapes"));
+            }
+            Ok(assembly)
+        },
+    );
+    engine.register_fn(
+        "colour",
+        |a: &mut AssemblySpec, rgb: Array| -> Fallible<AssemblySpec> {
+            a.material.colour = super::options::colour(&Dynamic::from(rgb), "colour")?;
+            Ok(a.clone())
+        },
+    );
 }
 
 /// `shape::box(w, d, h)` and friends; a bad dimension is reported at the call.
 fn primitives() -> Module {
     let mut m = Module::new();
-    m.set_native_fn("box", |ctx: NativeCallContext, w: Dynamic, d: Dynamic, h: Dynamic| {
-        make(&ctx, || Ok(Primitive::Box { size: [number(&w, "box width")?, number(&d, "box depth")?, number(&h, "box height")?] }))
-    });
-    m.set_native_fn("cylinder", |ctx: NativeCallContext, r: Dynamic, h: Dynamic| {
-        make(&ctx, || {
-            let r = number(&r, "cylinder radius")?;
-            Ok(Primitive::Frustum { bottom_radius: r, top_radius: r, height: number(&h, "cylinder height")? })
-        })
-    });
+    m.set_native_fn(
+        "box",
+        |ctx: NativeCallContext, w: Dynamic, d: Dynamic, h: Dynamic| {
+            make(&ctx, || {
+                Ok(Primitive::Box {
+                    size: [
+                        number(&w, "box width")?,
+                        number(&d, "box depth")?,
+                        number(&h, "box height")?,
+                    ],
+                })
+            })
+        },
+    );
+    m.set_native_fn(
+        "cylinder",
+        |ctx: NativeCallContext, r: Dynamic, h: Dynamic| {
+            make(&ctx, || {
+                let r = number(&r, "cylinder radius")?;
+                Ok(Primitive::Frustum {
+                    bottom_radius: r,
+                    top_radius: r,
+                    height: number(&h, "cylinder height")?,
+                })
+            })
+        },
+    );
     m.set_native_fn("cone", |ctx: NativeCallContext, r: Dynamic, h: Dynamic| {
-        make(&ctx, || Ok(Primitive::Frustum { bottom_radius: number(&r, "cone radius")?, top_radius: 0.0, height: number(&h, "cone height")? }))
-    });
-    m.set_native_fn("frustum", |ctx: NativeCallContext, r0: Dynamic, r1: Dynamic, h: Dynamic| {
         make(&ctx, || {
             Ok(Primitive::Frustum {
-                bottom_radius: number(&r0, "frustum bottom radius")?,
-                top_radius: number(&r1, "frustum top radius")?,
-                height: number(&h, "frustum height")?,
+                bottom_radius: number(&r, "cone radius")?,
+                top_radius: 0.0,
+                height: number(&h, "cone height")?,
             })
         })
     });
+    m.set_native_fn(
+        "frustum",
+        |ctx: NativeCallContext, r0: Dynamic, r1: Dynamic, h: Dynamic| {
+            make(&ctx, || {
+                Ok(Primitive::Frustum {
+                    bottom_radius: number(&r0, "frustum bottom radius")?,
+                    top_radius: number(&r1, "frustum top radius")?,
+                    height: number(&h, "frustum height")?,
+                })
+            })
+        },
+    );
     for name in ["tube", "ring"] {
-        m.set_native_fn(name, move |ctx: NativeCallContext, r: Dynamic, h: Dynamic, t: Dynamic| {
-            make(&ctx, || Ok(Primitive::Tube { radius: number(&r, "tube radius")?, height: number(&h, "tube height")?, wall: number(&t, "tube wall")? }))
-        });
+        m.set_native_fn(
+            name,
+            move |ctx: NativeCallContext, r: Dynamic, h: Dynamic, t: Dynamic| {
+                make(&ctx, || {
+                    Ok(Primitive::Tube {
+                        radius: number(&r, "tube radius")?,
+                        height: number(&h, "tube height")?,
+                        wall: number(&t, "tube wall")?,
+                    })
+                })
+            },
+        );
     }
     m.set_native_fn("cap", |ctx: NativeCallContext, r: Dynamic, h: Dynamic| {
-        make(&ctx, || Ok(Primitive::SphericalCap { radius: number(&r, "cap sphere radius")?, height: number(&h, "cap height")? }))
-    });
-    m.set_native_fn("extrude", |ctx: NativeCallContext, profile: Array, length: Dynamic| {
-        make(&ctx, || Ok(Primitive::Extrusion { profile: profile_points(&profile)?, length: number(&length, "extrude length")? }))
-    });
-    m.set_native_fn("bend", |ctx: NativeCallContext, profile: Array, radius: Dynamic, angle: Dynamic| {
         make(&ctx, || {
-            Ok(Primitive::Bend { profile: profile_points(&profile)?, radius: number(&radius, "bend radius")?, angle: number(&angle, "bend angle")? })
+            Ok(Primitive::SphericalCap {
+                radius: number(&r, "cap sphere radius")?,
+                height: number(&h, "cap height")?,
+            })
         })
     });
+    m.set_native_fn(
+        "extrude",
+        |ctx: NativeCallContext, profile: Array, length: Dynamic| {
+            make(&ctx, || {
+                Ok(Primitive::Extrusion {
+                    profile: profile_points(&profile)?,
+                    length: number(&length, "extrude length")?,
+                })
+            })
+        },
+    );
+    m.set_native_fn(
+        "bend",
+        |ctx: NativeCallContext, profile: Array, radius: Dynamic, angle: Dynamic| {
+            make(&ctx, || {
+                Ok(Primitive::Bend {
+                    profile: profile_points(&profile)?,
+                    radius: number(&radius, "bend radius")?,
+                    angle: number(&angle, "bend angle")?,
+                })
+            })
+        },
+    );
     m
 }
 
@@ -154,38 +255,91 @@ fn primitives() -> Module {
 /// `.elephant_foot(A, height)`; amplitudes in metres.
 fn register_shell_patterns(engine: &mut Engine) {
     fn add(s: &mut ShapeSpec, pattern: ShellPattern) -> Fallible<ShapeSpec> {
-        let Some(shell) = s.shell() else { return fail("shell patterns apply to tubes (shape::tube)".to_string()) };
+        let Some(shell) = s.shell() else {
+            return fail("shell patterns apply to tubes (shape::tube)".to_string());
+        };
         pattern.validate(&shell).or_else(fail)?;
         s.shell.push(LabelledPattern::new(pattern, &shell));
         Ok(s.clone())
     }
-    engine.register_fn("ovalise", |s: &mut ShapeSpec, a: Dynamic, n: i64, towards: Dynamic| -> Fallible<ShapeSpec> {
-        let n = u32::try_from(n).map_err(|_| format!("ovalisation n = {n} must be between 1 and 64"))?;
-        add(s, ShellPattern::Ovalisation { amplitude: number(&a, "ovalise amplitude")?, n, towards: number(&towards, "ovalise towards")? })
-    });
-    engine.register_fn("hoop_expansion", |s: &mut ShapeSpec, a: Dynamic| -> Fallible<ShapeSpec> {
-        add(s, ShellPattern::HoopExpansion { amplitude: number(&a, "hoop_expansion amplitude")? })
-    });
-    engine.register_fn("dimple", |s: &mut ShapeSpec, a: Dynamic, angle: Dynamic, height: Dynamic, radius: Dynamic| -> Fallible<ShapeSpec> {
-        add(s, ShellPattern::Dimple {
-            amplitude: number(&a, "dimple amplitude")?,
-            angle: number(&angle, "dimple angle")?,
-            height: number(&height, "dimple height")?,
-            radius: number(&radius, "dimple radius")?,
-        })
-    });
-    engine.register_fn("buckle", |s: &mut ShapeSpec, a: Dynamic, angle: Dynamic, height: Dynamic, radius: Dynamic, wavelength: Dynamic| -> Fallible<ShapeSpec> {
-        add(s, ShellPattern::Buckle {
-            amplitude: number(&a, "buckle amplitude")?,
-            angle: number(&angle, "buckle angle")?,
-            height: number(&height, "buckle height")?,
-            radius: number(&radius, "buckle radius")?,
-            wavelength: number(&wavelength, "buckle wavelength")?,
-        })
-    });
-    engine.register_fn("elephant_foot", |s: &mut ShapeSpec, a: Dynamic, height: Dynamic| -> Fallible<ShapeSpec> {
-        add(s, ShellPattern::ElephantFoot { amplitude: number(&a, "elephant_foot amplitude")?, height: number(&height, "elephant_foot height")? })
-    });
+    engine.register_fn(
+        "ovalise",
+        |s: &mut ShapeSpec, a: Dynamic, n: i64, towards: Dynamic| -> Fallible<ShapeSpec> {
+            let n = u32::try_from(n)
+                .map_err(|_| format!("ovalisation n = {n} must be between 1 and 64"))?;
+            add(
+                s,
+                ShellPattern::Ovalisation {
+                    amplitude: number(&a, "ovalise amplitude")?,
+                    n,
+                    towards: number(&towards, "ovalise towards")?,
+                },
+            )
+        },
+    );
+    engine.register_fn(
+        "hoop_expansion",
+        |s: &mut ShapeSpec, a: Dynamic| -> Fallible<ShapeSpec> {
+            add(
+                s,
+                ShellPattern::HoopExpansion {
+                    amplitude: number(&a, "hoop_expansion amplitude")?,
+                },
+            )
+        },
+    );
+    engine.register_fn(
+        "dimple",
+        |s: &mut ShapeSpec,
+         a: Dynamic,
+         angle: Dynamic,
+         height: Dynamic,
+         radius: Dynamic|
+         -> Fallible<ShapeSpec> {
+            add(
+                s,
+                ShellPattern::Dimple {
+                    amplitude: number(&a, "dimple amplitude")?,
+                    angle: number(&angle, "dimple angle")?,
+                    height: number(&height, "dimple height")?,
+                    radius: number(&radius, "dimple radius")?,
+                },
+            )
+        },
+    );
+    engine.register_fn(
+        "buckle",
+        |s: &mut ShapeSpec,
+         a: Dynamic,
+         angle: Dynamic,
+         height: Dynamic,
+         radius: Dynamic,
+         wavelength: Dynamic|
+         -> Fallible<ShapeSpec> {
+            add(
+                s,
+                ShellPattern::Buckle {
+                    amplitude: number(&a, "buckle amplitude")?,
+                    angle: number(&angle, "buckle angle")?,
+                    height: number(&height, "buckle height")?,
+                    radius: number(&radius, "buckle radius")?,
+                    wavelength: number(&wavelength, "buckle wavelength")?,
+                },
+            )
+        },
+    );
+    engine.register_fn(
+        "elephant_foot",
+        |s: &mut ShapeSpec, a: Dynamic, height: Dynamic| -> Fallible<ShapeSpec> {
+            add(
+                s,
+                ShellPattern::ElephantFoot {
+                    amplitude: number(&a, "elephant_foot amplitude")?,
+                    height: number(&height, "elephant_foot height")?,
+                },
+            )
+        },
+    );
 }
 
 /// "x", "-z", ...: a signed coordinate axis.
@@ -197,24 +351,42 @@ fn direction(name: &str) -> Fallible<DVec3> {
         "-y" => -DVec3::Y,
         "z" | "+z" => DVec3::Z,
         "-z" => -DVec3::Z,
-        other => return fail(format!("direction \"{other}\" is not one of x, y, z, -x, -y, -z")),
+        other => {
+            return fail(format!(
+                "direction \"{other}\" is not one of x, y, z, -x, -y, -z"
+            ));
+        }
     })
 }
 
 /// `shape::mesh("file", #{ normalize: true })`.
-fn imported(ctx: &NativeCallContext, files: &MeshFiles, file: &str, options: Map) -> Result<ShapeSpec, Box<EvalAltResult>> {
+fn imported(
+    ctx: &NativeCallContext,
+    files: &MeshFiles,
+    file: &str,
+    options: Map,
+) -> Result<ShapeSpec, Box<EvalAltResult>> {
     make(ctx, || {
         let mut o = Options::new(options, "shape::mesh options");
         let normalize = match o.take("normalize") {
             None => false,
-            Some(v) => v.as_bool().map_err(|_| format!("shape::mesh options.normalize = {v} must be true or false"))?,
+            Some(v) => v.as_bool().map_err(|_| {
+                format!("shape::mesh options.normalize = {v} must be true or false")
+            })?,
         };
         o.finish()?;
-        Ok(Primitive::Imported { file: file.to_string(), normalize, mesh: files.load(file, normalize)? })
+        Ok(Primitive::Imported {
+            file: file.to_string(),
+            normalize,
+            mesh: files.load(file, normalize)?,
+        })
     })
 }
 
-fn make(ctx: &NativeCallContext, build: impl FnOnce() -> Result<Primitive, String>) -> Result<ShapeSpec, Box<EvalAltResult>> {
+fn make(
+    ctx: &NativeCallContext,
+    build: impl FnOnce() -> Result<Primitive, String>,
+) -> Result<ShapeSpec, Box<EvalAltResult>> {
     let at = |msg: String| Box::new(EvalAltResult::ErrorRuntime(msg.into(), ctx.call_position()));
     let primitive = build().map_err(at)?;
     primitive.validate().map_err(at)?;
@@ -253,7 +425,9 @@ fn register_placement(engine: &mut Engine) {
             });
         };
     }
-    placement!("translate", |x, y, z| DAffine3::from_translation(DVec3::new(x, y, z)));
+    placement!("translate", |x, y, z| DAffine3::from_translation(
+        DVec3::new(x, y, z)
+    ));
     placement!("rotate_x", |angle| DAffine3::from_rotation_x(angle));
     placement!("rotate_y", |angle| DAffine3::from_rotation_y(angle));
     placement!("rotate_z", |angle| DAffine3::from_rotation_z(angle));

@@ -10,5 +10,5 @@ mod shade;
 mod trace;
 mod watertight;
 
-pub use shade::{shade, srgb_to_linear, Lighting};
-pub use trace::{GBuffer, TraceMesh, NO_HIT};
+pub use shade::{Lighting, shade, srgb_to_linear};
+pub use trace::{GBuffer, NO_HIT, TraceMesh};

@@ -4,10 +4,10 @@ use super::watertight::ShearedRay;
 use crate::cameras::Camera;
 use crate::geometry::Mesh;
 use glam::{DVec3, Vec3A};
-use obvhs::bvh2::{builder::build_bvh2_from_tris, Bvh2};
+use obvhs::BvhBuildParams;
+use obvhs::bvh2::{Bvh2, builder::build_bvh2_from_tris};
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
-use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 use std::time::Duration;
 
@@ -54,9 +54,17 @@ impl TraceMesh {
         let tris: Vec<Triangle> = mesh
             .triangles
             .iter()
-            .map(|t| Triangle { v0: local(t[0]), v1: local(t[1]), v2: local(t[2]) })
+            .map(|t| Triangle {
+                v0: local(t[0]),
+                v1: local(t[1]),
+                v2: local(t[2]),
+            })
             .collect();
-        let bvh = build_bvh2_from_tris(&tris, BvhBuildParams::medium_build(), &mut Duration::default());
+        let bvh = build_bvh2_from_tris(
+            &tris,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
         let triangles = bvh.primitive_indices.iter().map(|&i| {
             let t = &tris[i as usize];
             [t.v0, t.v1, t.v2]
@@ -104,13 +112,19 @@ impl TraceMesh {
                     }
                 }
             });
-        GBuffer { width: k.width, height: k.height, depth, triangle }
+        GBuffer {
+            width: k.width,
+            height: k.height,
+            depth,
+            triangle,
+        }
     }
 
     /// The triangle first hit along `view` (camera axes) from the camera, if any.
     pub fn first_hit(&self, camera: &Camera, view: DVec3) -> Option<u32> {
         let origin = camera.position - self.anchor;
-        self.closest_hit(origin, origin.as_vec3a(), camera.rotation * view).map(|(_, tri)| tri)
+        self.closest_hit(origin, origin.as_vec3a(), camera.rotation * view)
+            .map(|(_, tri)| tri)
     }
 
     /// Planar depth and original triangle of the first surface along `dir` (unit camera z).
@@ -133,7 +147,11 @@ impl TraceMesh {
         let n = self.normals[tri as usize];
         let denom = n.dot(dir);
         let refined = n.dot(a.as_dvec3() - origin) / denom;
-        let t = if refined.is_finite() && refined > 0.0 { refined as f32 } else { hit.t };
+        let t = if refined.is_finite() && refined > 0.0 {
+            refined as f32
+        } else {
+            hit.t
+        };
         (t > 0.0 && t.is_finite()).then_some((t, tri))
     }
 
@@ -143,7 +161,12 @@ impl TraceMesh {
         let k = camera.intrinsics;
         let full = (0..k.height as usize, 0..k.width as usize);
         let (lo, hi) = self.local_bounds;
-        let (mut u0, mut v0, mut u1, mut v1) = (f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+        let (mut u0, mut v0, mut u1, mut v1) = (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        );
         for i in 0..8 {
             let corner = DVec3::new(
                 if i & 1 == 0 { lo.x } else { hi.x },
@@ -158,6 +181,9 @@ impl TraceMesh {
             (u0, v0, u1, v1) = (u0.min(u), v0.min(v), u1.max(u), v1.max(v));
         }
         let clamp = |x: f64, n: u32| x.clamp(0.0, f64::from(n)) as usize;
-        (clamp(v0.floor() - 1.0, k.height)..clamp(v1.ceil() + 1.0, k.height), clamp(u0.floor() - 1.0, k.width)..clamp(u1.ceil() + 1.0, k.width))
+        (
+            clamp(v0.floor() - 1.0, k.height)..clamp(v1.ceil() + 1.0, k.height),
+            clamp(u0.floor() - 1.0, k.width)..clamp(u1.ceil() + 1.0, k.width),
+        )
     }
 }

@@ -17,7 +17,13 @@ pub struct ShearedRay {
 impl ShearedRay {
     pub fn new(origin: Vec3A, direction: Vec3A) -> Self {
         let a = direction.abs();
-        let kz = if a.x > a.y { if a.x > a.z { 0 } else { 2 } } else if a.y > a.z { 1 } else { 2 };
+        let kz = if a.x > a.y {
+            if a.x > a.z { 0 } else { 2 }
+        } else if a.y > a.z {
+            1
+        } else {
+            2
+        };
         let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
         // Keep the winding of the projected triangle when the major axis points backwards.
         if direction[kz] < 0.0 {
@@ -44,7 +50,9 @@ impl ShearedRay {
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
         if u == 0.0 || v == 0.0 || w == 0.0 {
-            let wide = |p: f32, q: f32, r: f32, t: f32| (f64::from(p) * f64::from(q) - f64::from(r) * f64::from(t)) as f32;
+            let wide = |p: f32, q: f32, r: f32, t: f32| {
+                (f64::from(p) * f64::from(q) - f64::from(r) * f64::from(t)) as f32
+            };
             u = wide(cx, by, cy, bx);
             v = wide(ax, cy, ay, cx);
             w = wide(bx, ay, by, ax);
@@ -58,7 +66,11 @@ impl ShearedRay {
         }
         let t_scaled = s.z * (u * a[kz] + v * b[kz] + w * c[kz]);
         let t = t_scaled / det;
-        if t > 0.0 && t < t_max { t } else { f32::INFINITY }
+        if t > 0.0 && t < t_max {
+            t
+        } else {
+            f32::INFINITY
+        }
     }
 }
 
@@ -87,7 +99,12 @@ mod tests {
         // Two triangles sharing the diagonal of a quad; rays swept exactly across the diagonal
         // from awkward directions must hit at least one of them every time. (The end points are
         // outer corners of the open quad, where no hit is promised.)
-        let q = [v(-1.3, -0.7, 4.1), v(2.9, -0.2, 3.3), v(2.1, 1.9, 5.7), v(-0.4, 1.1, 6.2)];
+        let q = [
+            v(-1.3, -0.7, 4.1),
+            v(2.9, -0.2, 3.3),
+            v(2.1, 1.9, 5.7),
+            v(-0.4, 1.1, 6.2),
+        ];
         let mut leaks = 0;
         for i in 1..400 {
             let s = i as f32 / 400.0;

@@ -1,9 +1,10 @@
 //! A straight beam: section, supports, loads, theory, tessellation and placement.
 
-use crate::geometry::{beam_mesh, Mesh};
+use crate::geometry::{Mesh, beam_mesh};
 use crate::materials::Material;
 use crate::mechanics::{
-    section_frames, BeamProblem, Deformation, Load, Mapping, Section, Support, Target, Theory, STEEL_E, STEEL_FY, STEEL_NU,
+    BeamProblem, Deformation, Load, Mapping, STEEL_E, STEEL_FY, STEEL_NU, Section, Support, Target,
+    Theory, section_frames,
 };
 use glam::{DMat3, DVec3};
 use serde::Serialize;
@@ -98,7 +99,8 @@ impl BeamSpec {
 
     /// Radius of the undeformed beam's bounding sphere.
     pub fn radius(&self) -> f64 {
-        0.5 * (self.length.powi(2) + self.section.width().powi(2) + self.section.height().powi(2)).sqrt()
+        0.5 * (self.length.powi(2) + self.section.width().powi(2) + self.section.height().powi(2))
+            .sqrt()
     }
 
     /// Solves the mechanics and meshes the deformed beam. `pixel_footprint` is the size of a
@@ -113,16 +115,33 @@ impl BeamSpec {
         let segments = match self.tessellation {
             Tessellation::Segments(n) => n as usize,
             Tessellation::Paper => crate::mechanics::PAPER_DIVISIONS,
-            Tessellation::Chord(_) | Tessellation::Pixels(_) => segments_for_chord(self.length, deformation.max_curvature(self.length), tolerance),
+            Tessellation::Chord(_) | Tessellation::Pixels(_) => segments_for_chord(
+                self.length,
+                deformation.max_curvature(self.length),
+                tolerance,
+            ),
         };
         let outline = match self.tessellation {
-            Tessellation::Paper => self.section.paper_outline().ok_or("the paper's mesh exists only for the rectangular section")?,
+            Tessellation::Paper => self
+                .section
+                .paper_outline()
+                .ok_or("the paper's mesh exists only for the rectangular section")?,
             _ => self.section.outline(tolerance),
         };
         let stations = stations(self.length, segments, &self.kinks(&deformation));
         let frames = section_frames(&stations, self.mapping, |x| deformation.at(x));
-        let mesh = beam_mesh(self.length, &frames, &outline, DMat3::from_rotation_z(self.yaw), DVec3::from_array(self.centre));
-        Ok(BuiltBeam { mesh, deformation, segments })
+        let mesh = beam_mesh(
+            self.length,
+            &frames,
+            &outline,
+            DMat3::from_rotation_z(self.yaw),
+            DVec3::from_array(self.centre),
+        );
+        Ok(BuiltBeam {
+            mesh,
+            deformation,
+            segments,
+        })
     }
 
     /// Where the deflected shape has kinks or its peak: these become stations.
@@ -142,7 +161,11 @@ impl BeamSpec {
 /// Uniform intervals whose chord error h²κ/8 stays below `tolerance`.
 pub fn segments_for_chord(length: f64, curvature: f64, tolerance: f64) -> usize {
     let n = (length * (curvature / (8.0 * tolerance)).sqrt()).ceil();
-    if n.is_finite() { (n as usize).clamp(1, 100_000) } else { 100_000 }
+    if n.is_finite() {
+        (n as usize).clamp(1, 100_000)
+    } else {
+        100_000
+    }
 }
 
 /// `segments` equal intervals plus the kinks, without slivers closer than 1e-9 L.
@@ -169,15 +192,33 @@ mod tests {
     use crate::mechanics::Load;
 
     fn closed_and_oriented(mesh: &crate::geometry::Mesh) {
-        assert!(mesh.is_closed_and_oriented(), "mesh is open or inconsistently oriented");
+        assert!(
+            mesh.is_closed_and_oriented(),
+            "mesh is open or inconsistently oriented"
+        );
     }
 
     fn sections() -> [Section; 4] {
         [
-            Section::Rectangle { width: 0.3, height: 0.5 },
-            Section::ISection { width: 0.15, height: 0.3, flange: 0.0107, web: 0.0071 },
-            Section::HollowBox { width: 0.2, height: 0.3, wall: 0.01 },
-            Section::CircularHollow { diameter: 0.32, wall: 0.01 },
+            Section::Rectangle {
+                width: 0.3,
+                height: 0.5,
+            },
+            Section::ISection {
+                width: 0.15,
+                height: 0.3,
+                flange: 0.0107,
+                web: 0.0071,
+            },
+            Section::HollowBox {
+                width: 0.2,
+                height: 0.3,
+                wall: 0.01,
+            },
+            Section::CircularHollow {
+                diameter: 0.32,
+                wall: 0.01,
+            },
         ]
     }
 
@@ -190,8 +231,16 @@ mod tests {
             closed_and_oriented(&mesh);
             let area = section.properties(0.3).area;
             // Circles are inscribed polygons: their area is short by O(tolerance/r).
-            let tol = if matches!(section, Section::CircularHollow { .. }) { 1e-3 } else { 1e-12 };
-            assert!((mesh.signed_volume() / (4.0 * area) - 1.0).abs() < tol, "{section:?}: {}", mesh.signed_volume() / (4.0 * area));
+            let tol = if matches!(section, Section::CircularHollow { .. }) {
+                1e-3
+            } else {
+                1e-12
+            };
+            assert!(
+                (mesh.signed_volume() / (4.0 * area) - 1.0).abs() < tol,
+                "{section:?}: {}",
+                mesh.signed_volume() / (4.0 * area)
+            );
         }
     }
 
@@ -209,7 +258,10 @@ mod tests {
     fn deformed_axis_passes_through_the_target_deflection() {
         let mut b = BeamSpec::rectangular(3.0, 0.3, 0.5);
         b.support = Support::Cantilever;
-        b.loads = vec![Load::Point { at: 3.0, force: 1.0 }];
+        b.loads = vec![Load::Point {
+            at: 3.0,
+            force: 1.0,
+        }];
         b.target = Target::Peak { deflection: 0.12 };
         let built = b.build(1e-3).unwrap();
         let n = built.mesh.positions.len();
@@ -222,7 +274,10 @@ mod tests {
 
     #[test]
     fn stations_include_kinks_and_both_ends() {
-        assert_eq!(stations(2.0, 4, &[0.3, 1.0, 2.0, 0.0]), vec![0.0, 0.3, 0.5, 1.0, 1.5, 2.0]);
+        assert_eq!(
+            stations(2.0, 4, &[0.3, 1.0, 2.0, 0.0]),
+            vec![0.0, 0.3, 0.5, 1.0, 1.5, 2.0]
+        );
     }
 
     #[test]
@@ -230,6 +285,9 @@ mod tests {
         // SS centre load: κ_max = 12δ/L², e_N = 1.5 δ/N² (mechanics.md §8.1).
         let (l, delta, tol) = (4.0, 0.2, 1e-3);
         let n = segments_for_chord(l, 12.0 * delta / (l * l), tol);
-        assert!(1.5 * delta / (n * n) as f64 <= tol && 1.5 * delta / ((n - 1) * (n - 1)) as f64 > tol, "n = {n}");
+        assert!(
+            1.5 * delta / (n * n) as f64 <= tol && 1.5 * delta / ((n - 1) * (n - 1)) as f64 > tol,
+            "n = {n}"
+        );
     }
 }

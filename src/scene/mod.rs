@@ -9,7 +9,7 @@ mod assembly;
 mod beam;
 
 pub use assembly::{AssemblySpec, Bending, LabelledPattern, ShapeSpec};
-pub use beam::{segments_for_chord, stations, BeamSpec, BuiltBeam, Tessellation};
+pub use beam::{BeamSpec, BuiltBeam, Tessellation, segments_for_chord, stations};
 
 use crate::cameras::CameraRig;
 use serde::Serialize;
