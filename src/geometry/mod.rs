@@ -1,9 +1,8 @@
 //! Triangle meshes of structures, in f64, in world coordinates.
 //!
 //! Owns: the indexed mesh type, the sweep mesher, the tessellation of beams and primitives, and
-//! (in `import` alone) reading and writing mesh files.
-//! Must not touch: mechanics formulas (it asks `mechanics` where section points go), cameras,
-//! rendering or files.
+//! (in `import` alone) reading and writing mesh files. Must not touch: mechanics formulas (it
+//! asks `mechanics` where section points go), cameras, rendering, or any other file.
 
 mod beam;
 pub mod import;

@@ -31,6 +31,20 @@ pub enum Load {
     },
 }
 
+/// Positions on the span where the loads put kinks into the deflected shape: stations there
+/// keep every mesh vertex on the exact curve.
+pub fn kinks(loads: &[Load]) -> Vec<f64> {
+    let mut k = Vec::new();
+    for load in loads {
+        match *load {
+            Load::Point { at, .. } => k.push(at),
+            Load::Distributed { from, to, .. } => k.extend([from, to]),
+            Load::EndMoments { .. } => {}
+        }
+    }
+    k
+}
+
 /// One station of a linear solution, for unit EI (divide by EI for physical values).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Station {

@@ -1,10 +1,12 @@
-//! Beam mechanics: how a straight beam deflects, and how its material moves with it.
+//! Structural mechanics: how a straight beam deflects, how its material moves with it, and how
+//! a cylindrical shell may be deformed.
 //!
 //! Owns: the linear theories (Euler–Bernoulli, Timoshenko) for four support cases and any mix
-//! of loads, the choice of theory by estimated error, the derived labels (load, moment,
-//! stress, plausibility) and the mapping of section points onto the deformed axis. Must not
-//! touch: meshes, cameras or files; it works on plain numbers in the beam's own frame (axis
-//! along x from 0 to L, deflection v positive downward).
+//! of loads, the cantilever elastica, vibration mode shapes, the choice of theory by estimated
+//! error, the derived labels (load, moment, stress, plausibility), the mapping of section
+//! points onto the deformed axis, cross-sections, and silo shell patterns with their plausible
+//! amplitudes. Must not touch: meshes, cameras or files; it works on plain numbers in the
+//! beam's own frame (axis along x from 0 to L, deflection v positive downward).
 //!
 //! Formulas, reference values and traps: `shared/research/mechanics.md`.
 
@@ -16,7 +18,7 @@ mod modes;
 mod section;
 mod shell;
 
-pub use linear::{LinearBeam, Load, Station};
+pub use linear::{LinearBeam, Load, Station, kinks};
 pub use mapping::{AxisPoint, Mapping, SectionFrame, section_frames};
 pub use model::{BeamProblem, Deformation, Labels, Target, Theory};
 pub use modes::ModeShape;

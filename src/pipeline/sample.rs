@@ -6,7 +6,7 @@ use crate::mechanics::Labels;
 use crate::output::{SampleStage, depth_exr, id_png, mask_png, rgb_png, view_file};
 use crate::recipe::Recipe;
 use crate::render::{GBuffer, Lighting, NO_HIT, TraceMesh, shade};
-use crate::scene::{DatasetSpec, SceneSpec, Structure};
+use crate::scene::{DatasetSpec, PIXEL_TOLERANCE, SceneSpec, Structure};
 use crate::seeds::{Scope, Stream};
 use anyhow::{Result, bail};
 use glam::DVec3;
@@ -49,7 +49,7 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
             }
             Structure::Assembly(a) => {
                 let tolerance =
-                    TOLERANCE_PX * recipe.dataset.camera.nearest_pixel_footprint(a.radius());
+                    PIXEL_TOLERANCE * recipe.dataset.camera.nearest_pixel_footprint(a.radius());
                 for (mesh, part) in a.build(tolerance).map_err(failed)? {
                     assembled.add(&mesh, i, part);
                 }
@@ -90,10 +90,6 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
         radius,
     })
 }
-
-/// Chord tolerance of primitives, as a fraction of a pixel at the nearest camera (the beams'
-/// default too).
-const TOLERANCE_PX: f64 = 0.1;
 
 /// The scene mesh being put together, with each triangle's structure and part.
 #[derive(Default)]
@@ -145,6 +141,7 @@ pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage)
         .collect();
     let background = dataset.background.map(|c| (c * 255.0).round() as u8);
     let lighting = Lighting::default();
+    let scene = scene_json(sample);
     for view in 0..dataset.views {
         let (camera, draw) = view_camera(dataset, sample, view);
         let g = trace_mesh.trace(&camera);
@@ -185,7 +182,7 @@ pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage)
                 id_png(w, h, &ids(&g, &sample.owner)),
             )?;
         }
-        let meta = view_json(recipe, sample, view, &camera, &draw, &g, files);
+        let meta = view_json(recipe, sample, view, &camera, &draw, &g, files, &scene);
         let path = view_file(sample.index, view, "json");
         let mut bytes = serde_json::to_vec_pretty(&meta)?;
         bytes.push(b'\n');
@@ -215,16 +212,9 @@ fn mask(g: &GBuffer) -> Vec<u8> {
         .collect()
 }
 
-fn view_json(
-    recipe: &Recipe,
-    sample: &PreparedSample,
-    view: u32,
-    camera: &Camera,
-    draw: &ViewDraw,
-    g: &GBuffer,
-    files: serde_json::Map<String, Value>,
-) -> Value {
-    let k = camera.intrinsics;
+/// What every view of a sample shares: its structures with their labels, and the id tables
+/// of the segmentation images.
+fn scene_json(sample: &PreparedSample) -> Value {
     let structures: Vec<Value> = sample
         .scene
         .structures
@@ -256,6 +246,24 @@ fn view_json(
                 }
             }),
     );
+    json!({
+        "structures": structures,
+        "segmentation": { "part_ids": part_ids, "instance_ids": instance_ids, "encoding": "PNG grey, 8-bit when every id fits, else 16-bit; 0 = background" },
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn view_json(
+    recipe: &Recipe,
+    sample: &PreparedSample,
+    view: u32,
+    camera: &Camera,
+    draw: &ViewDraw,
+    g: &GBuffer,
+    files: serde_json::Map<String, Value>,
+    scene: &Value,
+) -> Value {
+    let k = camera.intrinsics;
     let hits = g.triangle.iter().filter(|&&t| t != NO_HIT).count();
     json!({
         "schema": VIEW_SCHEMA,
@@ -285,9 +293,9 @@ fn view_json(
         },
         "depth": { "kind": "planar_z", "unit": "m", "no_surface": 0.0, "channel": crate::output::DEPTH_CHANNEL },
         "mask": { "structure": 255, "background": 0 },
-        "segmentation": { "part_ids": part_ids, "instance_ids": instance_ids, "encoding": "PNG grey, 8-bit when every id fits, else 16-bit; 0 = background" },
+        "segmentation": scene["segmentation"],
         "background": recipe.dataset.background,
-        "scene": { "structures": structures },
+        "scene": { "structures": scene["structures"] },
         "mesh": { "vertices": sample.mesh.positions.len(), "triangles": sample.mesh.triangles.len(), "bounding_radius": sample.radius },
         "coverage": hits as f64 / g.triangle.len() as f64,
     })

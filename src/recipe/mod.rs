@@ -2,7 +2,8 @@
 //!
 //! Owns: the sandboxed engine, module imports, recipe parameters (`param` and `--set`),
 //! the recipe API and error reporting with file:line:col. Must not touch: meshes, rendering
-//! or files other than the recipe and the modules it imports. A recipe is evaluated once to
+//! or files other than the recipe, the modules it imports and the mesh files it names (all
+//! inside the recipe's folder or `stdlib/`). A recipe is evaluated once to
 //! get the dataset settings; its scene function is then called once per sample with a random
 //! source derived from (seed, sample, "scene"), so samples can be drawn in any order, on any
 //! thread, with the same result.
@@ -50,13 +51,9 @@ impl Recipe {
         let label = path.display().to_string();
         let sources = Arc::new(Sources::default());
         sources.insert(&label, &text);
-        let folder = path
-            .parent()
-            .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
-        let folder = if folder.as_os_str().is_empty() {
-            PathBuf::from(".")
-        } else {
-            folder
+        let folder = match path.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
+            _ => PathBuf::from("."),
         };
         let resolver = Arc::new(Resolver::new(&folder, sources.clone()));
         let params = Arc::new(Params {
@@ -65,8 +62,12 @@ impl Recipe {
         });
         let files = Arc::new(shape_api::MeshFiles::new(&folder, sources.clone()));
 
-        let mut engine = engine::sandboxed(resolver.clone());
-        api::register(&mut engine, params.clone(), files.clone());
+        let new_engine = || {
+            let mut engine = engine::sandboxed(resolver.clone());
+            api::register(&mut engine, params.clone(), files.clone());
+            engine
+        };
+        let engine = new_engine();
         let mut ast = engine
             .compile(&text)
             .map_err(|e| RecipeError::parse(&e, &label, &sources))?;
@@ -83,8 +84,7 @@ impl Recipe {
 
         // Closures called later no longer see the recipe's imports: give them the imported
         // modules as static modules under the same aliases.
-        let mut sample_engine = engine::sandboxed(resolver.clone());
-        api::register(&mut sample_engine, params.clone(), files);
+        let mut sample_engine = new_engine();
         for (module, alias) in imports(&ast) {
             let m = resolver
                 .resolve(&engine, &module, Position::NONE)

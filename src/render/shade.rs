@@ -46,11 +46,12 @@ pub fn shade(
 ) -> Vec<u8> {
     let width = g.width as usize;
     let background_linear = background.map(|c| srgb_to_linear(f64::from(c) / 255.0));
+    let to_camera = camera.rotation.transpose();
     let radiance = |tri: Option<u32>, view: DVec3| -> [f64; 3] {
         let Some(tri) = tri else {
             return background_linear;
         };
-        let mut n = camera.rotation.transpose() * mesh.normal(tri);
+        let mut n = to_camera * mesh.normal(tri);
         // Two-sided: light the face the camera sees.
         if n.dot(view) > 0.0 {
             n = -n;

@@ -1,10 +1,11 @@
 //! Assemblies: structures built in recipes from labelled, transformed primitives.
 
 use super::BeamSpec;
+use super::beam::segments_for_chord;
 use crate::geometry::Mesh;
 use crate::geometry::primitives::Primitive;
 use crate::materials::Material;
-use crate::mechanics::{Deformation, Load, Shell, ShellPattern, section_frames};
+use crate::mechanics::{Deformation, Shell, ShellPattern, kinks, section_frames};
 use glam::{DAffine3, DMat3, DVec3};
 use serde::Serialize;
 
@@ -187,9 +188,7 @@ fn deformed_shell(
         .iter()
         .map(|p| p.pattern.curvatures(shell))
         .fold((0.0, 0.0), |(a, b), (z, s)| (a + z, b + s));
-    let need = |length: f64, k: f64| {
-        ((length * (k / (8.0 * tolerance)).sqrt()).ceil() as usize).clamp(1, 4096)
-    };
+    let need = |length: f64, k: f64| segments_for_chord(length, k, tolerance).min(4096);
     // An even ring count puts a ring at mid-height, where wind lobes peak.
     let rings = need(shell.height, kz).next_multiple_of(2);
     let segments = need(2.0 * std::f64::consts::PI * shell.radius, ks);
@@ -208,6 +207,16 @@ fn deformed_shell(
     mesh
 }
 
+/// Smallest and largest coordinate of the mesh along `direction`.
+fn range_along(mesh: &Mesh, direction: DVec3) -> (f64, f64) {
+    mesh.positions
+        .iter()
+        .map(|p| p.dot(direction))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        })
+}
+
 /// Moves every vertex with the deformed beam: sections turn with the bending rotation and the
 /// axis shortens, exactly as for a meshed beam (the vertices are the stations).
 fn bend(mesh: &mut Mesh, b: &Bending) -> Result<(), String> {
@@ -218,12 +227,7 @@ fn bend(mesh: &mut Mesh, b: &Bending) -> Result<(), String> {
     let up = -towards;
     let across = up.cross(axis);
     let along = |p: DVec3| p.dot(axis);
-    let (lo, hi) = mesh
-        .positions
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &p| {
-            (lo.min(along(p)), hi.max(along(p)))
-        });
+    let (lo, hi) = range_along(mesh, axis);
     let extent = hi - lo;
     if (extent - b.beam.length).abs() > 1e-6 * extent {
         return Err(format!(
@@ -231,22 +235,11 @@ fn bend(mesh: &mut Mesh, b: &Bending) -> Result<(), String> {
             b.beam.length
         ));
     }
-    let neutral = {
-        let (zl, zh) = mesh
-            .positions
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &p| {
-                (l.min(p.dot(up)), h.max(p.dot(up)))
-            });
-        0.5 * (zl + zh)
-    };
+    let (bottom, top) = range_along(mesh, up);
+    let neutral = 0.5 * (bottom + top);
     let deformation = Deformation::solve(&b.beam.problem())?;
     let mut stations: Vec<f64> = mesh.positions.iter().map(|&p| along(p) - lo).collect();
-    stations.extend(b.beam.loads.iter().flat_map(|l| match *l {
-        Load::Point { at, .. } => vec![at],
-        Load::Distributed { from, to, .. } => vec![from, to],
-        Load::EndMoments { .. } => vec![],
-    }));
+    stations.extend(kinks(&b.beam.loads));
     stations.push(0.0);
     stations.sort_by(f64::total_cmp);
     stations.dedup();
@@ -264,6 +257,7 @@ fn bend(mesh: &mut Mesh, b: &Bending) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mechanics::Load;
 
     #[test]
     fn a_bent_box_matches_the_same_beam_meshed_directly() {

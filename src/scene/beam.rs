@@ -4,7 +4,7 @@ use crate::geometry::{Mesh, beam_mesh};
 use crate::materials::Material;
 use crate::mechanics::{
     BeamProblem, Deformation, Load, Mapping, STEEL_E, STEEL_FY, STEEL_NU, Section, Support, Target,
-    Theory, section_frames,
+    Theory, kinks, section_frames,
 };
 use glam::{DMat3, DVec3};
 use serde::Serialize;
@@ -67,7 +67,7 @@ impl BeamSpec {
             vibration: Vec::new(),
             model_tolerance: 0.01,
             mapping: Mapping::default(),
-            tessellation: Tessellation::Pixels(0.1),
+            tessellation: Tessellation::Pixels(super::PIXEL_TOLERANCE),
             elastic_modulus: STEEL_E,
             poisson: STEEL_NU,
             yield_strength: STEEL_FY,
@@ -110,6 +110,7 @@ impl BeamSpec {
         let tolerance = match self.tessellation {
             Tessellation::Chord(metres) => metres,
             Tessellation::Pixels(fraction) => fraction * pixel_footprint,
+            // A fixed count along the length still leaves the section's circles to the rule.
             Tessellation::Segments(_) | Tessellation::Paper => 0.25 * pixel_footprint,
         };
         let segments = match self.tessellation {
@@ -146,14 +147,8 @@ impl BeamSpec {
 
     /// Where the deflected shape has kinks or its peak: these become stations.
     fn kinks(&self, d: &Deformation) -> Vec<f64> {
-        let mut k = vec![d.labels.max_deflection_at];
-        for load in &self.loads {
-            match *load {
-                Load::Point { at, .. } => k.push(at),
-                Load::Distributed { from, to, .. } => k.extend([from, to]),
-                Load::EndMoments { .. } => {}
-            }
-        }
+        let mut k = kinks(&self.loads);
+        k.push(d.labels.max_deflection_at);
         k
     }
 }

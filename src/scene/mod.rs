@@ -9,10 +9,14 @@ mod assembly;
 mod beam;
 
 pub use assembly::{AssemblySpec, Bending, LabelledPattern, ShapeSpec};
-pub use beam::{BeamSpec, BuiltBeam, Tessellation, segments_for_chord, stations};
+pub use beam::{BeamSpec, BuiltBeam, Tessellation};
 
 use crate::cameras::CameraRig;
 use serde::Serialize;
+
+/// Default chord tolerance of every curved surface, beams and primitives alike: this fraction of
+/// a pixel at the nearest camera the rig can place.
+pub const PIXEL_TOLERANCE: f64 = 0.1;
 
 /// Dataset-wide settings declared by a recipe.
 #[derive(Clone, Debug, PartialEq, Serialize)]
