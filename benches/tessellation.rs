@@ -117,9 +117,7 @@ fn main() {
             let mut reference = beam.clone();
             reference.tessellation = Tessellation::Segments(4096);
             let reference_mesh = reference.build(footprint).unwrap().mesh;
-            let (lo, hi) = reference_mesh.bounds().unwrap();
-            let centre = 0.5 * (lo + hi);
-            let radius = reference_mesh.positions.iter().map(|p| p.distance(centre)).fold(0.0, f64::max);
+            let (centre, radius) = reference_mesh.bounding_sphere().unwrap();
             let cameras: Vec<_> = (0..views).map(|v| rig.draw(&mut Stream::new(1, Scope::View(0, v), "camera"), centre, radius).0).collect();
             let reference_trace = TraceMesh::build(&reference_mesh);
             let truth: Vec<_> = cameras.iter().map(|c| reference_trace.trace(c)).collect();

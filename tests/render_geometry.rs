@@ -265,13 +265,7 @@ fn closed_meshes_have_no_holes_from_200_cameras_including_the_poles() {
     for (b, beam) in deformed_beams().iter().enumerate() {
         let mesh = built(beam);
         let trace = TraceMesh::build(&mesh);
-        let (lo, hi) = mesh.bounds().unwrap();
-        let centre = 0.5 * (lo + hi);
-        let radius = mesh
-            .positions
-            .iter()
-            .map(|p| p.distance(centre))
-            .fold(0.0, f64::max);
+        let (centre, radius) = mesh.bounding_sphere().unwrap();
         for view in 0..200u32 {
             let cam = match view {
                 // Exact poles and a camera exactly along the beam axis.
@@ -453,13 +447,7 @@ fn a_deformed_beam_one_kilometre_away_renders_like_one_at_the_origin() {
     };
     let render = |b: &BeamSpec| {
         let mesh = built(b);
-        let (lo, hi) = mesh.bounds().unwrap();
-        let centre = 0.5 * (lo + hi);
-        let radius = mesh
-            .positions
-            .iter()
-            .map(|p| p.distance(centre))
-            .fold(0.0, f64::max);
+        let (centre, radius) = mesh.bounding_sphere().unwrap();
         let (cam, _) = rig.draw(
             &mut Stream::new(2, Scope::View(0, 0), "camera"),
             centre,

@@ -40,6 +40,19 @@ impl Mesh {
         )
     }
 
+    /// A sphere around the bounding box's centre holding every vertex; None for an empty mesh.
+    /// Cameras aim at its centre and frame its radius.
+    pub fn bounding_sphere(&self) -> Option<(DVec3, f64)> {
+        let (lo, hi) = self.bounds()?;
+        let centre = 0.5 * (lo + hi);
+        let radius = self
+            .positions
+            .iter()
+            .map(|p| p.distance(centre))
+            .fold(0.0, f64::max);
+        Some((centre, radius))
+    }
+
     pub fn triangle(&self, t: usize) -> [DVec3; 3] {
         self.triangles[t].map(|i| self.positions[i as usize])
     }

@@ -387,13 +387,6 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
-    fn closed_and_oriented(mesh: &crate::geometry::Mesh) {
-        assert!(
-            mesh.is_closed_and_oriented(),
-            "mesh is open or inconsistently oriented"
-        );
-    }
-
     /// Area of a regular n-gon of circumradius r: the exact face of our tessellated circles.
     fn ngon(n: usize, r: f64) -> f64 {
         0.5 * n as f64 * r * r * (TAU / n as f64).sin()
@@ -406,7 +399,7 @@ mod tests {
             size: [2.0, 3.0, 0.5],
         }
         .mesh(tol);
-        closed_and_oriented(&b);
+        assert!(b.is_closed_and_oriented());
         assert!(
             (b.signed_volume() - 3.0).abs() < 1e-12
                 && (b.area() - 2.0 * (6.0 + 1.0 + 1.5)).abs() < 1e-12
@@ -420,7 +413,7 @@ mod tests {
             height: h,
         }
         .mesh(tol);
-        closed_and_oriented(&f);
+        assert!(f.is_closed_and_oriented());
         let n = circle_segments(r0, tol);
         let (b0, b1) = (ngon(n, r0), ngon(n, r1));
         assert!((f.signed_volume() - h / 3.0 * (b0 + b1 + (b0 * b1).sqrt())).abs() < 1e-9);
@@ -436,7 +429,7 @@ mod tests {
             height: 3.0,
         }
         .mesh(tol);
-        closed_and_oriented(&cone);
+        assert!(cone.is_closed_and_oriented());
         assert!((cone.signed_volume() - ngon(circle_segments(1.0, tol), 1.0)).abs() < 1e-9);
 
         // Tube: h(B(r) − B(r − t)); lateral area = h × (outer + inner perimeters) + 2 annuli.
@@ -447,7 +440,7 @@ mod tests {
             wall: t,
         }
         .mesh(tol);
-        closed_and_oriented(&tube);
+        assert!(tube.is_closed_and_oriented());
         let n = circle_segments(r, tol);
         let side = |rr: f64| n as f64 * 2.0 * rr * (PI / n as f64).sin();
         assert!((tube.signed_volume() - h * (ngon(n, r) - ngon(n, r - t))).abs() < 1e-9);
@@ -463,7 +456,7 @@ mod tests {
             height: 0.8,
         }
         .mesh(1e-4);
-        closed_and_oriented(&cap);
+        assert!(cap.is_closed_and_oriented());
         let exact = PI * 0.64 * (6.0 - 0.8) / 3.0;
         assert!(
             (cap.signed_volume() / exact - 1.0).abs() < 1e-3,
@@ -485,7 +478,7 @@ mod tests {
             length: 4.0,
         }
         .mesh(tol);
-        closed_and_oriented(&e);
+        assert!(e.is_closed_and_oriented());
         assert!((e.signed_volume() - 4.0 * 1.5).abs() < 1e-12);
         // Clockwise input is accepted and turned around.
         let reversed: Vec<[f64; 2]> = l_shape.iter().rev().copied().collect();
@@ -509,7 +502,7 @@ mod tests {
             angle: PI / 2.0,
         }
         .mesh(1e-5);
-        closed_and_oriented(&bend);
+        assert!(bend.is_closed_and_oriented());
         assert!((bend.signed_volume() / (0.04 * 2.0 * PI / 2.0) - 1.0).abs() < 1e-4);
     }
 

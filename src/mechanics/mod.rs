@@ -22,6 +22,8 @@ pub use linear::{LinearBeam, Load, Station, kinks};
 pub use mapping::{AxisPoint, Mapping, SectionFrame, section_frames};
 pub use model::{BeamProblem, Deformation, Labels, Target, Theory};
 pub use modes::ModeShape;
+#[cfg(test)]
+pub(crate) use section::examples as section_examples;
 pub use section::{PAPER_DIVISIONS, Section, SectionOutline, SectionProperties, circle_segments};
 pub(crate) use section::{annulus, rectangle_grid};
 pub use shell::{Shell, ShellPattern};

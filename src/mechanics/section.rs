@@ -244,6 +244,33 @@ impl Section {
     }
 }
 
+/// One section of each kind, for tests across the crate (the I-section is an IPE 300:
+/// 150 × 300, tf 10.7, tw 7.1, root fillets ignored).
+#[cfg(test)]
+pub fn examples() -> Vec<Section> {
+    vec![
+        Section::Rectangle {
+            width: 0.3,
+            height: 0.5,
+        },
+        Section::ISection {
+            width: 0.150,
+            height: 0.300,
+            flange: 0.0107,
+            web: 0.0071,
+        },
+        Section::HollowBox {
+            width: 0.2,
+            height: 0.3,
+            wall: 0.01,
+        },
+        Section::CircularHollow {
+            diameter: 0.3239,
+            wall: 0.01,
+        },
+    ]
+}
+
 /// Five 1→4 subdivisions of a cube face: 2⁵ divisions per edge.
 pub const PAPER_DIVISIONS: usize = 32;
 
@@ -363,31 +390,6 @@ pub(crate) fn annulus(outer: Vec<DVec2>, inner: Vec<DVec2>) -> SectionOutline {
 mod tests {
     use super::*;
 
-    fn sections() -> Vec<Section> {
-        vec![
-            Section::Rectangle {
-                width: 0.3,
-                height: 0.5,
-            },
-            // IPE 300: 150 × 300, tf 10.7, tw 7.1 (r = 15 mm root fillets ignored).
-            Section::ISection {
-                width: 0.150,
-                height: 0.300,
-                flange: 0.0107,
-                web: 0.0071,
-            },
-            Section::HollowBox {
-                width: 0.2,
-                height: 0.3,
-                wall: 0.01,
-            },
-            Section::CircularHollow {
-                diameter: 0.3239,
-                wall: 0.01,
-            },
-        ]
-    }
-
     /// Area and second moment of the meshed face by the polygon (Green's theorem) formulas.
     fn outline_integrals(o: &SectionOutline) -> (f64, f64) {
         let (mut area, mut iy) = (0.0, 0.0);
@@ -404,7 +406,7 @@ mod tests {
 
     #[test]
     fn properties_match_the_meshed_outline_and_handbook_values() {
-        for s in sections() {
+        for s in examples() {
             let p = s.properties(0.3);
             // Polygons are exact; the tube is an inscribed polygon at 1e-7 m sagitta.
             let (area, second_moment) = outline_integrals(&s.outline(1e-7));
@@ -422,7 +424,7 @@ mod tests {
         }
         // IPE 300 tables (with 15 mm root fillets): A = 53.8 cm², I = 8356 cm⁴. The four fillets
         // add 4(1 − π/4)r² = 1.93 cm² of area and about 4 % of I, which this section omits.
-        let ipe = sections()[1].properties(0.3);
+        let ipe = examples()[1].properties(0.3);
         assert!(
             (ipe.area * 1e4 - (53.8 - 1.93)).abs() < 0.05,
             "{}",
@@ -434,7 +436,7 @@ mod tests {
             ipe.second_moment * 1e8
         );
         // Cowper's values: rectangle 0.8497, thin tube → 2(1+ν)/(4+3ν) = 0.5306.
-        assert!((sections()[0].properties(0.3).shear_coefficient - 0.8497).abs() < 1e-4);
+        assert!((examples()[0].properties(0.3).shear_coefficient - 0.8497).abs() < 1e-4);
         let thin = Section::CircularHollow {
             diameter: 1.0,
             wall: 1e-4,
@@ -445,7 +447,7 @@ mod tests {
 
     #[test]
     fn caps_cover_the_section_once_with_counter_clockwise_triangles() {
-        for s in sections().into_iter().chain([Section::Rectangle {
+        for s in examples().into_iter().chain([Section::Rectangle {
             width: 1.0,
             height: 2.0,
         }]) {

@@ -68,13 +68,9 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
             "sample {index}: the deformed mesh has non-finite vertices (check the structure's dimensions and loads)"
         );
     }
-    let (lo, hi) = mesh.bounds().expect("a scene has at least one structure");
-    let centre = 0.5 * (lo + hi);
-    let radius = mesh
-        .positions
-        .iter()
-        .map(|p| p.distance(centre))
-        .fold(0.0, f64::max);
+    let (centre, radius) = mesh
+        .bounding_sphere()
+        .expect("a scene has at least one structure");
     if !(radius > 0.0 && radius.is_finite()) {
         bail!("sample {index}: the scene has no extent (radius {radius})");
     }

@@ -186,44 +186,13 @@ mod tests {
     use super::*;
     use crate::mechanics::Load;
 
-    fn closed_and_oriented(mesh: &crate::geometry::Mesh) {
-        assert!(
-            mesh.is_closed_and_oriented(),
-            "mesh is open or inconsistently oriented"
-        );
-    }
-
-    fn sections() -> [Section; 4] {
-        [
-            Section::Rectangle {
-                width: 0.3,
-                height: 0.5,
-            },
-            Section::ISection {
-                width: 0.15,
-                height: 0.3,
-                flange: 0.0107,
-                web: 0.0071,
-            },
-            Section::HollowBox {
-                width: 0.2,
-                height: 0.3,
-                wall: 0.01,
-            },
-            Section::CircularHollow {
-                diameter: 0.32,
-                wall: 0.01,
-            },
-        ]
-    }
-
     #[test]
     fn every_section_gives_a_closed_mesh_with_the_section_volume() {
-        for section in sections() {
+        for section in crate::mechanics::section_examples() {
             let mut b = BeamSpec::new(4.0, section.clone());
             b.tessellation = Tessellation::Chord(1e-5);
             let mesh = b.build(1e-3).unwrap().mesh;
-            closed_and_oriented(&mesh);
+            assert!(mesh.is_closed_and_oriented());
             let area = section.properties(0.3).area;
             // Circles are inscribed polygons: their area is short by O(tolerance/r).
             let tol = if matches!(section, Section::CircularHollow { .. }) {
@@ -245,7 +214,7 @@ mod tests {
         b.tessellation = Tessellation::Paper;
         let mesh = b.build(1e-3).unwrap().mesh;
         assert_eq!(mesh.triangles.len(), 12_288);
-        closed_and_oriented(&mesh);
+        assert!(mesh.is_closed_and_oriented());
         assert!((mesh.signed_volume() - 2.0 * 0.2 * 0.1).abs() < 1e-12);
     }
 
@@ -262,7 +231,7 @@ mod tests {
         let n = built.mesh.positions.len();
         let tip: glam::DVec3 = built.mesh.positions[n - 4..].iter().sum::<glam::DVec3>() / 4.0;
         assert!((tip.z + 0.12).abs() < 1e-12, "{tip}");
-        closed_and_oriented(&built.mesh);
+        assert!(built.mesh.is_closed_and_oriented());
         // Bending keeps the volume to second order in the rotation.
         assert!((built.mesh.signed_volume() / (3.0 * 0.15) - 1.0).abs() < 1e-4);
     }
