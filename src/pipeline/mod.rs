@@ -8,7 +8,9 @@
 mod progress;
 mod sample;
 
-pub use sample::{PreparedSample, VIEW_SCHEMA, prepare, render, view_camera};
+pub use sample::{
+    PreparedSample, RenderedView, SampleRenderer, VIEW_SCHEMA, prepare, render, view_camera,
+};
 
 use crate::output::DatasetFolder;
 use crate::recipe::Recipe;

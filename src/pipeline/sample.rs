@@ -125,22 +125,97 @@ pub fn view_camera(
         .draw(&mut stream, sample.centre, sample.radius)
 }
 
+/// Everything a sample's views share: the BVH, the surface look of every structure and the
+/// lighting. Built once per sample; `view` renders one view into memory.
+pub struct SampleRenderer<'a> {
+    recipe: &'a Recipe,
+    sample: &'a PreparedSample,
+    trace_mesh: TraceMesh,
+    albedo: Vec<[f64; 3]>,
+    lighting: Lighting,
+}
+
+/// One view of a sample, rendered into memory.
+pub struct RenderedView {
+    pub view: u32,
+    pub camera: Camera,
+    pub draw: ViewDraw,
+    pub gbuffer: GBuffer,
+    /// sRGB 8-bit, row-major, when the dataset asks for RGB.
+    pub rgb: Option<Vec<u8>>,
+}
+
+impl<'a> SampleRenderer<'a> {
+    pub fn new(recipe: &'a Recipe, sample: &'a PreparedSample) -> Self {
+        let albedo = sample
+            .scene
+            .structures
+            .iter()
+            .map(|s| s.material().albedo())
+            .collect();
+        SampleRenderer {
+            recipe,
+            sample,
+            trace_mesh: TraceMesh::build(&sample.mesh),
+            albedo,
+            lighting: Lighting::default(),
+        }
+    }
+
+    pub fn view(&self, view: u32) -> RenderedView {
+        let dataset = &self.recipe.dataset;
+        let (camera, draw) = view_camera(dataset, self.sample, view);
+        let gbuffer = self.trace_mesh.trace(&camera);
+        let rgb = dataset.outputs.rgb.then(|| {
+            shade(
+                &gbuffer,
+                &self.trace_mesh,
+                &camera,
+                &self.lighting,
+                |t| self.albedo[self.sample.owner[t as usize] as usize],
+                dataset.background.map(|c| (c * 255.0).round() as u8),
+                dataset.antialias,
+            )
+        });
+        RenderedView {
+            view,
+            camera,
+            draw,
+            gbuffer,
+            rgb,
+        }
+    }
+}
+
+impl RenderedView {
+    /// 255 where the centre ray hit a structure, 0 elsewhere.
+    pub fn mask(&self) -> Vec<u8> {
+        self.gbuffer
+            .triangle
+            .iter()
+            .map(|&t| if t == NO_HIT { 0 } else { 255 })
+            .collect()
+    }
+
+    /// Part id of every pixel (see `PreparedSample::parts`; 0 = background).
+    pub fn part_ids(&self, sample: &PreparedSample) -> Vec<u16> {
+        ids(&self.gbuffer, &sample.part)
+    }
+
+    /// Structure index + 1 of every pixel (0 = background).
+    pub fn instance_ids(&self, sample: &PreparedSample) -> Vec<u16> {
+        ids(&self.gbuffer, &sample.owner)
+    }
+}
+
 /// Renders and stages every view of the sample. Returns the number of views written.
 pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage) -> Result<u32> {
     let dataset = &recipe.dataset;
-    let trace_mesh = TraceMesh::build(&sample.mesh);
-    let albedo: Vec<[f64; 3]> = sample
-        .scene
-        .structures
-        .iter()
-        .map(|s| s.material().albedo())
-        .collect();
-    let background = dataset.background.map(|c| (c * 255.0).round() as u8);
-    let lighting = Lighting::default();
+    let renderer = SampleRenderer::new(recipe, sample);
     let scene = scene_json(sample);
     for view in 0..dataset.views {
-        let (camera, draw) = view_camera(dataset, sample, view);
-        let g = trace_mesh.trace(&camera);
+        let rendered = renderer.view(view);
+        let g = &rendered.gbuffer;
         let (w, h) = (g.width, g.height);
         let mut files = serde_json::Map::new();
         let mut put =
@@ -149,36 +224,32 @@ pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage)
                 files.insert(kind.to_string(), json!(path));
                 stage.write(path, &bytes)
             };
-        if dataset.outputs.rgb {
-            let rgb = shade(
-                &g,
-                &trace_mesh,
-                &camera,
-                &lighting,
-                |t| albedo[sample.owner[t as usize] as usize],
-                background,
-                dataset.antialias,
-            );
-            put(stage, "rgb", "png", rgb_png(w, h, &rgb))?;
+        if let Some(rgb) = &rendered.rgb {
+            put(stage, "rgb", "png", rgb_png(w, h, rgb))?;
         }
         if dataset.outputs.depth {
             put(stage, "depth", "exr", depth_exr(w, h, &g.depth))?;
         }
         if dataset.outputs.mask {
-            put(stage, "mask", "png", mask_png(w, h, &mask(&g)))?;
+            put(stage, "mask", "png", mask_png(w, h, &rendered.mask()))?;
         }
         if dataset.outputs.parts {
-            put(stage, "parts", "png", id_png(w, h, &ids(&g, &sample.part)))?;
+            put(
+                stage,
+                "parts",
+                "png",
+                id_png(w, h, &rendered.part_ids(sample)),
+            )?;
         }
         if dataset.outputs.instances {
             put(
                 stage,
                 "instances",
                 "png",
-                id_png(w, h, &ids(&g, &sample.owner)),
+                id_png(w, h, &rendered.instance_ids(sample)),
             )?;
         }
-        let meta = view_json(recipe, sample, view, &camera, &draw, &g, files, &scene);
+        let meta = view_json(recipe, sample, &rendered, files, &scene);
         let path = view_file(sample.index, view, "json");
         let mut bytes = serde_json::to_vec_pretty(&meta)?;
         bytes.push(b'\n');
@@ -198,13 +269,6 @@ fn ids(g: &GBuffer, of_triangle: &[u32]) -> Vec<u16> {
                 of_triangle[t as usize] as u16 + 1
             }
         })
-        .collect()
-}
-
-fn mask(g: &GBuffer) -> Vec<u8> {
-    g.triangle
-        .iter()
-        .map(|&t| if t == NO_HIT { 0 } else { 255 })
         .collect()
 }
 
@@ -248,17 +312,20 @@ fn scene_json(sample: &PreparedSample) -> Value {
     })
 }
 
-#[allow(clippy::too_many_arguments)]
 fn view_json(
     recipe: &Recipe,
     sample: &PreparedSample,
-    view: u32,
-    camera: &Camera,
-    draw: &ViewDraw,
-    g: &GBuffer,
+    rendered: &RenderedView,
     files: serde_json::Map<String, Value>,
     scene: &Value,
 ) -> Value {
+    let RenderedView {
+        view,
+        camera,
+        draw,
+        gbuffer: g,
+        ..
+    } = rendered;
     let k = camera.intrinsics;
     let hits = g.triangle.iter().filter(|&&t| t != NO_HIT).count();
     json!({
