@@ -53,6 +53,11 @@ impl Sources {
             .map(str::to_string)
     }
 
+    /// The label of every file, in label order.
+    pub fn labels(&self) -> Vec<String> {
+        self.0.lock().unwrap().keys().cloned().collect()
+    }
+
     /// Content hash over every file, in label order.
     pub fn hash(&self) -> String {
         let mut h = blake3::Hasher::new();

@@ -129,6 +129,18 @@ impl Recipe {
             .map_err(|m| RecipeError::plain(format!("{}: {m} ({context})", self.label)))?;
         Ok(SceneSpec { structures })
     }
+
+    /// The files this recipe was built from so far, for a watcher: the recipe, the modules it
+    /// imported from disk and the mesh files its scenes read (a mesh named only by a sample
+    /// not yet drawn is not known yet). Built-in modules have no file and are left out.
+    pub fn watched_paths(&self) -> Vec<PathBuf> {
+        self.sources
+            .labels()
+            .into_iter()
+            .map(PathBuf::from)
+            .filter(|p| p.is_file())
+            .collect()
+    }
 }
 
 /// The structures a scene function returned: one structure, or a list of them.
