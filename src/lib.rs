@@ -13,6 +13,7 @@ pub mod materials;
 pub mod mechanics;
 pub mod output;
 pub mod pipeline;
+pub mod preview;
 pub mod recipe;
 pub mod render;
 pub mod scene;

@@ -3,6 +3,7 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use shmgen::pipeline::{self, RunOptions, Shard};
+use shmgen::preview::{self, PreviewOptions, Size, WatchOptions};
 use shmgen::recipe::Recipe;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -43,6 +44,62 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Re-render a small preview sheet whenever the recipe or a file it uses changes.
+    Watch {
+        /// The recipe, e.g. scripts/quickstart.rhai.
+        recipe: PathBuf,
+        /// Override a recipe parameter declared with param("name", default). Repeatable.
+        #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
+        sets: Vec<(String, String)>,
+        /// Samples in the sheet, from the first.
+        #[arg(long, default_value_t = 4)]
+        samples: u64,
+        /// Views of each sample (default: up to 4).
+        #[arg(long)]
+        views: Option<u32>,
+        /// Longer side of each image in pixels (never above the recipe's resolution).
+        #[arg(
+            long,
+            value_name = "PX",
+            default_value_t = 240,
+            conflicts_with = "scale"
+        )]
+        size: u32,
+        /// Scale the recipe's resolution instead, e.g. 0.25.
+        #[arg(long, value_parser = parse_scale)]
+        scale: Option<f64>,
+        /// Where to write the sheet (default: <recipe stem>.preview.png next to the recipe).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Also serve the sheet as a self-refreshing page at http://127.0.0.1:PORT/ (0 picks a
+        /// free port).
+        #[arg(long, value_name = "PORT", conflicts_with = "once")]
+        serve: Option<u16>,
+        /// Write one sheet and exit (non-zero if the recipe is broken).
+        #[arg(long)]
+        once: bool,
+    },
+    /// Validate a recipe and estimate the run time and disk size of its dataset, from a
+    /// small timed render (nothing is kept).
+    Check {
+        /// The recipe, e.g. scripts/quickstart.rhai.
+        recipe: PathBuf,
+        /// Override a recipe parameter declared with param("name", default). Repeatable.
+        #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
+        sets: Vec<(String, String)>,
+        /// Worker threads for the timed render and the estimate (default: every core).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
+}
+
+fn parse_scale(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x > 0.0 && x <= 1.0 => Ok(x),
+        _ => Err(format!(
+            "--scale {s}: expected a number in (0, 1], e.g. 0.25"
+        )),
+    }
 }
 
 fn parse_set(s: &str) -> Result<(String, String), String> {
@@ -106,5 +163,32 @@ fn execute(command: Command) -> Result<()> {
             );
             Ok(())
         }
+        Command::Watch {
+            recipe,
+            sets,
+            samples,
+            views,
+            size,
+            scale,
+            out,
+            serve,
+            once,
+        } => preview::watch(&WatchOptions {
+            recipe,
+            sets,
+            preview: PreviewOptions {
+                samples,
+                views,
+                size: scale.map_or(Size::MaxSide(size), Size::Scale),
+            },
+            out,
+            serve,
+            once,
+        }),
+        Command::Check {
+            recipe,
+            sets,
+            threads,
+        } => preview::check(&recipe, &sets, threads),
     }
 }

@@ -10,7 +10,7 @@ mod encode;
 mod folder;
 
 pub use encode::{DEPTH_CHANNEL, depth_exr, id_png, mask_png, rgb_png};
-pub use folder::{DatasetFolder, SampleStage};
+pub use folder::{DatasetFolder, SampleStage, write_atomic};
 
 /// Relative path of one view's file of the given kind (`rgb.png`, `depth.exr`, ...):
 /// samples are grouped a thousand to a folder so no folder grows unboundedly.

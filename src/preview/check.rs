@@ -1,0 +1,195 @@
+//! `shmgen check`: validates a recipe and estimates what the full run will cost, without
+//! writing the dataset.
+//!
+//! Owns: the report (dataset settings, structure sizes, run-time and disk estimates). Must
+//! not touch: the renderer or the dataset format: the estimate times a real `pipeline::run`
+//! of a few samples into a temporary folder, which is removed.
+
+use crate::pipeline::{self, PreparedSample, RunOptions, Shard, prepare};
+use crate::recipe::Recipe;
+use crate::scene::{Outputs, Structure};
+use anyhow::Result;
+use rayon::prelude::*;
+use std::collections::{BTreeMap, HashSet};
+use std::path::{Path, PathBuf};
+
+/// Samples drawn and meshed for the structure report.
+const DRAWN: u64 = 8;
+
+/// Runs `shmgen check`.
+pub fn check(path: &Path, sets: &[(String, String)], threads: Option<usize>) -> Result<()> {
+    let mut recipe = Recipe::load(path, sets)?;
+    print_dataset(&recipe);
+    let drawn = recipe.dataset.samples.min(DRAWN);
+    let samples = (0..drawn)
+        .into_par_iter()
+        .map(|index| prepare(&recipe, index))
+        .collect::<Result<Vec<_>>>()?;
+    print_structures(&samples);
+    estimate(&mut recipe, threads)
+}
+
+fn print_dataset(recipe: &Recipe) {
+    let d = &recipe.dataset;
+    let outputs: Vec<&str> = Outputs::NAMES
+        .into_iter()
+        .zip([
+            d.outputs.rgb,
+            d.outputs.depth,
+            d.outputs.mask,
+            d.outputs.parts,
+            d.outputs.instances,
+        ])
+        .filter_map(|(name, on)| on.then_some(name))
+        .collect();
+    println!(
+        "{}: dataset \"{}\", seed {}",
+        recipe.path.display(),
+        d.name,
+        d.seed
+    );
+    println!(
+        "  {} samples × {} views = {} views at {}×{}; outputs {}",
+        d.samples,
+        d.views,
+        d.samples * u64::from(d.views),
+        d.camera.width,
+        d.camera.height,
+        outputs.join(", ")
+    );
+}
+
+/// Per kind of structure: how many, and min / median / max of vertices and triangles.
+fn print_structures(samples: &[PreparedSample]) {
+    let mut kinds: BTreeMap<String, Vec<(usize, usize)>> = BTreeMap::new();
+    for sample in samples {
+        for (kind, size) in structure_sizes(sample) {
+            kinds.entry(kind).or_default().push(size);
+        }
+    }
+    println!(
+        "  structures in samples 0–{} (drawn and meshed at full resolution):",
+        samples.len().saturating_sub(1)
+    );
+    for (kind, sizes) in kinds {
+        let (vertices, triangles): (Vec<usize>, Vec<usize>) = sizes.iter().copied().unzip();
+        println!(
+            "    {kind}: {}, vertices {}, triangles {} (min / median / max)",
+            sizes.len(),
+            spread(vertices),
+            spread(triangles)
+        );
+    }
+}
+
+/// (kind, (vertices, triangles)) of every structure of a sample.
+fn structure_sizes(sample: &PreparedSample) -> Vec<(String, (usize, usize))> {
+    let structures = &sample.scene.structures;
+    let mut vertices = vec![HashSet::<u32>::new(); structures.len()];
+    let mut triangles = vec![0; structures.len()];
+    for (triangle, &owner) in sample.mesh.triangles.iter().zip(&sample.owner) {
+        vertices[owner as usize].extend(triangle);
+        triangles[owner as usize] += 1;
+    }
+    structures
+        .iter()
+        .zip(vertices.iter().zip(triangles))
+        .map(|(structure, (v, t))| {
+            let kind = match structure {
+                Structure::Beam(_) => "beam".to_string(),
+                Structure::Assembly(a) => format!("assembly \"{}\"", a.name),
+            };
+            (kind, (v.len(), t))
+        })
+        .collect()
+}
+
+/// "min / median / max" of some counts.
+fn spread(mut values: Vec<usize>) -> String {
+    values.sort_unstable();
+    let at = |i: usize| values[i].to_string();
+    match values.len() {
+        0 => "-".into(),
+        n => format!("{} / {} / {}", at(0), at((n - 1) / 2), at(n - 1)),
+    }
+}
+
+/// Times a real run of one round of samples (one per thread) and scales it to the dataset.
+fn estimate(recipe: &mut Recipe, threads: Option<usize>) -> Result<()> {
+    let threads = threads.unwrap_or_else(rayon::current_num_threads).max(1);
+    let total = recipe.dataset.samples;
+    let timed = total.min(threads as u64);
+    recipe.dataset.samples = timed;
+    let scratch = Scratch::new();
+    let summary = pipeline::run(
+        recipe,
+        &RunOptions {
+            out: scratch.0.clone(),
+            threads: Some(threads),
+            shard: Shard::WHOLE,
+            force: true,
+            quiet: true,
+        },
+    )?;
+    let scale = total as f64 / timed as f64;
+    println!(
+        "  timed run: {timed} samples ({} views) on {threads} threads in {:.2} s, {}",
+        summary.pairs,
+        summary.seconds,
+        bytes(summary.bytes as f64)
+    );
+    println!(
+        "  estimate for all {total} samples on {threads} threads: {}, {} on disk",
+        duration(summary.seconds * scale),
+        bytes(summary.bytes as f64 * scale)
+    );
+    Ok(())
+}
+
+/// A temporary dataset folder, removed however `check` ends.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new() -> Self {
+        Scratch(std::env::temp_dir().join(format!("shmgen-check-{}", std::process::id())))
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn duration(seconds: f64) -> String {
+    match seconds {
+        s if s < 120.0 => format!("{s:.1} s"),
+        s if s < 7200.0 => format!("{:.0} min", s / 60.0),
+        s => format!("{:.1} h", s / 3600.0),
+    }
+}
+
+fn bytes(b: f64) -> String {
+    match b {
+        b if b < 1e6 => format!("{:.0} kB", b / 1e3),
+        b if b < 1e9 => format!("{:.1} MB", b / 1e6),
+        b => format!("{:.2} GB", b / 1e9),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spreads_and_units() {
+        assert_eq!(spread(vec![5, 1, 3, 2]), "1 / 2 / 5");
+        assert_eq!(spread(vec![7]), "7 / 7 / 7");
+        assert_eq!(duration(30.0), "30.0 s");
+        assert_eq!(duration(600.0), "10 min");
+        assert_eq!(duration(36000.0), "10.0 h");
+        assert_eq!(bytes(2.5e6), "2.5 MB");
+        assert_eq!(bytes(51_200.0), "51 kB");
+        assert_eq!(bytes(3.2e9), "3.20 GB");
+    }
+}
