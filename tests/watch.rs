@@ -1,0 +1,482 @@
+//! `shmgen watch` and `shmgen check` end to end, through the built binary: edits, broken saves
+//! and their fixes, editors' save patterns (delete and recreate, write and rename), imported
+//! modules, Ctrl-C, the sheet's layout and the loopback web page.
+
+use std::io::{Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_shmgen");
+
+/// Generous for a busy 2-core machine; waits poll often, so passing tests stay fast.
+const WAIT: Duration = Duration::from_secs(20);
+const POLL: Duration = Duration::from_millis(20);
+
+/// Two structures (so instance ids differ), one of them with two parts, built by a module
+/// next to the recipe. Pure blue background and no anti-aliasing: an RGB pixel is background
+/// exactly when no surface is there.
+const RECIPE: &str = r#"import "piece" as piece;
+
+dataset(#{
+    name: "watched",
+    seed: 1,
+    samples: 2,
+    views: 2,
+    outputs: ["rgb", "depth", "mask", "parts", "instances"],
+    background: [0.0, 0.0, 1.0],
+    antialias: false,
+    camera: #{ width: 64, height: 48, pitch: [deg(10), deg(60)] },
+    scene: |rng| [
+        assembly("block", [piece::block(rng.uniform(0.8, 1.2)), shape::box(0.3, 0.3, 0.3).translate(0.0, 0.0, 0.3).part("cap")])
+            .colour([0.8, 0.3, 0.2]),
+        assembly("post", [shape::box(0.2, 0.2, 0.8).translate(0.9, 0.0, 0.0)]).colour([0.3, 0.7, 0.3]),
+    ],
+});
+"#;
+
+const PIECE: &str = "fn block(size) { shape::box(size, 0.5 * size, 0.3 * size) }\n";
+
+/// A folder with the recipe and its module.
+fn project() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("piece.rhai"), PIECE).unwrap();
+    let recipe = dir.path().join("recipe.rhai");
+    std::fs::write(&recipe, RECIPE).unwrap();
+    (dir, recipe)
+}
+
+fn preview_of(recipe: &Path) -> PathBuf {
+    recipe.with_file_name("recipe.preview.png")
+}
+
+/// `RECIPE` with the first structure's colour changed.
+fn recoloured(rgb: &str) -> String {
+    let text = RECIPE.replace("[0.8, 0.3, 0.2]", rgb);
+    assert_ne!(text, RECIPE);
+    text
+}
+
+fn wait_until(what: &str, mut done: impl FnMut() -> bool) {
+    let start = Instant::now();
+    while !done() {
+        assert!(start.elapsed() < WAIT, "timed out waiting for {what}");
+        std::thread::sleep(POLL);
+    }
+}
+
+/// A running `shmgen watch`, killed when dropped (also when a test fails).
+struct Watch {
+    child: Child,
+    stdout: Arc<Mutex<String>>,
+    stderr: Arc<Mutex<String>>,
+}
+
+impl Watch {
+    fn start(recipe: &Path, extra: &[&str]) -> Watch {
+        Watch::spawn(Command::new(BIN).arg("watch").arg(recipe).args(extra))
+    }
+
+    fn spawn(command: &mut Command) -> Watch {
+        let mut child = command
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let stdout = collect(child.stdout.take().unwrap());
+        let stderr = collect(child.stderr.take().unwrap());
+        Watch {
+            child,
+            stdout,
+            stderr,
+        }
+    }
+
+    fn stdout(&self) -> String {
+        self.stdout.lock().unwrap().clone()
+    }
+
+    fn stderr(&self) -> String {
+        self.stderr.lock().unwrap().clone()
+    }
+
+    fn previews(&self) -> usize {
+        self.stdout()
+            .lines()
+            .filter(|l| l.starts_with("preview:"))
+            .count()
+    }
+
+    /// Waits for preview number `n` (counting from 1) and returns the sheet's bytes.
+    fn wait_for_preview(&self, n: usize, file: &Path) -> Vec<u8> {
+        wait_until(&format!("preview {n}"), || self.previews() >= n);
+        assert_eq!(
+            self.previews(),
+            n,
+            "one preview per change:\n{}",
+            self.stdout()
+        );
+        std::fs::read(file).unwrap()
+    }
+
+    fn assert_alive(&mut self) {
+        assert!(
+            self.child.try_wait().unwrap().is_none(),
+            "the watcher exited:\n{}\n{}",
+            self.stdout(),
+            self.stderr()
+        );
+    }
+}
+
+impl Drop for Watch {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Gathers a child's output as it comes, so the test can look at it while the child runs.
+fn collect(mut pipe: impl Read + Send + 'static) -> Arc<Mutex<String>> {
+    let text = Arc::new(Mutex::new(String::new()));
+    let sink = text.clone();
+    std::thread::spawn(move || {
+        let mut buf = [0u8; 4096];
+        while let Ok(n) = pipe.read(&mut buf) {
+            if n == 0 {
+                break;
+            }
+            sink.lock()
+                .unwrap()
+                .push_str(&String::from_utf8_lossy(&buf[..n]));
+        }
+    });
+    text
+}
+
+#[test]
+fn an_edit_gives_a_new_preview() {
+    let (_dir, recipe) = project();
+    let sheet = preview_of(&recipe);
+    let watch = Watch::start(&recipe, &[]);
+    let first = watch.wait_for_preview(1, &sheet);
+    std::fs::write(&recipe, recoloured("[0.2, 0.3, 0.8]")).unwrap();
+    let second = watch.wait_for_preview(2, &sheet);
+    assert_ne!(first, second, "the colour change shows");
+}
+
+#[test]
+fn a_broken_save_keeps_the_last_preview_and_a_fix_recovers() {
+    let (_dir, recipe) = project();
+    let sheet = preview_of(&recipe);
+    let mut watch = Watch::start(&recipe, &[]);
+    let good = watch.wait_for_preview(1, &sheet);
+
+    let broken = RECIPE.replace("    seed: 1,", "    seed: 1 1,");
+    let line = broken
+        .lines()
+        .position(|l| l.contains("seed: 1 1"))
+        .unwrap()
+        + 1;
+    std::fs::write(&recipe, &broken).unwrap();
+    wait_until("the error", || {
+        watch.stderr().contains("keeping the last good preview")
+    });
+    let stderr = watch.stderr();
+    let location = format!("recipe.rhai:{line}:");
+    assert!(stderr.contains(&location), "{location} in:\n{stderr}");
+    assert!(
+        stderr.contains("    seed: 1 1,"),
+        "the source line in:\n{stderr}"
+    );
+    watch.assert_alive();
+    assert_eq!(
+        std::fs::read(&sheet).unwrap(),
+        good,
+        "the last good preview stays"
+    );
+    assert_eq!(watch.previews(), 1);
+
+    std::fs::write(&recipe, recoloured("[0.9, 0.9, 0.2]")).unwrap();
+    let fixed = watch.wait_for_preview(2, &sheet);
+    assert_ne!(fixed, good);
+    watch.assert_alive();
+}
+
+#[test]
+fn delete_and_recreate_and_write_and_rename_both_reload() {
+    let (dir, recipe) = project();
+    let sheet = preview_of(&recipe);
+    let watch = Watch::start(&recipe, &[]);
+    let first = watch.wait_for_preview(1, &sheet);
+
+    std::fs::remove_file(&recipe).unwrap();
+    std::fs::write(&recipe, recoloured("[0.2, 0.8, 0.8]")).unwrap();
+    wait_until("a preview after delete and recreate", || {
+        std::fs::read(&sheet).unwrap() != first
+    });
+    let recreated = std::fs::read(&sheet).unwrap();
+
+    // An editor's atomic save: a temporary file renamed over the recipe.
+    let tmp = dir.path().join(".recipe.rhai.tmp");
+    std::fs::write(&tmp, recoloured("[0.9, 0.6, 0.1]")).unwrap();
+    std::fs::rename(&tmp, &recipe).unwrap();
+    wait_until("a preview after write and rename", || {
+        std::fs::read(&sheet).unwrap() != recreated
+    });
+}
+
+/// Edits the module the recipe imports, next to the recipe or in the standard-library folder,
+/// and expects a new preview. The standard-library folder is not the recipe's: only the list
+/// of files the recipe used can tell the watcher to look there.
+fn editing_the_module_reloads(in_stdlib: bool) {
+    let (dir, recipe) = project();
+    let stdlib = tempfile::tempdir().unwrap();
+    let module = match in_stdlib {
+        true => stdlib.path().join("piece.rhai"),
+        false => dir.path().join("piece.rhai"),
+    };
+    std::fs::rename(dir.path().join("piece.rhai"), &module).unwrap();
+    let sheet = preview_of(&recipe);
+    let watch = Watch::spawn(
+        Command::new(BIN)
+            .arg("watch")
+            .arg(&recipe)
+            .env("SHMGEN_STDLIB", stdlib.path()),
+    );
+    let first = watch.wait_for_preview(1, &sheet);
+    std::fs::write(&module, PIECE.replace("0.3 * size", "0.6 * size")).unwrap();
+    let second = watch.wait_for_preview(2, &sheet);
+    assert_ne!(first, second, "the taller block shows");
+}
+
+#[test]
+fn editing_an_imported_module_reloads() {
+    editing_the_module_reloads(false);
+}
+
+#[test]
+fn editing_a_module_in_another_folder_reloads() {
+    editing_the_module_reloads(true);
+}
+
+#[test]
+fn saving_the_same_content_or_touching_other_files_does_not_reload() {
+    let (dir, recipe) = project();
+    let sheet = preview_of(&recipe);
+    let watch = Watch::start(&recipe, &[]);
+    watch.wait_for_preview(1, &sheet);
+    // A no-op save, a note and an editor's backup: none changes the preview...
+    std::fs::write(&recipe, RECIPE).unwrap();
+    std::fs::write(dir.path().join("notes.txt"), "x").unwrap();
+    std::fs::write(dir.path().join("recipe.rhai~"), "x").unwrap();
+    // ...and a real edit afterwards is the second preview, not the third.
+    std::thread::sleep(Duration::from_millis(500));
+    std::fs::write(&recipe, recoloured("[0.5, 0.5, 0.5]")).unwrap();
+    watch.wait_for_preview(2, &sheet);
+    std::thread::sleep(Duration::from_millis(500));
+    assert_eq!(watch.previews(), 2, "{}", watch.stdout());
+}
+
+#[test]
+fn ctrl_c_exits_cleanly() {
+    let (dir, recipe) = project();
+    let mut watch = Watch::start(&recipe, &[]);
+    watch.wait_for_preview(1, &preview_of(&recipe));
+    let status = Command::new("kill")
+        .args(["-INT", &watch.child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let start = Instant::now();
+    let exit = loop {
+        if let Some(exit) = watch.child.try_wait().unwrap() {
+            break exit;
+        }
+        assert!(start.elapsed() < WAIT, "still running after Ctrl-C");
+        std::thread::sleep(POLL);
+    };
+    assert!(exit.success(), "{exit:?}");
+    wait_until("the goodbye", || watch.stdout().contains("stopped"));
+    let mut left: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["piece.rhai", "recipe.preview.png", "recipe.rhai"]);
+}
+
+/// The (x, y) pixel of an RGB8 image `width` wide.
+fn pixel(data: &[u8], width: usize, x: usize, y: usize) -> [u8; 3] {
+    let i = 3 * (y * width + x);
+    [data[i], data[i + 1], data[i + 2]]
+}
+
+#[test]
+fn once_writes_a_sheet_whose_columns_agree() {
+    let (dir, recipe) = project();
+    let out = dir.path().join("sheet.png");
+    let output = Command::new(BIN)
+        .arg("watch")
+        .arg(&recipe)
+        .args(["--once", "--size", "32", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{output:?}");
+
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut data = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut data).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    // 64×48 at a longer side of 32 px is 32×24. Columns: RGB, depth, mask, parts, instances;
+    // rows: 2 samples × 2 views; separators between cells.
+    let (w, h, sep) = (32, 24, shmgen::preview::SEPARATOR as usize);
+    let (columns, rows) = (5, 4);
+    assert_eq!(info.width as usize, columns * w + (columns - 1) * sep);
+    assert_eq!(info.height as usize, rows * h + (rows - 1) * sep);
+
+    let sheet_width = info.width as usize;
+    let at = |column: usize, row: usize, x: usize, y: usize| {
+        pixel(
+            &data,
+            sheet_width,
+            column * (w + sep) + x,
+            row * (h + sep) + y,
+        )
+    };
+    let (mut surface, mut background) = (0, 0);
+    for row in 0..rows {
+        for y in 0..h {
+            for x in 0..w {
+                let hit = at(0, row, x, y) != [0, 0, 255];
+                let mask = at(2, row, x, y);
+                assert_eq!(
+                    mask,
+                    if hit { [255; 3] } else { [0; 3] },
+                    "row {row} ({x}, {y})"
+                );
+                for label in [1, 3, 4] {
+                    let black = at(label, row, x, y) == [0; 3];
+                    assert_eq!(black, !hit, "column {label}, row {row} ({x}, {y})");
+                }
+                if hit {
+                    surface += 1;
+                } else {
+                    background += 1;
+                }
+            }
+        }
+    }
+    assert!(surface > 100 && background > 100, "{surface} {background}");
+}
+
+#[test]
+fn once_fails_on_a_broken_recipe() {
+    let (_dir, recipe) = project();
+    std::fs::write(&recipe, RECIPE.replace("samples: 2,", "samples: 2,,")).unwrap();
+    let output = Command::new(BIN)
+        .arg("watch")
+        .arg(&recipe)
+        .arg("--once")
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("recipe.rhai:6:"), "{stderr}");
+    assert!(!preview_of(&recipe).exists());
+}
+
+fn check(recipe: &Path) -> Output {
+    Command::new(BIN).arg("check").arg(recipe).output().unwrap()
+}
+
+#[test]
+fn check_reports_counts_and_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = dir.path().join("box.rhai");
+    let text = r#"dataset(#{
+    name: "box",
+    seed: 1,
+    samples: 3,
+    views: 2,
+    camera: #{ width: 64, height: 48 },
+    scene: |rng| assembly("block", [shape::box(1.0, 0.5, 0.3)]),
+});
+"#;
+    std::fs::write(&recipe, text).unwrap();
+    let output = check(&recipe);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{output:?}");
+    assert!(stdout.contains("3 samples × 2 views"), "{stdout}");
+    // A closed box shares its 8 corners among 6 faces of 2 triangles each
+    // (Euler: 8 − 18 + 12 = 2).
+    assert!(
+        stdout.contains("assembly \"block\": 3, vertices 8 / 8 / 8, triangles 12 / 12 / 12"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("estimate for all 3 samples"), "{stdout}");
+
+    std::fs::write(&recipe, text.replace("samples: 3,", "samples: 3 +,")).unwrap();
+    let output = check(&recipe);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(stderr.contains("box.rhai:4:"), "{stderr}");
+    assert!(stderr.contains("samples: 3 +,"), "{stderr}");
+}
+
+/// GET `path` from a local server: (status line, body).
+fn get(port: u16, path: &str) -> (String, Vec<u8>) {
+    let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
+    write!(
+        stream,
+        "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n"
+    )
+    .unwrap();
+    let mut response = Vec::new();
+    stream.read_to_end(&mut response).unwrap();
+    let split = response.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+    let head = String::from_utf8_lossy(&response[..split]).into_owned();
+    assert!(head.contains("Cache-Control: no-store"), "{head}");
+    let status = head.lines().next().unwrap().to_string();
+    (status, response[split + 4..].to_vec())
+}
+
+#[test]
+fn the_preview_is_served_on_loopback() {
+    let (_dir, recipe) = project();
+    let sheet = preview_of(&recipe);
+    let watch = Watch::start(&recipe, &["--serve", "0"]);
+    let png = watch.wait_for_preview(1, &sheet);
+    let stdout = watch.stdout();
+    let url = stdout
+        .split_whitespace()
+        .find(|w| w.starts_with("http://"))
+        .unwrap_or_else(|| panic!("no URL in:\n{stdout}"));
+    let port: u16 = url
+        .strip_prefix("http://127.0.0.1:")
+        .and_then(|rest| rest.strip_suffix('/'))
+        .unwrap_or_else(|| panic!("{url} is not on 127.0.0.1"))
+        .parse()
+        .unwrap();
+
+    let (status, page) = get(port, "/");
+    assert!(status.contains("200"), "{status}");
+    assert!(String::from_utf8_lossy(&page).contains("<html"));
+    let (status, served) = get(port, "/preview.png?n=1");
+    assert!(status.contains("200"), "{status}");
+    assert_eq!(served, png);
+
+    std::fs::write(&recipe, RECIPE.replace("views: 2,", "views: 2,,")).unwrap();
+    wait_until("the error on the page", || {
+        String::from_utf8_lossy(&get(port, "/state").1).contains("recipe.rhai:")
+    });
+    assert_eq!(
+        get(port, "/preview.png").1,
+        png,
+        "the last good sheet stays"
+    );
+}
