@@ -62,7 +62,8 @@ enum Command {
             long,
             value_name = "PX",
             default_value_t = 240,
-            conflicts_with = "scale"
+            conflicts_with = "scale",
+            value_parser = clap::value_parser!(u32).range(1..)
         )]
         size: u32,
         /// Scale the recipe's resolution instead, e.g. 0.25.
