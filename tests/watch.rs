@@ -390,6 +390,18 @@ fn once_fails_on_a_broken_recipe() {
     assert!(!preview_of(&recipe).exists());
 }
 
+#[test]
+fn watching_a_missing_recipe_fails_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = Command::new(BIN)
+        .arg("watch")
+        .arg(dir.path().join("typo.rhai"))
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr).contains("typo.rhai: no such recipe file"));
+}
+
 fn check(recipe: &Path) -> Output {
     Command::new(BIN).arg("check").arg(recipe).output().unwrap()
 }

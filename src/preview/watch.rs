@@ -14,7 +14,7 @@ use super::serve::Server;
 use super::sheet::{self, Preview, PreviewOptions};
 use crate::output::write_atomic;
 use crate::recipe::Recipe;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use notify::event::{AccessKind, AccessMode, ModifyKind};
 use notify::{Event, EventKind, RecursiveMode, Watcher};
 use std::collections::{BTreeSet, HashMap};
@@ -59,6 +59,10 @@ pub fn watch(options: &WatchOptions) -> Result<()> {
         write_atomic(&out, &preview.png)?;
         println!("{}", summary(&preview, start, &out));
         return Ok(());
+    }
+    // A mistyped path would otherwise wait forever for a file that never comes.
+    if !options.recipe.is_file() {
+        bail!("{}: no such recipe file", options.recipe.display());
     }
     Session::new(options, out)?.run()
 }
