@@ -17,3 +17,4 @@ pub mod recipe;
 pub mod render;
 pub mod scene;
 pub mod seeds;
+pub mod words;

@@ -179,7 +179,7 @@ fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {
             "parts" => out.parts = true,
             "instances" => out.instances = true,
             _ => {
-                let hint = options::nearest(&name, &Outputs::NAMES)
+                let hint = crate::words::nearest(&name, &Outputs::NAMES)
                     .map(|k| format!("; did you mean \"{k}\"?"))
                     .unwrap_or_default();
                 return Err(format!(

@@ -165,7 +165,7 @@ fn resolved_params(
     for (name, value) in overrides {
         if !resolved.contains_key(name) {
             let known: Vec<&str> = resolved.keys().map(String::as_str).collect();
-            let hint = options::nearest(name, &known)
+            let hint = crate::words::nearest(name, &known)
                 .map(|k| format!("; did you mean `{k}`?"))
                 .unwrap_or_default();
             return Err(RecipeError::plain(format!(
