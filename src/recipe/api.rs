@@ -1,7 +1,7 @@
 //! The functions and types a recipe can call. Each builds or edits plain scene data and
 //! validates what it is given; none does per-vertex or per-pixel work.
 
-use super::options::{self, OptResult, Options, number};
+use super::options::{OptResult, Options, number};
 use crate::cameras::{CameraRig, Distance};
 use crate::scene::{DatasetSpec, Outputs};
 use crate::seeds::Stream;
