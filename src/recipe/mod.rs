@@ -12,6 +12,8 @@ mod api;
 mod beam_api;
 mod diagnostics;
 mod engine;
+mod files;
+mod material_api;
 mod options;
 mod shape_api;
 
@@ -60,11 +62,15 @@ impl Recipe {
             overrides: overrides.iter().cloned().collect(),
             ..Params::default()
         });
-        let files = Arc::new(shape_api::MeshFiles::new(&folder, sources.clone()));
+        let materials = material_api::MaterialContext {
+            files: Arc::new(files::RecipeFiles::new(&folder, sources.clone())),
+            warnings: Arc::new(diagnostics::Warnings::new(sources.clone())),
+            label: label.clone(),
+        };
 
         let new_engine = || {
             let mut engine = engine::sandboxed(resolver.clone());
-            api::register(&mut engine, params.clone(), files.clone());
+            api::register(&mut engine, params.clone(), materials.clone());
             engine
         };
         let engine = new_engine();

@@ -114,6 +114,14 @@ impl Options {
         }
     }
 
+    pub fn flag(&mut self, key: &'static str, default: bool) -> OptResult<bool> {
+        let path = self.path(key);
+        self.take(key).map_or(Ok(default), |v| {
+            v.as_bool()
+                .map_err(|_| format!("{path} = {v} must be true or false"))
+        })
+    }
+
     /// A range `[lo, hi]` (lo ≤ hi), or a single number meaning `[x, x]`.
     pub fn range(&mut self, key: &'static str, default: [f64; 2]) -> OptResult<[f64; 2]> {
         let path = self.path(key);
