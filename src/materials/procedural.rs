@@ -56,8 +56,8 @@ pub struct Shader {
 }
 
 /// Rust as it forms on structural steel: orange-brown to dark brown (sRGB).
-const RUST_LIGHT: [f64; 3] = [0.55, 0.27, 0.11];
-const RUST_DARK: [f64; 3] = [0.24, 0.11, 0.05];
+const RUST_LIGHT: [f64; 3] = [0.5, 0.27, 0.14];
+const RUST_DARK: [f64; 3] = [0.22, 0.11, 0.06];
 const MOSS: [f64; 3] = [0.27, 0.36, 0.12];
 const MORTAR: [f64; 3] = [0.66, 0.64, 0.6];
 /// Bare steel showing where paint has worn away.
@@ -97,6 +97,12 @@ impl Shader {
         &self.material
     }
 
+    /// Whether the surface varies from point to point.
+    pub fn textured(&self) -> bool {
+        let m = &self.material;
+        m.base != Base::Plain || !m.conditions.is_empty() || m.texture != Texture::Procedural
+    }
+
     /// Mean linear albedo, without texture.
     pub fn albedo(&self) -> [f64; 3] {
         self.albedo
@@ -121,7 +127,7 @@ impl Shader {
             specular: m.specular,
             crack: false,
         };
-        if m.base == Base::Plain && m.conditions.is_empty() {
+        if !self.textured() {
             return s;
         }
         let at = Point {
@@ -383,10 +389,10 @@ impl Point<'_> {
             ConditionKind::Rusty | ConditionKind::Corroded => {
                 let corroded = c.kind == ConditionKind::Corroded;
                 let reach = if corroded { 0.85 * i + 0.15 } else { i };
-                // Patches grow with intensity (about a third of the surface at 0.3) and have
+                // Patches cover about `reach` of the surface and have
                 // ragged edges: fine noise shifts the threshold locally.
                 let field = self.fractal(0.3, 6) + 0.35 * self.fractal_at(19.0, 0.02, 3);
-                let patch = smoothstep(-0.15, 0.15, 0.45 - 0.8 * reach - field);
+                let patch = smoothstep(-0.15, 0.15, coverage_threshold(reach) - field);
                 let tone = smoothstep(-0.7, 0.7, self.fractal_at(13.0, 0.05, 5));
                 let mut rust = mix(linear(RUST_LIGHT), linear(RUST_DARK), tone);
                 if corroded {
@@ -449,7 +455,9 @@ impl Point<'_> {
                 s.specular = s.specular.max(0.02 + 0.03 * i);
             }
             ConditionKind::Worn => {
-                let patch = smoothstep(-0.05, 0.05, 0.4 - 0.9 * i - self.fractal_at(53.0, 0.12, 5));
+                // Paint wears through on about half the share rust of the same intensity covers.
+                let field = self.fractal_at(53.0, 0.12, 5);
+                let patch = smoothstep(-0.05, 0.05, coverage_threshold(0.5 * i) - field);
                 let bare = mix(
                     linear(BARE_STEEL),
                     linear(RUST_DARK),
@@ -460,6 +468,12 @@ impl Point<'_> {
             }
         }
     }
+}
+
+/// The level below which fractal noise lies on about `share` of the surface (the noise is
+/// roughly normal with a standard deviation near 0.35; linear in the middle is close enough).
+fn coverage_threshold(share: f64) -> f64 {
+    0.7 * (share - 0.5)
 }
 
 /// An image texture projected along the three axes of the undeformed structure and blended

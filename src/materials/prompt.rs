@@ -196,14 +196,14 @@ const fn mineral(base: Base, family: Family, colour: [f64; 3], rough: f64) -> Ba
 // Bare (blast-cleaned or mill-scale) steel: mid grey, slightly blue, a metal.
 // Specular values are kept low: with a single sun and no reflected environment, a higher
 // F0 turns whole flat faces into glare.
-const STEEL: BaseDef = def(Base::Steel, Family::Metal, [0.52, 0.54, 0.57], 0.55, 0.3);
+const STEEL: BaseDef = def(Base::Steel, Family::Metal, [0.52, 0.54, 0.57], 0.6, 0.15);
 // Zinc coat: lighter and a little shinier than bare steel.
 const GALVANISED: BaseDef = def(
     Base::GalvanisedSteel,
     Family::Metal,
     [0.7, 0.72, 0.74],
     0.5,
-    0.4,
+    0.25,
 );
 // The brown oxide patina is what is seen, and it is not metallic: rough and dull.
 const WEATHERING: BaseDef = def(
@@ -214,8 +214,8 @@ const WEATHERING: BaseDef = def(
     0.1,
 );
 // Stainless: the renderer has no own base for it; steel, lighter, smoother, more specular.
-const STAINLESS: BaseDef = def(Base::Steel, Family::Metal, [0.72, 0.73, 0.74], 0.35, 0.5);
-const ALUMINIUM: BaseDef = def(Base::Aluminium, Family::Metal, [0.8, 0.81, 0.83], 0.4, 0.5);
+const STAINLESS: BaseDef = def(Base::Steel, Family::Metal, [0.72, 0.73, 0.74], 0.35, 0.4);
+const ALUMINIUM: BaseDef = def(Base::Aluminium, Family::Metal, [0.8, 0.81, 0.83], 0.4, 0.35);
 const CONCRETE: BaseDef = mineral(Base::Concrete, Family::Concrete, [0.58, 0.57, 0.55], 0.9);
 const PINE: BaseDef = wood(Species::Pine, [0.78, 0.62, 0.42]);
 const SPRUCE: BaseDef = wood(Species::Spruce, [0.82, 0.7, 0.52]);

@@ -88,6 +88,8 @@ pub trait Surfaces: Sync {
     fn at(&self, tri: u32, p: DVec3, footprint: f64) -> Surface;
     /// Untextured linear albedo of the triangle: decides where anti-aliasing is needed.
     fn flat(&self, tri: u32) -> [f64; 3];
+    /// Whether the surface varies over the triangle (else `flat` is all there is to it).
+    fn textured(&self, tri: u32) -> bool;
 }
 
 /// A plain matte colour per triangle.
@@ -103,6 +105,10 @@ impl<F: Fn(u32) -> [f64; 3] + Sync> Surfaces for F {
 
     fn flat(&self, tri: u32) -> [f64; 3] {
         self(tri)
+    }
+
+    fn textured(&self, _: u32) -> bool {
+        false
     }
 }
 
@@ -162,11 +168,14 @@ pub fn shade(
                     _ => encode(s.radiance(hit, u, v)),
                 };
                 out[3 * col..3 * col + 3].copy_from_slice(&colour);
-                if let Some((_, tri)) = hit {
-                    let view = k.ray_through(u, v);
-                    let c = s.light(tri, view, s.surfaces.flat(tri), None, None);
-                    flat[3 * col..3 * col + 3].copy_from_slice(&encode(c));
-                }
+                let flat_colour = match hit {
+                    Some((_, tri)) if s.surfaces.textured(tri) => {
+                        let view = k.ray_through(u, v);
+                        encode(s.light(tri, view, s.surfaces.flat(tri), None, None))
+                    }
+                    _ => colour,
+                };
+                flat[3 * col..3 * col + 3].copy_from_slice(&flat_colour);
             }
         });
     if !antialias {

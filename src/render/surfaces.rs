@@ -80,6 +80,10 @@ impl Surfaces for SampleSurfaces<'_> {
     fn flat(&self, tri: u32) -> [f64; 3] {
         self.shader_of(tri).0.albedo()
     }
+
+    fn textured(&self, tri: u32) -> bool {
+        self.shader_of(tri).0.textured()
+    }
 }
 
 /// Barycentric weights of the point of triangle (a, b, c) nearest to `p`'s projection,
