@@ -46,7 +46,7 @@ impl Noise {
     /// half the size and half the amplitude. Octaves shorter than four pixel footprints fade
     /// out, and are gone at two (the Nyquist limit). Normalised to roughly [-1, 1].
     pub fn fractal(&self, p: DVec3, wavelength: f64, octaves: u32, footprint: f64) -> f64 {
-        let (mut sum, mut norm, mut amplitude, mut lambda) = (0.0, 0.0, 1.0, wavelength);
+        let (mut sum, mut amplitude, mut lambda) = (0.0, 1.0, wavelength);
         for octave in 0..octaves {
             let weight = (lambda / footprint / 2.0 - 1.0).clamp(0.0, 1.0);
             if weight == 0.0 {
@@ -55,11 +55,12 @@ impl Noise {
             // Shift each octave so their lattice points do not line up.
             let shift = DVec3::splat(17.31 * f64::from(octave));
             sum += amplitude * weight * self.perlin.get((p / lambda + shift).to_array());
-            norm += amplitude;
             amplitude *= 0.5;
             lambda *= 0.5;
         }
-        if norm == 0.0 { 0.0 } else { sum / norm * 1.4 }
+        // Normalised by every octave, so octaves filtered out take their variance with them.
+        let norm = 2.0 * (1.0 - 0.5f64.powi(octaves as i32));
+        sum / norm * 1.4
     }
 
     /// Cellular noise with one jittered point per cube of side `size` metres.

@@ -530,3 +530,217 @@ impl Material {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::materials::prompt::compile;
+    use crate::seeds::Scope;
+
+    fn shader(prompt: &str) -> Shader {
+        let material = compile(prompt, true).unwrap().material;
+        Shader::new(&material, &mut Stream::new(3, Scope::Sample(0), "material"))
+    }
+
+    const GRAIN: Grain = Grain {
+        axis: DVec3::X,
+        centre: DVec3::ZERO,
+    };
+
+    /// Points spread over a 2 m × 2 m wall facing −y.
+    fn wall(n: usize) -> impl Iterator<Item = SurfacePoint> {
+        (0..n).map(move |i| {
+            let t = i as f64;
+            SurfacePoint {
+                rest: DVec3::new(
+                    2.0 * (t * 0.618_034).fract(),
+                    0.0,
+                    2.0 * (t * 0.414_214).fract(),
+                ),
+                rest_normal: -DVec3::Y,
+                footprint: 1e-4,
+            }
+        })
+    }
+
+    fn is_rust(c: [f64; 3]) -> bool {
+        // Rust is clearly red-brown; steel is grey with a touch of blue.
+        c[0] > 1.5 * c[2]
+    }
+
+    #[test]
+    fn rust_covers_a_share_of_the_surface_that_grows_with_intensity() {
+        let shares: Vec<f64> = ["slightly rusty steel", "rusty steel", "heavily rusty steel"]
+            .iter()
+            .map(|p| {
+                let s = shader(p);
+                let n = 4000;
+                wall(n)
+                    .filter(|q| is_rust(s.surface(q, &GRAIN).albedo))
+                    .count() as f64
+                    / n as f64
+            })
+            .collect();
+        // Intensities 0.3, 0.6 and 1.0: the share of rust follows them within ±0.2.
+        for (share, intensity) in shares.iter().zip([0.3, 0.6, 1.0]) {
+            assert!((share - intensity).abs() < 0.2, "{shares:?}");
+        }
+        assert!(shares[0] < shares[1] && shares[1] < shares[2], "{shares:?}");
+        assert!(wall(4000).all(|q| !is_rust(shader("steel").surface(&q, &GRAIN).albedo)));
+    }
+
+    #[test]
+    fn every_material_is_continuous_in_the_rest_position() {
+        // Across an edge two triangles evaluate the same function at the same point, so
+        // continuity of the function is continuity across edges. With a pixel footprint of
+        // 1 mm, a 1 µm step may change the albedo by at most about a thousandth.
+        for prompt in [
+            "rusty steel",
+            "heavily corroded steel",
+            "cracked concrete",
+            "galvanised steel",
+            "rosewood",
+            "cracked timber",
+            "brick",
+            "stone",
+            "worn blue paint",
+            "mossy stained concrete",
+        ] {
+            let s = shader(prompt);
+            for q in wall(500) {
+                let q = SurfacePoint {
+                    footprint: 1e-3,
+                    ..q
+                };
+                let near = SurfacePoint {
+                    rest: q.rest + DVec3::new(1e-6, 0.0, 0.7e-6),
+                    ..q
+                };
+                let (a, b) = (s.surface(&q, &GRAIN), s.surface(&near, &GRAIN));
+                for k in 0..3 {
+                    assert!(
+                        (a.albedo[k] - b.albedo[k]).abs() < 5e-3,
+                        "{prompt}: {a:?} vs {b:?} at {}",
+                        q.rest
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn texture_seen_from_afar_averages_instead_of_aliasing() {
+        // A pixel 1 m wide on concrete spans every feature of it: each sample must lie near
+        // the mean of the fine texture, not on a random grain of it.
+        let s = shader("concrete");
+        let fine: Vec<f64> = wall(4000)
+            .map(|q| luminance(s.surface(&q, &GRAIN).albedo))
+            .collect();
+        let mean = fine.iter().sum::<f64>() / fine.len() as f64;
+        let spread =
+            |v: &[f64]| (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+        let far: Vec<f64> = wall(4000)
+            .map(|q| {
+                let q = SurfacePoint {
+                    footprint: 1.0,
+                    ..q
+                };
+                luminance(s.surface(&q, &GRAIN).albedo)
+            })
+            .collect();
+        assert!(
+            spread(&far) < 0.5 * spread(&fine),
+            "{} vs {}",
+            spread(&far),
+            spread(&fine)
+        );
+        let far_mean = far.iter().sum::<f64>() / far.len() as f64;
+        assert!((far_mean - mean).abs() < 0.1 * mean, "{far_mean} vs {mean}");
+    }
+
+    #[test]
+    fn cracks_grow_with_intensity_and_the_mask_matches_the_image() {
+        let share = |prompt: &str| {
+            let s = shader(prompt);
+            let mut cracked = 0;
+            for q in wall(20_000) {
+                let on = s.crack(&q, &GRAIN);
+                assert_eq!(on, s.surface(&q, &GRAIN).crack);
+                cracked += usize::from(on);
+            }
+            cracked as f64 / 20_000.0
+        };
+        let (light, heavy) = (
+            share("slightly cracked concrete"),
+            share("heavily cracked concrete"),
+        );
+        assert!(light > 0.0 && heavy > 2.0 * light, "{light} {heavy}");
+        assert_eq!(share("concrete"), 0.0);
+    }
+
+    #[test]
+    fn timber_grain_runs_along_the_piece() {
+        // Along the grain the colour changes slowly; across it, ring after ring.
+        let s = shader("oak");
+        let variation = |step: DVec3| {
+            (0..400)
+                .map(|i| {
+                    let at = |k: f64| SurfacePoint {
+                        rest: DVec3::new(0.3, -0.05, 0.2) + step * (f64::from(i) + k),
+                        rest_normal: -DVec3::Y,
+                        footprint: 1e-4,
+                    };
+                    let (a, b) = (s.surface(&at(0.0), &GRAIN), s.surface(&at(1.0), &GRAIN));
+                    (luminance(a.albedo) - luminance(b.albedo)).abs()
+                })
+                .sum::<f64>()
+        };
+        let (along, across) = (variation(DVec3::X * 5e-4), variation(DVec3::Z * 5e-4));
+        assert!(across > 3.0 * along, "along {along}, across {across}");
+    }
+
+    #[test]
+    fn brick_joints_fall_on_the_bond() {
+        // 65 mm bricks + 10 mm joints: 75 mm courses. Half-way between bed joints is brick,
+        // on a bed joint is mortar, whatever the sample's texture offset.
+        let s = shader("brick");
+        let mortar = linear(MORTAR);
+        let shift = s.offset.z;
+        for course in 0..20 {
+            let joint = 0.075 * f64::from(course) - shift.rem_euclid(0.075);
+            let at = |z: f64| SurfacePoint {
+                rest: DVec3::new(0.37, 0.0, z),
+                rest_normal: -DVec3::Y,
+                footprint: 1e-4,
+            };
+            let differs =
+                |c: [f64; 3]| (0..3).map(|k| (c[k] - mortar[k]).abs()).fold(0.0, f64::max);
+            assert!(differs(s.surface(&at(joint), &GRAIN).albedo) < 1e-12);
+            assert!(differs(s.surface(&at(joint + 0.0375), &GRAIN).albedo) > 0.01);
+        }
+    }
+
+    #[test]
+    fn each_sample_cuts_its_own_texture_and_plain_colours_stay_plain() {
+        let material = compile("rusty steel", true).unwrap().material;
+        let draw = |sample| {
+            Shader::new(
+                &material,
+                &mut Stream::new(3, Scope::Sample(sample), "material"),
+            )
+        };
+        let (a, again, b) = (draw(0), draw(0), draw(1));
+        let q = wall(1).next().unwrap();
+        assert_eq!(a.surface(&q, &GRAIN), again.surface(&q, &GRAIN));
+        assert_ne!(a.offset, b.offset);
+        let plain = Shader::new(
+            &Material::plain([0.2, 0.4, 0.6]),
+            &mut Stream::new(3, Scope::Sample(0), "material"),
+        );
+        assert!(!plain.textured());
+        assert_eq!(
+            plain.surface(&q, &GRAIN).albedo,
+            Material::plain([0.2, 0.4, 0.6]).albedo()
+        );
+    }
+}
