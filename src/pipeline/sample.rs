@@ -233,11 +233,13 @@ impl<'a> SampleRenderer<'a> {
         let dataset = &self.recipe.dataset;
         let (camera, draw) = view_camera(dataset, self.sample, view);
         let gbuffer = self.trace_mesh.trace(&camera);
-        let (backdrop, drawn_backdrop) = dataset.background.draw(&mut Stream::new(
+        let mut stream = Stream::new(
             dataset.seed,
             Scope::View(self.sample.index, view),
             "background",
-        ));
+        );
+        let frame = (dataset.camera.width, dataset.camera.height);
+        let (backdrop, drawn_backdrop) = dataset.background.draw(&mut stream, frame);
         let rgb = dataset.outputs.rgb.then(|| {
             shade(
                 &gbuffer,

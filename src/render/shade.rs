@@ -72,12 +72,12 @@ pub enum Backdrop {
         horizon: [f64; 3],
         ground: [f64; 3],
     },
-    /// An image stretched over the frame from a window: (u0, v0) top-left and `size`, in
-    /// image units (1 = the whole image).
+    /// A window of an image filling the frame: top-left `origin` and `size` (width, height), in
+    /// image units (1 = the whole image), with square pixels.
     Image {
         image: Arc<TextureImage>,
         origin: (f64, f64),
-        size: f64,
+        size: (f64, f64),
     },
 }
 
@@ -318,12 +318,11 @@ impl<S: Surfaces> Shading<'_, S> {
                 size,
             } => {
                 let k = self.camera.intrinsics;
-                let side = f64::from(k.width.max(k.height));
-                let texel = size / side;
+                let (w, h) = (f64::from(k.width), f64::from(k.height));
                 image.sample(
-                    origin.0 + u / side * size,
-                    origin.1 + v / side * size,
-                    texel,
+                    origin.0 + u / w * size.0,
+                    origin.1 + v / h * size.1,
+                    size.0 / w,
                 )
             }
         }

@@ -142,8 +142,9 @@ pub struct ImageRecord {
 }
 
 impl Background {
-    /// The backdrop of one view, and what was drawn (for the JSON).
-    pub fn draw(&self, stream: &mut Stream) -> (Backdrop, Value) {
+    /// The backdrop of one view of `frame` (width, height) pixels, and what was drawn (for the
+    /// JSON).
+    pub fn draw(&self, stream: &mut Stream, frame: (u32, u32)) -> (Backdrop, Value) {
         match self {
             Background::Colour(c) => (
                 Backdrop::Colour(c.map(|c| (c * 255.0).round() as u8)),
@@ -159,11 +160,16 @@ impl Background {
             ),
             Background::Images { decoded, .. } => {
                 let chosen = &decoded[stream.integer(0, decoded.len() as i64 - 1) as usize];
-                // A window of 50–100 % of the image's side, anywhere inside it.
-                let size = stream.uniform(0.5, 1.0);
+                let (w, h) = (f64::from(frame.0), f64::from(frame.1));
+                let (iw, ih) = (chosen.image.width() as f64, chosen.image.height() as f64);
+                // The widest window with the frame's aspect that fits the image, then 50–100 %
+                // of it, anywhere inside the image.
+                let widest = (ih * w / (iw * h)).min(1.0);
+                let width = stream.uniform(0.5, 1.0) * widest;
+                let size = (width, width * iw * h / (ih * w));
                 let origin = (
-                    stream.uniform(0.0, 1.0 - size),
-                    stream.uniform(0.0, 1.0 - size),
+                    stream.uniform(0.0, 1.0 - size.0),
+                    stream.uniform(0.0, 1.0 - size.1),
                 );
                 (
                     Backdrop::Image {
@@ -171,7 +177,7 @@ impl Background {
                         origin,
                         size,
                     },
-                    json!({ "image": chosen.name, "hash": chosen.hash, "window_origin": [origin.0, origin.1], "window_size": size }),
+                    json!({ "image": chosen.name, "hash": chosen.hash, "window_origin": [origin.0, origin.1], "window_size": [size.0, size.1] }),
                 )
             }
         }
