@@ -7,7 +7,7 @@
 use shmgen::output::{depth_exr, mask_png, rgb_png};
 use shmgen::pipeline::{self, RunOptions, Shard, prepare, view_camera};
 use shmgen::recipe::Recipe;
-use shmgen::render::{Lighting, TraceMesh, shade};
+use shmgen::render::{Backdrop, SampleSurfaces, TraceMesh, shade};
 use std::path::Path;
 use std::time::Instant;
 
@@ -86,13 +86,20 @@ fn main() {
                         / g.triangle.len() as f64,
                 );
                 let t = Instant::now();
+                let surfaces = SampleSurfaces {
+                    mesh: &sample.mesh,
+                    rest: &sample.rest,
+                    piece: &sample.piece,
+                    pieces: &sample.pieces,
+                    shaders: &sample.shaders,
+                };
                 let rgb = shade(
                     &g,
                     &mesh,
                     &camera,
-                    &Lighting::default(),
-                    |_| [0.5, 0.3, 0.2],
-                    [0, 0, 0],
+                    &sample.lighting.0,
+                    &surfaces,
+                    &Backdrop::Colour([0, 0, 0]),
                     true,
                 );
                 stages[3].1.push(t.elapsed().as_secs_f64());

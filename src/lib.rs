@@ -18,3 +18,4 @@ pub mod recipe;
 pub mod render;
 pub mod scene;
 pub mod seeds;
+pub mod words;

@@ -482,7 +482,8 @@ fn a_deformed_beam_one_kilometre_away_renders_like_one_at_the_origin() {
 
 #[test]
 fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() {
-    use shmgen::render::{Lighting, shade, srgb_to_linear};
+    use shmgen::materials::srgb_to_linear;
+    use shmgen::render::{Backdrop, Lighting, shade};
     // Head-on, the box shows one face of uniform colour on black: a silhouette pixel's linear
     // value must be the face's times the fraction of the 2 × 2 sub-pixel rays that hit it.
     let k = Intrinsics::from_fov_y(240, 180, 0.8);
@@ -499,8 +500,8 @@ fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() 
         &mesh,
         &cam,
         &Lighting::default(),
-        |_| [0.5, 0.5, 0.5],
-        [0, 0, 0],
+        &|_| [0.5, 0.5, 0.5],
+        &Backdrop::Colour([0, 0, 0]),
         true,
     );
     let plain = shade(
@@ -508,8 +509,8 @@ fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() 
         &mesh,
         &cam,
         &Lighting::default(),
-        |_| [0.5, 0.5, 0.5],
-        [0, 0, 0],
+        &|_| [0.5, 0.5, 0.5],
+        &Backdrop::Colour([0, 0, 0]),
         false,
     );
     assert!(

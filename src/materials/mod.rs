@@ -1,28 +1,169 @@
-//! Surface materials. Here a material is a plain colour; text prompts and procedural
-//! textures come later and will compile into this same description.
+//! Surface materials: what a surface looks like, described as plain data and evaluated per
+//! shading point.
 //!
-//! Owns: what a surface looks like (albedo). Must not touch: geometry, lights or files.
+//! A material is a base (steel, concrete, a timber species, paint, …) with a colour, a finish
+//! (roughness and specular) and conditions layered on top (rust, cracks, moss, …). Text prompts
+//! compile into this description (`prompt`); `procedural` evaluates it at a point of the
+//! *undeformed* surface, in metres, so textures are continuous across faces and move with the
+//! deformation; `image` samples textures made elsewhere.
+//!
+//! Owns: the material vocabulary, the generators and texture images. Must not touch: geometry,
+//! lights, cameras or writing files.
+
+pub mod image;
+pub mod noise;
+pub mod procedural;
+pub mod prompt;
+
+pub use procedural::{Grain, Shader, Surface, SurfacePoint};
 
 use serde::Serialize;
+use std::sync::Arc;
 
+/// How a surface looks: everything here is written to each view's JSON.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Material {
-    /// Base colour, sRGB components in [0, 1].
+    /// The text the material was compiled from, if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prompt: Option<String>,
+    pub base: Base,
+    /// Base colour, sRGB components in [0, 1]: the paint, the plastic, the wood or the metal.
     pub colour: [f64; 3],
+    /// Microfacet roughness in (0, 1]: 1 is fully matte.
+    pub roughness: f64,
+    /// Specular reflectance at normal incidence (about 0.04 for dielectrics, more for metals).
+    pub specular: f64,
+    /// Conditions layered over the base, in order.
+    pub conditions: Vec<Condition>,
+    /// Multiplies the size of every texture feature (1 = the material's natural size).
+    pub scale: f64,
+    pub texture: Texture,
+}
+
+/// The substance under any condition.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Base {
+    /// A flat colour, no texture (the default, and `.colour([r, g, b])`).
+    Plain,
+    Steel,
+    GalvanisedSteel,
+    WeatheringSteel,
+    Aluminium,
+    Concrete,
+    Timber(Species),
+    Plastic,
+    Brick,
+    Stone,
+    /// Paint over steel; the colour is the paint's.
+    Painted,
+}
+
+/// Wood species, for colour and ring spacing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Species {
+    Pine,
+    Spruce,
+    Oak,
+    Ash,
+    Birch,
+    Cedar,
+    Teak,
+    Walnut,
+    Mahogany,
+    Rosewood,
+}
+
+/// A condition of the surface with its intensity in (0, 1].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Condition {
+    pub kind: ConditionKind,
+    pub intensity: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ConditionKind {
+    /// Rust patches (steel) or iron staining (other bases).
+    Rusty,
+    /// Rust with pitting and loss of section: darker, rougher.
+    Corroded,
+    /// A crack network, also written as a crack mask.
+    Cracked,
+    /// Faded, uneven colour.
+    Weathered,
+    /// Dark streaks running down the surface.
+    Stained,
+    /// Moss patches, mostly on upward-facing surfaces.
+    Mossy,
+    /// Clean and even, slightly glossier.
+    New,
+    /// Darker and glossier.
+    Wet,
+    /// Paint worn away in patches, showing the substrate.
+    Worn,
+}
+
+/// Where the albedo comes from.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "source", rename_all = "snake_case")]
+pub enum Texture {
+    Procedural,
+    /// An image file tiled over the undeformed surface, `size` metres per tile.
+    Image {
+        file: String,
+        /// blake3 of the file's bytes.
+        hash: String,
+        size: f64,
+        /// How the file was chosen: "explicit" (named in the recipe) or "prompt" (found in the
+        /// recipe's textures folder under the prompt's name).
+        chosen: String,
+        #[serde(skip)]
+        pixels: Arc<image::TextureImage>,
+    },
 }
 
 impl Default for Material {
     /// Light grey, like primed steel.
     fn default() -> Self {
-        Material {
-            colour: [0.62, 0.62, 0.6],
-        }
+        Material::plain([0.62, 0.62, 0.6])
     }
 }
 
 impl Material {
-    /// Linear-light albedo for shading.
+    /// A flat colour (sRGB), matte.
+    pub fn plain(colour: [f64; 3]) -> Self {
+        Material {
+            prompt: None,
+            base: Base::Plain,
+            colour,
+            roughness: 0.8,
+            specular: 0.02,
+            conditions: Vec::new(),
+            scale: 1.0,
+            texture: Texture::Procedural,
+        }
+    }
+
+    /// Linear-light base colour.
     pub fn albedo(&self) -> [f64; 3] {
-        self.colour.map(crate::render::srgb_to_linear)
+        self.colour.map(srgb_to_linear)
+    }
+
+    /// Whether the material draws a crack network (and so has a crack mask).
+    pub fn has_cracks(&self) -> bool {
+        self.conditions
+            .iter()
+            .any(|c| c.kind == ConditionKind::Cracked)
+    }
+}
+
+/// sRGB (0–1) → linear.
+pub fn srgb_to_linear(s: f64) -> f64 {
+    if s <= 0.040_45 {
+        s / 12.92
+    } else {
+        ((s + 0.055) / 1.055).powf(2.4)
     }
 }

@@ -2,10 +2,11 @@
 
 use crate::cameras::{Camera, ViewDraw, rows4};
 use crate::geometry::Mesh;
+use crate::materials::{Grain, Shader};
 use crate::mechanics::Labels;
 use crate::output::{SampleStage, depth_exr, id_png, mask_png, rgb_png, view_file};
 use crate::recipe::Recipe;
-use crate::render::{GBuffer, Lighting, NO_HIT, TraceMesh, shade};
+use crate::render::{GBuffer, Lighting, NO_HIT, SampleSurfaces, TraceMesh, shade};
 use crate::scene::{DatasetSpec, PIXEL_TOLERANCE, SceneSpec, Structure};
 use crate::seeds::{Scope, Stream};
 use anyhow::{Result, bail};
@@ -22,6 +23,16 @@ pub struct PreparedSample {
     /// Mechanics labels and segment count of each beam (None for assemblies).
     pub labels: Vec<Option<(Labels, usize)>>,
     pub mesh: Mesh,
+    /// Undeformed position of every vertex (where textures are evaluated).
+    pub rest: Vec<DVec3>,
+    /// Piece (a beam, or one shape of an assembly) of every triangle.
+    pub piece: Vec<u32>,
+    /// Structure index and grain direction of every piece.
+    pub pieces: Vec<(u32, Grain)>,
+    /// The material of every structure, with this sample's random choices.
+    pub shaders: Vec<Shader>,
+    /// The light of this sample, and the values drawn for it.
+    pub lighting: (Lighting, Value),
     /// Structure index of every triangle.
     pub owner: Vec<u32>,
     /// Part of every triangle, as an index into `parts`.
@@ -44,14 +55,19 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
             Structure::Beam(beam) => {
                 let footprint = recipe.dataset.camera.nearest_pixel_footprint(beam.radius());
                 let built = beam.build(footprint).map_err(failed)?;
-                assembled.add(&built.mesh, i, "beam");
+                let grain = Grain {
+                    axis: glam::DMat3::from_rotation_z(beam.yaw) * DVec3::X,
+                    centre: DVec3::from_array(beam.centre),
+                };
+                assembled.add(&built.mesh, &built.rest, i, "beam", grain);
                 labels.push(Some((built.deformation.labels, built.segments)));
             }
             Structure::Assembly(a) => {
                 let tolerance =
                     PIXEL_TOLERANCE * recipe.dataset.camera.nearest_pixel_footprint(a.radius());
-                for (mesh, part) in a.build(tolerance).map_err(failed)? {
-                    assembled.add(&mesh, i, part);
+                for shape in a.build(tolerance).map_err(failed)? {
+                    let grain = grain_of(&shape.rest);
+                    assembled.add(&shape.mesh, &shape.rest, i, shape.part, grain);
                 }
                 labels.push(None);
             }
@@ -59,9 +75,12 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
     }
     let Assembled {
         mesh,
+        rest,
         owner,
         part,
         parts,
+        piece,
+        pieces,
     } = assembled;
     if !mesh.is_finite() {
         bail!(
@@ -74,11 +93,27 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
     if !(radius > 0.0 && radius.is_finite()) {
         bail!("sample {index}: the scene has no extent (radius {radius})");
     }
+    let mut materials = Stream::new(recipe.dataset.seed, Scope::Sample(index), "material");
+    let shaders = scene
+        .structures
+        .iter()
+        .map(|s| Shader::new(s.material(), &mut materials))
+        .collect();
+    let lighting = recipe.dataset.light.draw(&mut Stream::new(
+        recipe.dataset.seed,
+        Scope::Sample(index),
+        "light",
+    ));
     Ok(PreparedSample {
         index,
         scene,
         labels,
         mesh,
+        rest,
+        piece,
+        pieces,
+        shaders,
+        lighting,
         owner,
         part,
         parts,
@@ -87,17 +122,41 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<PreparedSample> {
     })
 }
 
-/// The scene mesh being put together, with each triangle's structure and part.
+/// The scene mesh being put together, with each triangle's structure, part and piece.
 #[derive(Default)]
 struct Assembled {
     mesh: Mesh,
+    rest: Vec<DVec3>,
     owner: Vec<u32>,
     part: Vec<u32>,
     parts: Vec<String>,
+    piece: Vec<u32>,
+    pieces: Vec<(u32, Grain)>,
+}
+
+/// Grain along the longest side of a piece's undeformed bounding box.
+fn grain_of(rest: &[DVec3]) -> Grain {
+    let (lo, hi) = rest
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    let size = hi - lo;
+    let axis = if size.x >= size.y && size.x >= size.z {
+        DVec3::X
+    } else if size.y >= size.z {
+        DVec3::Y
+    } else {
+        DVec3::Z
+    };
+    Grain {
+        axis,
+        centre: 0.5 * (lo + hi),
+    }
 }
 
 impl Assembled {
-    fn add(&mut self, mesh: &Mesh, structure: usize, part: &str) {
+    fn add(&mut self, mesh: &Mesh, rest: &[DVec3], structure: usize, part: &str, grain: Grain) {
         let id = match self.parts.iter().position(|p| p == part) {
             Some(id) => id,
             None => {
@@ -109,6 +168,12 @@ impl Assembled {
             .extend(std::iter::repeat_n(structure as u32, mesh.triangles.len()));
         self.part
             .extend(std::iter::repeat_n(id as u32, mesh.triangles.len()));
+        self.piece.extend(std::iter::repeat_n(
+            self.pieces.len() as u32,
+            mesh.triangles.len(),
+        ));
+        self.pieces.push((structure as u32, grain));
+        self.rest.extend_from_slice(rest);
         self.mesh.append(mesh);
     }
 }
@@ -131,8 +196,7 @@ pub struct SampleRenderer<'a> {
     recipe: &'a Recipe,
     sample: &'a PreparedSample,
     trace_mesh: TraceMesh,
-    albedo: Vec<[f64; 3]>,
-    lighting: Lighting,
+    surfaces: SampleSurfaces<'a>,
 }
 
 /// One view of a sample, rendered into memory.
@@ -143,22 +207,25 @@ pub struct RenderedView {
     pub gbuffer: GBuffer,
     /// sRGB 8-bit, row-major, when the dataset asks for RGB.
     pub rgb: Option<Vec<u8>>,
+    /// 255 where a crack is seen, when the dataset asks for it.
+    pub cracks: Option<Vec<u8>>,
+    /// The background drawn for this view.
+    pub backdrop: Value,
 }
 
 impl<'a> SampleRenderer<'a> {
     pub fn new(recipe: &'a Recipe, sample: &'a PreparedSample) -> Self {
-        let albedo = sample
-            .scene
-            .structures
-            .iter()
-            .map(|s| s.material().albedo())
-            .collect();
         SampleRenderer {
             recipe,
             sample,
             trace_mesh: TraceMesh::build(&sample.mesh),
-            albedo,
-            lighting: Lighting::default(),
+            surfaces: SampleSurfaces {
+                mesh: &sample.mesh,
+                rest: &sample.rest,
+                piece: &sample.piece,
+                pieces: &sample.pieces,
+                shaders: &sample.shaders,
+            },
         }
     }
 
@@ -166,16 +233,27 @@ impl<'a> SampleRenderer<'a> {
         let dataset = &self.recipe.dataset;
         let (camera, draw) = view_camera(dataset, self.sample, view);
         let gbuffer = self.trace_mesh.trace(&camera);
+        let mut stream = Stream::new(
+            dataset.seed,
+            Scope::View(self.sample.index, view),
+            "background",
+        );
+        let frame = (dataset.camera.width, dataset.camera.height);
+        let (backdrop, drawn_backdrop) = dataset.background.draw(&mut stream, frame);
         let rgb = dataset.outputs.rgb.then(|| {
             shade(
                 &gbuffer,
                 &self.trace_mesh,
                 &camera,
-                &self.lighting,
-                |t| self.albedo[self.sample.owner[t as usize] as usize],
-                dataset.background.map(|c| (c * 255.0).round() as u8),
+                &self.sample.lighting.0,
+                &self.surfaces,
+                &backdrop,
                 dataset.antialias,
             )
+        });
+        let cracks = dataset.outputs.cracks.then(|| {
+            self.surfaces
+                .crack_mask(&gbuffer, &camera, &self.trace_mesh)
         });
         RenderedView {
             view,
@@ -183,6 +261,8 @@ impl<'a> SampleRenderer<'a> {
             draw,
             gbuffer,
             rgb,
+            cracks,
+            backdrop: drawn_backdrop,
         }
     }
 }
@@ -233,6 +313,9 @@ pub fn render(recipe: &Recipe, sample: &PreparedSample, stage: &mut SampleStage)
         if dataset.outputs.mask {
             put(stage, "mask", "png", mask_png(w, h, &rendered.mask()))?;
         }
+        if let Some(cracks) = &rendered.cracks {
+            put(stage, "cracks", "png", mask_png(w, h, cracks))?;
+        }
         if dataset.outputs.parts {
             put(
                 stage,
@@ -280,8 +363,10 @@ fn scene_json(sample: &PreparedSample) -> Value {
         .structures
         .iter()
         .zip(&sample.labels)
-        .map(|(s, labels)| {
+        .zip(&sample.shaders)
+        .map(|((s, labels), shader)| {
             let mut v = json!(s);
+            v["material_drawn"] = shader.drawn();
             if let (Structure::Beam(b), Some((labels, segments))) = (s, labels) {
                 v["section_properties"] = json!(b.section.properties(b.poisson));
                 v["segments"] = json!(segments);
@@ -356,8 +441,10 @@ fn view_json(
         },
         "depth": { "kind": "planar_z", "unit": "m", "no_surface": 0.0, "channel": crate::output::DEPTH_CHANNEL },
         "mask": { "structure": 255, "background": 0 },
+        "cracks": { "crack": 255, "elsewhere": 0, "rule": "the centre ray meets the surface within half a crack width, or half a pixel footprint for cracks thinner than a pixel, of a crack's centre line" },
         "segmentation": scene["segmentation"],
-        "background": recipe.dataset.background,
+        "background": rendered.backdrop,
+        "light": sample.lighting.1,
         "scene": { "structures": scene["structures"] },
         "mesh": { "vertices": sample.mesh.positions.len(), "triangles": sample.mesh.triangles.len(), "bounding_radius": sample.radius },
         "coverage": hits as f64 / g.triangle.len() as f64,

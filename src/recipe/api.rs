@@ -1,9 +1,12 @@
 //! The functions and types a recipe can call. Each builds or edits plain scene data and
 //! validates what it is given; none does per-vertex or per-pixel work.
 
+use super::files::RecipeFiles;
 use super::options::{self, OptResult, Options, number};
 use crate::cameras::{CameraRig, Distance};
-use crate::scene::{DatasetSpec, Outputs};
+use crate::scene::{
+    Background, DatasetSpec, ImageRecord, LightSpec, Outputs, SkyGradient, SkySpec, SunSpec,
+};
 use crate::seeds::Stream;
 use rhai::{Array, Dynamic, Engine, EvalAltResult, FnPtr, ImmutableString, Map};
 use std::collections::BTreeMap;
@@ -42,7 +45,12 @@ impl ScriptRng {
     }
 }
 
-pub fn register(engine: &mut Engine, params: Arc<Params>, files: Arc<super::shape_api::MeshFiles>) {
+pub fn register(
+    engine: &mut Engine,
+    params: Arc<Params>,
+    materials: super::material_api::MaterialContext,
+) {
+    let files = materials.files.clone();
     engine.register_fn("param", move |name: ImmutableString, default: Dynamic| {
         param(&params, &name, default)
     });
@@ -50,11 +58,13 @@ pub fn register(engine: &mut Engine, params: Arc<Params>, files: Arc<super::shap
         Ok(number(&x, "deg(x)")?.to_radians())
     });
     engine.register_type_with_name::<Dataset>("Dataset");
-    engine.register_fn("dataset", |map: Map| -> Fallible<Dataset> {
-        Ok(dataset(map)?)
+    let images = files.clone();
+    engine.register_fn("dataset", move |map: Map| -> Fallible<Dataset> {
+        Ok(dataset(map, &images)?)
     });
     super::beam_api::register(engine);
     super::shape_api::register(engine, files);
+    super::material_api::register(engine, materials);
     register_rng(engine);
 }
 
@@ -112,19 +122,18 @@ fn parse_override(name: &str, text: &str, default: &Dynamic) -> Fallible<Dynamic
     }
 }
 
-fn dataset(map: Map) -> OptResult<Dataset> {
+fn dataset(map: Map, files: &RecipeFiles) -> OptResult<Dataset> {
     let mut o = Options::new(map, "dataset");
     let name = o.string("name", "dataset")?;
     let seed = o.integer("seed", 0, 0, i64::MAX)? as u64;
     let samples = o.integer("samples", 1, 1, 1 << 40)? as u64;
     let views = o.integer("views", 1, 1, 100_000)? as u32;
-    let background = o.colour("background", [0.0; 3])?;
-    let antialias = match o.take("antialias") {
-        None => true,
-        Some(v) => v
-            .as_bool()
-            .map_err(|_| format!("dataset.antialias = {v} must be true or false"))?,
+    let background = background(o.take("background"), files)?;
+    let light = match o.sub("light")? {
+        Some(l) => light(l)?,
+        None => LightSpec::default(),
     };
+    let antialias = o.flag("antialias", true)?;
     let outputs = outputs(o.take("outputs"))?;
     let camera = match o.sub("camera")? {
         Some(c) => camera(c)?,
@@ -144,6 +153,7 @@ fn dataset(map: Map) -> OptResult<Dataset> {
             camera,
             outputs,
             background,
+            light,
             antialias,
         },
         scene,
@@ -158,6 +168,7 @@ fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {
             mask: true,
             parts: false,
             instances: false,
+            cracks: false,
         });
     };
     let list = value
@@ -169,6 +180,7 @@ fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {
         mask: false,
         parts: false,
         instances: false,
+        cracks: false,
     };
     for item in list {
         let name = item.to_string();
@@ -178,12 +190,14 @@ fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {
             "mask" => out.mask = true,
             "parts" => out.parts = true,
             "instances" => out.instances = true,
+            "cracks" => out.cracks = true,
             _ => {
-                let hint = options::nearest(&name, &Outputs::NAMES)
+                let hint = crate::words::nearest(&name, &Outputs::NAMES)
                     .map(|k| format!("; did you mean \"{k}\"?"))
                     .unwrap_or_default();
                 return Err(format!(
-                    "unknown output \"{name}\" in dataset.outputs{hint} (known: rgb, depth, mask, parts, instances)"
+                    "unknown output \"{name}\" in dataset.outputs{hint} (known: {})",
+                    Outputs::NAMES.join(", ")
                 ));
             }
         }
@@ -239,6 +253,123 @@ fn camera(mut o: Options) -> OptResult<CameraRig> {
         pitch,
         roll,
         distance,
+    })
+}
+
+/// `background: [r, g, b]`, `"black"`, `"sky"`, `#{ sky: #{ zenith, horizon, ground } }` or
+/// `#{ images: "folder" }`.
+fn background(value: Option<Dynamic>, files: &RecipeFiles) -> OptResult<Background> {
+    let Some(value) = value else {
+        return Ok(Background::Colour([0.0; 3]));
+    };
+    if value.is_string() {
+        return match value.to_string().as_str() {
+            "black" => Ok(Background::Colour([0.0; 3])),
+            "sky" => Ok(Background::Sky {
+                sky: SkyGradient::default(),
+            }),
+            other => Err(format!(
+                "dataset.background = \"{other}\": expected \"black\", \"sky\", a colour [r, g, b], #{{ sky: #{{ ... }} }} or #{{ images: \"folder\" }}"
+            )),
+        };
+    }
+    if value.is_array() {
+        return Ok(Background::Colour(options::colour(
+            &value,
+            "dataset.background",
+        )?));
+    }
+    let map = value.try_cast::<Map>().ok_or(
+        "dataset.background must be \"black\", \"sky\", a colour [r, g, b] or a map like #{ images: \"backgrounds\" }",
+    )?;
+    let mut o = Options::new(map, "dataset.background");
+    let result = if let Some(mut sky) = o.sub("sky")? {
+        let d = SkyGradient::default();
+        let gradient = SkyGradient {
+            zenith: sky.colour("zenith", d.zenith)?,
+            horizon: sky.colour("horizon", d.horizon)?,
+            ground: sky.colour("ground", d.ground)?,
+        };
+        sky.finish()?;
+        Background::Sky { sky: gradient }
+    } else {
+        let folder = o.string("images", "")?;
+        if folder.is_empty() {
+            return Err("dataset.background needs `sky` or `images`".into());
+        }
+        let decoded = files.images_in(&folder, "dataset.background.images")?;
+        Background::Images {
+            images: folder,
+            files: decoded
+                .iter()
+                .map(|f| ImageRecord {
+                    file: f.name.clone(),
+                    hash: f.hash.clone(),
+                })
+                .collect(),
+            decoded,
+        }
+    };
+    o.finish()?;
+    Ok(result)
+}
+
+/// `light: #{ sun: #{ ... }, sky: #{ ... }, ambient, shadows, studio }`.
+fn light(mut o: Options) -> OptResult<LightSpec> {
+    let sun = match o.sub("sun")? {
+        None => None,
+        Some(mut s) => {
+            let spec = SunSpec {
+                elevation: s.range("elevation", [0.7, 0.7])?,
+                azimuth: s.range("azimuth", [0.0, std::f64::consts::TAU])?,
+                intensity: s.range("intensity", [1.2, 1.2])?,
+                colour: s.colour("colour", [1.0, 0.96, 0.9])?,
+            };
+            let half_pi = std::f64::consts::FRAC_PI_2;
+            if spec.elevation[0] < -half_pi || spec.elevation[1] > half_pi {
+                return Err(format!(
+                    "dataset.light.sun.elevation = [{}, {}] must lie within [-π/2, π/2]",
+                    spec.elevation[0], spec.elevation[1]
+                ));
+            }
+            s.finish()?;
+            Some(spec)
+        }
+    };
+    let sky = match o.sub("sky")? {
+        None => None,
+        Some(mut s) => {
+            let spec = SkySpec {
+                intensity: s.range("intensity", [0.3, 0.3])?,
+                colour: s.colour("colour", [0.75, 0.83, 0.95])?,
+                ground: s.colour("ground", [0.4, 0.36, 0.3])?,
+            };
+            s.finish()?;
+            Some(spec)
+        }
+    };
+    let outdoor = sun.is_some() || sky.is_some();
+    let ambient = o.range("ambient", if outdoor { [0.02; 2] } else { [0.12; 2] })?;
+    let shadows = o.flag("shadows", outdoor)?;
+    let studio = o.flag("studio", !outdoor)?;
+    for (name, [lo, _]) in [("ambient", ambient)]
+        .into_iter()
+        .chain(sun.iter().map(|s| ("sun.intensity", s.intensity)))
+        .chain(sky.iter().map(|s| ("sky.intensity", s.intensity)))
+    {
+        if lo < 0.0 {
+            return Err(format!(
+                "dataset.light.{name} must not be negative (got {lo})"
+            ));
+        }
+    }
+    o.finish()?;
+    Ok(LightSpec {
+        studio,
+        sun,
+        sky,
+        ambient,
+        shadows,
     })
 }
 

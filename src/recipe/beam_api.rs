@@ -337,13 +337,6 @@ fn register_settings(engine: &mut Engine) {
         },
     );
     engine.register_fn(
-        "colour",
-        |b: &mut BeamSpec, rgb: Array| -> Fallible<BeamSpec> {
-            b.material.colour = super::options::colour(&Dynamic::from(rgb), "colour")?;
-            Ok(b.clone())
-        },
-    );
-    engine.register_fn(
         "at",
         |b: &mut BeamSpec, x: Dynamic, y: Dynamic, z: Dynamic| -> Fallible<BeamSpec> {
             b.centre = [

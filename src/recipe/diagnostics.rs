@@ -1,9 +1,12 @@
 //! Turning Rhai errors into messages that point into the user's files:
 //! `error: ...` then `--> file:line:col`, the source line and a caret, then the call chain.
+//! Warnings take the same form.
 
 use super::engine::{MAX_OPERATIONS, Sources};
 use rhai::{EvalAltResult, ParseError, Position};
+use std::collections::BTreeSet;
 use std::fmt;
+use std::sync::{Arc, Mutex};
 
 /// A recipe error, fully formatted for the terminal.
 #[derive(Debug, Clone)]
@@ -32,7 +35,7 @@ impl RecipeError {
             label: label.to_string(),
             pos: err.1,
         };
-        RecipeError(render(&err.0.to_string(), &at, &[], None, sources))
+        RecipeError(render("error", &err.0.to_string(), &at, &[], None, sources))
     }
 
     /// `context` says what was being evaluated, e.g. "while drawing the scene of sample 3".
@@ -44,7 +47,34 @@ impl RecipeError {
     ) -> Self {
         let mut chain = Vec::new();
         let (message, at) = innermost(err, main_label, &mut chain);
-        RecipeError(render(&message, &at, &chain, context, sources))
+        RecipeError(render("error", &message, &at, &chain, context, sources))
+    }
+}
+
+/// Warnings about a recipe, each printed once however many samples repeat it, pointing at the
+/// call that caused it.
+pub struct Warnings {
+    sources: Arc<Sources>,
+    seen: Mutex<BTreeSet<String>>,
+}
+
+impl Warnings {
+    pub fn new(sources: Arc<Sources>) -> Self {
+        Warnings {
+            sources,
+            seen: Mutex::default(),
+        }
+    }
+
+    pub fn warn(&self, message: &str, label: &str, pos: Position) {
+        let at = Located {
+            label: label.to_string(),
+            pos,
+        };
+        let text = render("warning", message, &at, &[], None, &self.sources);
+        if self.seen.lock().unwrap().insert(text.clone()) {
+            eprintln!("{text}");
+        }
     }
 }
 
@@ -127,13 +157,14 @@ fn innermost(
 }
 
 fn render(
+    severity: &str,
     message: &str,
     at: &Located,
     chain: &[(String, Located)],
     context: Option<&str>,
     sources: &Sources,
 ) -> String {
-    let mut out = format!("error: {message}\n");
+    let mut out = format!("{severity}: {message}\n");
     out += &format!("  --> {}\n", place(at));
     if let (Some(line), Some(col)) = (at.pos.line(), at.pos.position()) {
         if let Some(text) = sources.line(&at.label, line) {

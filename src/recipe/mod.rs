@@ -12,6 +12,8 @@ mod api;
 mod beam_api;
 mod diagnostics;
 mod engine;
+mod files;
+mod material_api;
 mod options;
 mod shape_api;
 
@@ -60,11 +62,15 @@ impl Recipe {
             overrides: overrides.iter().cloned().collect(),
             ..Params::default()
         });
-        let files = Arc::new(shape_api::MeshFiles::new(&folder, sources.clone()));
+        let materials = material_api::MaterialContext {
+            files: Arc::new(files::RecipeFiles::new(&folder, sources.clone())),
+            warnings: Arc::new(diagnostics::Warnings::new(sources.clone())),
+            label: label.clone(),
+        };
 
         let new_engine = || {
             let mut engine = engine::sandboxed(resolver.clone());
-            api::register(&mut engine, params.clone(), files.clone());
+            api::register(&mut engine, params.clone(), materials.clone());
             engine
         };
         let engine = new_engine();
@@ -131,8 +137,8 @@ impl Recipe {
     }
 
     /// The files this recipe was built from so far, for a watcher: the recipe, the modules it
-    /// imported from disk and the mesh files its scenes read (a mesh named only by a sample
-    /// not yet drawn is not known yet). Built-in modules have no file and are left out.
+    /// imported from disk and the mesh and image files its scenes read (a file named only by
+    /// a sample not yet drawn is not known yet). Built-in modules have no file and are left out.
     pub fn watched_paths(&self) -> Vec<PathBuf> {
         self.sources
             .labels()
@@ -177,7 +183,7 @@ fn resolved_params(
     for (name, value) in overrides {
         if !resolved.contains_key(name) {
             let known: Vec<&str> = resolved.keys().map(String::as_str).collect();
-            let hint = options::nearest(name, &known)
+            let hint = crate::words::nearest(name, &known)
                 .map(|k| format!("; did you mean `{k}`?"))
                 .unwrap_or_default();
             return Err(RecipeError::plain(format!(

@@ -114,6 +114,14 @@ impl Options {
         }
     }
 
+    pub fn flag(&mut self, key: &'static str, default: bool) -> OptResult<bool> {
+        let path = self.path(key);
+        self.take(key).map_or(Ok(default), |v| {
+            v.as_bool()
+                .map_err(|_| format!("{path} = {v} must be true or false"))
+        })
+    }
+
     /// A range `[lo, hi]` (lo ≤ hi), or a single number meaning `[x, x]`.
     pub fn range(&mut self, key: &'static str, default: [f64; 2]) -> OptResult<[f64; 2]> {
         let path = self.path(key);
@@ -168,7 +176,7 @@ impl Options {
         let mut known = self.known.clone();
         known.sort_unstable();
         known.dedup();
-        let hint = nearest(key, &known)
+        let hint = crate::words::nearest(key, &known)
             .map(|k| format!("; did you mean `{k}`?"))
             .unwrap_or_default();
         Err(format!(
@@ -196,45 +204,10 @@ pub fn colour(v: &Dynamic, path: &str) -> OptResult<[f64; 3]> {
     Ok(c)
 }
 
-/// The known name closest to `word` by edit distance, if it is plausibly a typo of it.
-pub fn nearest<'a>(word: &str, known: &[&'a str]) -> Option<&'a str> {
-    known
-        .iter()
-        .map(|k| (edit_distance(word, k), *k))
-        .filter(|(d, k)| *d <= 2.max(k.len() / 3))
-        .min()
-        .map(|(_, k)| k)
-}
-
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let next = (prev + usize::from(ca != cb))
-                .min(row[j] + 1)
-                .min(row[j + 1] + 1);
-            prev = row[j + 1];
-            row[j + 1] = next;
-        }
-    }
-    row[b.len()]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    #[test]
-    fn typo_suggestions() {
-        assert_eq!(nearest("pich", &["pitch", "yaw", "roll"]), Some("pitch"));
-        assert_eq!(nearest("zzzzzz", &["pitch", "yaw"]), None);
-        assert_eq!(edit_distance("kitten", "sitting"), 3);
-    }
-
-    #[test]
     fn unknown_and_bad_values_are_named() {
         let mut map = Map::new();
         map.insert("widht".into(), Dynamic::from(0.2));

@@ -3,10 +3,8 @@
 //! structure. Descriptions only: tessellation happens in Rust when the scene is built.
 
 use super::api::{Fallible, fail};
-use super::engine::Sources;
+use super::files::RecipeFiles;
 use super::options::{Options, number};
-use crate::geometry::Mesh;
-use crate::geometry::import::{ImportOptions, import_mesh};
 use crate::geometry::primitives::Primitive;
 use crate::mechanics::ShellPattern;
 use crate::scene::{AssemblySpec, BeamSpec, Bending, LabelledPattern, ShapeSpec};
@@ -14,58 +12,9 @@ use glam::{DAffine3, DVec3};
 use rhai::{
     Array, Dynamic, Engine, EvalAltResult, ImmutableString, Map, Module, NativeCallContext,
 };
-use std::collections::BTreeMap;
-use std::path::{Component, Path, PathBuf};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
-/// Mesh files a recipe imports: read once per recipe, only from inside the recipe's folder.
-pub struct MeshFiles {
-    folder: PathBuf,
-    sources: Arc<Sources>,
-    cache: Mutex<BTreeMap<(String, bool), Arc<Mesh>>>,
-}
-
-impl MeshFiles {
-    pub fn new(folder: &Path, sources: Arc<Sources>) -> Self {
-        MeshFiles {
-            folder: folder.to_path_buf(),
-            sources,
-            cache: Mutex::default(),
-        }
-    }
-
-    fn load(&self, file: &str, normalize: bool) -> Result<Arc<Mesh>, String> {
-        let key = (file.to_string(), normalize);
-        if let Some(mesh) = self.cache.lock().unwrap().get(&key) {
-            return Ok(mesh.clone());
-        }
-        let relative = Path::new(file);
-        if file.is_empty()
-            || !relative
-                .components()
-                .all(|c| matches!(c, Component::Normal(_)))
-        {
-            return Err(format!(
-                "shape::mesh(\"{file}\"): mesh files are named relative to the recipe's folder, without '..' or absolute paths"
-            ));
-        }
-        let path = self.folder.join(relative);
-        let imported = import_mesh(&path, ImportOptions { normalize })?;
-        for warning in &imported.warnings {
-            eprintln!("warning: {}: {warning}", path.display());
-        }
-        let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-        self.sources.insert(
-            &path.display().to_string(),
-            &format!("mesh file, blake3 {}", blake3::hash(&bytes).to_hex()),
-        );
-        let mesh = Arc::new(imported.mesh);
-        self.cache.lock().unwrap().insert(key, mesh.clone());
-        Ok(mesh)
-    }
-}
-
-pub fn register(engine: &mut Engine, files: Arc<MeshFiles>) {
+pub fn register(engine: &mut Engine, files: Arc<RecipeFiles>) {
     engine.register_type_with_name::<ShapeSpec>("Shape");
     engine.register_type_with_name::<AssemblySpec>("Assembly");
     let mut shapes = primitives();
@@ -140,13 +89,6 @@ pub fn register(engine: &mut Engine, files: Arc<MeshFiles>) {
                 return fail(format!("assembly \"{name}\" has no shapes"));
             }
             Ok(assembly)
-        },
-    );
-    engine.register_fn(
-        "colour",
-        |a: &mut AssemblySpec, rgb: Array| -> Fallible<AssemblySpec> {
-            a.material.colour = super::options::colour(&Dynamic::from(rgb), "colour")?;
-            Ok(a.clone())
         },
     );
 }
@@ -362,23 +304,18 @@ fn direction(name: &str) -> Fallible<DVec3> {
 /// `shape::mesh("file", #{ normalize: true })`.
 fn imported(
     ctx: &NativeCallContext,
-    files: &MeshFiles,
+    files: &RecipeFiles,
     file: &str,
     options: Map,
 ) -> Result<ShapeSpec, Box<EvalAltResult>> {
     make(ctx, || {
         let mut o = Options::new(options, "shape::mesh options");
-        let normalize = match o.take("normalize") {
-            None => false,
-            Some(v) => v.as_bool().map_err(|_| {
-                format!("shape::mesh options.normalize = {v} must be true or false")
-            })?,
-        };
+        let normalize = o.flag("normalize", false)?;
         o.finish()?;
         Ok(Primitive::Imported {
             file: file.to_string(),
             normalize,
-            mesh: files.load(file, normalize)?,
+            mesh: files.mesh(file, normalize)?,
         })
     })
 }

@@ -2,13 +2,16 @@
 //!
 //! Owns: the BVH over a scene mesh (built once, reused for all its views), the watertight
 //! ray–triangle test, screen-space culling, the per-pixel geometric buffers (planar depth,
-//! hit triangle) and Lambert shading into RGB, anti-aliased with fixed sub-pixel rays only where
-//! the image changes. Must not touch: recipes, mechanics or files. One centre ray per pixel for
-//! every geometric label; nothing here is random.
+//! hit triangle), texture lookup on the undeformed surface (through `materials`), shading into
+//! RGB with sun, sky, studio lights and shadows, anti-aliased with fixed sub-pixel rays only
+//! where the image changes, and backdrops. Must not touch: recipes, mechanics or files. One
+//! centre ray per pixel for every geometric label; nothing here draws random numbers.
 
 mod shade;
+mod surfaces;
 mod trace;
 mod watertight;
 
-pub use shade::{Lighting, shade, srgb_to_linear};
+pub use shade::{Backdrop, Lighting, Sky, Sun, Surfaces, shade};
+pub use surfaces::SampleSurfaces;
 pub use trace::{GBuffer, NO_HIT, TraceMesh};

@@ -1,18 +1,48 @@
-//! Lambert shading with a key and a fill light, fixed relative to the camera so that every
-//! view is lit the same way whatever its direction.
+//! Shading into RGB: diffuse and glossy reflection of the sun, the sky, an ambient term and
+//! (by default) a studio key and fill light fixed to the camera, with optional sun shadows;
+//! the background is a colour, a sky gradient or an image.
+//!
+//! Anti-aliasing: a first pass shades one centre ray per pixel, as for the geometric labels.
+//! Where a pixel differs from a neighbour in what it sees (surface or background, another
+//! structure, or an untextured shade more than one 8-bit level apart: silhouettes, creases),
+//! it is re-shaded from four fixed sub-pixel rays averaged in linear light. Texture detail is
+//! filtered by the materials themselves, so it never triggers extra rays.
 
 use super::trace::{GBuffer, NO_HIT, TraceMesh};
 use crate::cameras::Camera;
+use crate::materials::{Surface, image::TextureImage, srgb_to_linear};
 use glam::DVec3;
 use rayon::prelude::*;
-use std::sync::OnceLock;
+use std::f64::consts::PI;
+use std::sync::{Arc, OnceLock};
 
-/// Light intensities and directions (towards the light, camera axes: x right, y down, z forward).
-#[derive(Clone, Copy, Debug)]
+/// The light of one sample. Directions point towards the light.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Lighting {
+    /// Uniform light from everywhere (linear, per channel).
     pub ambient: f64,
-    pub key: (DVec3, f64),
-    pub fill: (DVec3, f64),
+    /// Key and fill lights fixed to the camera (camera axes: x right, y down, z forward), so
+    /// every view is lit alike; the default when a recipe sets no light.
+    pub studio: Option<[(DVec3, f64); 2]>,
+    /// A directional light fixed in the world.
+    pub sun: Option<Sun>,
+    /// Hemispherical light: `sky` from above, `ground` bounce from below.
+    pub sky: Option<Sky>,
+    /// Whether the sun casts shadows.
+    pub shadows: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sun {
+    pub direction: DVec3,
+    /// Linear radiance per channel.
+    pub colour: [f64; 3],
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sky {
+    pub sky: [f64; 3],
+    pub ground: [f64; 3],
 }
 
 impl Default for Lighting {
@@ -20,9 +50,65 @@ impl Default for Lighting {
         Lighting {
             ambient: 0.12,
             // Key above-left and behind the camera; fill from the right, weaker.
-            key: (DVec3::new(-0.45, -0.6, -0.66).normalize(), 0.85),
-            fill: (DVec3::new(0.7, -0.1, -0.7).normalize(), 0.3),
+            studio: Some([
+                (DVec3::new(-0.45, -0.6, -0.66).normalize(), 0.85),
+                (DVec3::new(0.7, -0.1, -0.7).normalize(), 0.3),
+            ]),
+            sun: None,
+            sky: None,
+            shadows: false,
         }
+    }
+}
+
+/// What a view shows where no structure is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Backdrop {
+    /// sRGB 8-bit.
+    Colour([u8; 3]),
+    /// Linear colours: a gradient from the horizon up to the zenith, flat ground below.
+    Sky {
+        zenith: [f64; 3],
+        horizon: [f64; 3],
+        ground: [f64; 3],
+    },
+    /// A window of an image filling the frame: top-left `origin` and `size` (width, height), in
+    /// image units (1 = the whole image), with square pixels.
+    Image {
+        image: Arc<TextureImage>,
+        origin: (f64, f64),
+        size: (f64, f64),
+    },
+}
+
+/// The surfaces of a mesh, by triangle.
+pub trait Surfaces: Sync {
+    /// The surface of triangle `tri` at world point `p`, seen with pixels `footprint` metres
+    /// wide there.
+    fn at(&self, tri: u32, p: DVec3, footprint: f64) -> Surface;
+    /// Untextured linear albedo of the triangle: decides where anti-aliasing is needed.
+    fn flat(&self, tri: u32) -> [f64; 3];
+    /// Whether the surface varies over the triangle (else `flat` is all there is to it).
+    fn textured(&self, tri: u32) -> bool;
+}
+
+/// A plain matte colour per triangle.
+impl<F: Fn(u32) -> [f64; 3] + Sync> Surfaces for F {
+    fn at(&self, tri: u32, _: DVec3, _: f64) -> Surface {
+        Surface {
+            albedo: self(tri),
+            roughness: 1.0,
+            specular: 0.0,
+            crack: false,
+        }
+    }
+
+    fn flat(&self, tri: u32) -> [f64; 3] {
+        self(tri)
+    }
+
+    fn textured(&self, _: u32) -> bool {
+        false
     }
 }
 
@@ -30,66 +116,81 @@ impl Default for Lighting {
 /// on every run.
 const EDGE_SAMPLES: [(f64, f64); 4] = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)];
 
-/// RGB8 image (sRGB) of the G-buffer. `albedo_of(triangle)` gives the linear albedo of the
-/// surface a pixel sees; `background` is sRGB 0–255. A first pass shades one centre ray per
-/// pixel, as for the geometric labels; pixels whose colour differs from a neighbour's by more
-/// than one 8-bit level (silhouettes, creases, material boundaries) are then re-shaded from
-/// four sub-pixel rays averaged in linear light. Smooth shading changes cost nothing extra.
+/// Everything a ray needs to be shaded.
+struct Shading<'a, S: Surfaces> {
+    mesh: &'a TraceMesh,
+    camera: &'a Camera,
+    lighting: &'a Lighting,
+    surfaces: &'a S,
+    backdrop: &'a Backdrop,
+    background: [f64; 3],
+}
+
+/// RGB8 image (sRGB) of the G-buffer.
 pub fn shade(
     g: &GBuffer,
     mesh: &TraceMesh,
     camera: &Camera,
     lighting: &Lighting,
-    albedo_of: impl Fn(u32) -> [f64; 3] + Sync,
-    background: [u8; 3],
+    surfaces: &impl Surfaces,
+    backdrop: &Backdrop,
     antialias: bool,
 ) -> Vec<u8> {
-    let width = g.width as usize;
-    let background_linear = background.map(|c| srgb_to_linear(f64::from(c) / 255.0));
-    let to_camera = camera.rotation.transpose();
-    let radiance = |tri: Option<u32>, view: DVec3| -> [f64; 3] {
-        let Some(tri) = tri else {
-            return background_linear;
-        };
-        let mut n = to_camera * mesh.normal(tri);
-        // Two-sided: light the face the camera sees.
-        if n.dot(view) > 0.0 {
-            n = -n;
-        }
-        let light = lighting.ambient
-            + lighting.key.1 * n.dot(lighting.key.0).max(0.0)
-            + lighting.fill.1 * n.dot(lighting.fill.0).max(0.0);
-        albedo_of(tri).map(|c| (c * light).clamp(0.0, 1.0))
+    let k = camera.intrinsics;
+    let s = Shading {
+        mesh,
+        camera,
+        lighting,
+        surfaces,
+        backdrop,
+        background: match backdrop {
+            Backdrop::Colour(c) => c.map(|c| srgb_to_linear(f64::from(c) / 255.0)),
+            _ => [0.0; 3],
+        },
     };
-    let background_bytes = encode(background_linear);
+    let width = g.width as usize;
+    let plain_background = matches!(backdrop, Backdrop::Colour(_)).then(|| encode(s.background));
+    // Centre rays: the shaded colour, and the untextured one that decides anti-aliasing.
     let mut centre = vec![0u8; g.triangle.len() * 3];
+    let mut flat = vec![0u8; g.triangle.len() * 3];
     centre
         .par_chunks_mut(width * 3)
+        .zip(flat.par_chunks_mut(width * 3))
         .enumerate()
-        .for_each(|(row, out)| {
+        .for_each(|(row, (out, flat))| {
             for col in 0..width {
-                let tri = g.triangle[row * width + col];
-                // Most of a frame is background: no ray, no shading.
-                let colour = if tri == NO_HIT {
-                    background_bytes
-                } else {
-                    encode(radiance(
-                        Some(tri),
-                        camera.intrinsics.ray_through_pixel(row as u32, col as u32),
-                    ))
+                let i = row * width + col;
+                let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
+                let hit = (g.triangle[i] != NO_HIT).then(|| (g.depth[i], g.triangle[i]));
+                let colour = match (hit, plain_background) {
+                    // Most of a frame is plain background: nothing to compute.
+                    (None, Some(bytes)) => bytes,
+                    _ => encode(s.radiance(hit, u, v)),
                 };
                 out[3 * col..3 * col + 3].copy_from_slice(&colour);
+                let flat_colour = match hit {
+                    Some((_, tri)) if s.surfaces.textured(tri) => {
+                        let view = k.ray_through(u, v);
+                        encode(s.light(tri, view, s.surfaces.flat(tri), None, None))
+                    }
+                    _ => colour,
+                };
+                flat[3 * col..3 * col + 3].copy_from_slice(&flat_colour);
             }
         });
     if !antialias {
         return centre;
     }
-    let pixel = |i: usize| &centre[3 * i..3 * i + 3];
     let differs = |i: usize, j: usize| {
-        pixel(i)
-            .iter()
-            .zip(pixel(j))
-            .any(|(a, b)| a.abs_diff(*b) > 1)
+        let (a, b) = (g.triangle[i], g.triangle[j]);
+        if (a == NO_HIT) != (b == NO_HIT) {
+            return true;
+        }
+        a != NO_HIT
+            && flat[3 * i..3 * i + 3]
+                .iter()
+                .zip(&flat[3 * j..3 * j + 3])
+                .any(|(x, y)| x.abs_diff(*y) > 1)
     };
     let mut rgb = centre.clone();
     rgb.par_chunks_mut(width * 3)
@@ -103,24 +204,14 @@ pub fn shade(
                     (row > 0).then(|| i - width),
                     (i + width < g.triangle.len()).then(|| i + width),
                 ];
-                let near_surface = g.triangle[i] != NO_HIT
-                    || neighbours
-                        .iter()
-                        .flatten()
-                        .any(|&j| g.triangle[j] != NO_HIT);
-                if !near_surface || !neighbours.into_iter().flatten().any(|j| differs(i, j)) {
+                if !neighbours.into_iter().flatten().any(|j| differs(i, j)) {
                     continue;
                 }
                 let mean = EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
-                    let view = camera
-                        .intrinsics
-                        .ray_through(col as f64 + du, row as f64 + dv);
-                    let c = radiance(mesh.first_hit(camera, view), view);
-                    [
-                        acc[0] + c[0] / 4.0,
-                        acc[1] + c[1] / 4.0,
-                        acc[2] + c[2] / 4.0,
-                    ]
+                    let (u, v) = (col as f64 + du, row as f64 + dv);
+                    let hit = s.mesh.first_hit(s.camera, k.ray_through(u, v));
+                    let c = s.radiance(hit, u, v);
+                    std::array::from_fn(|k| acc[k] + c[k] / 4.0)
                 });
                 out[3 * col..3 * col + 3].copy_from_slice(&encode(mean));
             }
@@ -128,10 +219,156 @@ pub fn shade(
     rgb
 }
 
+impl<S: Surfaces> Shading<'_, S> {
+    /// Linear radiance along the ray through image point (u, v), given what it hit.
+    fn radiance(&self, hit: Option<(f32, u32)>, u: f64, v: f64) -> [f64; 3] {
+        let view = self.camera.intrinsics.ray_through(u, v);
+        let Some((depth, tri)) = hit else {
+            return self.backdrop(view, u, v);
+        };
+        let (point, normal, footprint) =
+            hit_geometry(self.camera, self.mesh, tri, view, f64::from(depth));
+        let surface = self.surfaces.at(tri, point, footprint);
+        self.light(
+            tri,
+            view,
+            surface.albedo,
+            Some(&surface),
+            Some((point, normal)),
+        )
+    }
+
+    fn facing_normal(&self, tri: u32, view: DVec3) -> DVec3 {
+        facing_normal(self.camera, self.mesh, tri, view)
+    }
+
+    /// Reflected light of a surface with `albedo` (and, when given, its gloss; and the shading
+    /// point, for shadows).
+    fn light(
+        &self,
+        tri: u32,
+        view: DVec3,
+        albedo: [f64; 3],
+        gloss: Option<&Surface>,
+        at: Option<(DVec3, DVec3)>,
+    ) -> [f64; 3] {
+        let l = self.lighting;
+        let n = self.facing_normal(tri, view);
+        let to_eye = -(self.camera.rotation * view).normalize();
+        let mut diffuse = [l.ambient; 3];
+        let mut specular = [0.0; 3];
+        let mut add = |direction: DVec3, colour: [f64; 3]| {
+            let cos = n.dot(direction);
+            if cos <= 0.0 {
+                return;
+            }
+            for k in 0..3 {
+                diffuse[k] += colour[k] * cos;
+            }
+            if let Some(s) = gloss.filter(|s| s.specular > 0.0) {
+                let glint = blinn_phong(n, direction, to_eye, s) * cos;
+                for k in 0..3 {
+                    specular[k] += colour[k] * glint;
+                }
+            }
+        };
+        if let Some(lights) = &l.studio {
+            for (direction, intensity) in lights {
+                add(self.camera.rotation * *direction, [*intensity; 3]);
+            }
+        }
+        if let Some(sun) = &l.sun {
+            let lit = match at {
+                Some((p, normal)) if l.shadows => !self.mesh.occluded(p, normal, sun.direction),
+                _ => true,
+            };
+            if lit {
+                add(sun.direction, sun.colour);
+            }
+        }
+        if let Some(sky) = &l.sky {
+            // Irradiance of a sky dome and a ground below, for a surface tilted by n.z.
+            let up = 0.5 * (1.0 + n.z);
+            for k in 0..3 {
+                diffuse[k] += sky.sky[k] * up + sky.ground[k] * (1.0 - up);
+            }
+        }
+        std::array::from_fn(|k| (albedo[k] * diffuse[k] + specular[k]).clamp(0.0, 1.0))
+    }
+
+    fn backdrop(&self, view: DVec3, u: f64, v: f64) -> [f64; 3] {
+        match self.backdrop {
+            Backdrop::Colour(_) => self.background,
+            Backdrop::Sky {
+                zenith,
+                horizon,
+                ground,
+            } => {
+                let up = (self.camera.rotation * view).normalize().z;
+                if up < 0.0 {
+                    *ground
+                } else {
+                    let t = up.sqrt();
+                    std::array::from_fn(|k| horizon[k] + (zenith[k] - horizon[k]) * t)
+                }
+            }
+            Backdrop::Image {
+                image,
+                origin,
+                size,
+            } => {
+                let k = self.camera.intrinsics;
+                let (w, h) = (f64::from(k.width), f64::from(k.height));
+                image.sample(
+                    origin.0 + u / w * size.0,
+                    origin.1 + v / h * size.1,
+                    size.0 / w,
+                )
+            }
+        }
+    }
+}
+
+/// World normal of the triangle, turned towards the camera (surfaces are two-sided).
+fn facing_normal(camera: &Camera, mesh: &TraceMesh, tri: u32, view: DVec3) -> DVec3 {
+    let n = mesh.normal(tri);
+    if n.dot(camera.rotation * view) > 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
+/// Where the ray along `view` (camera axes, unit z) meets triangle `tri` at planar `depth`:
+/// the world point, the normal facing the camera, and the pixel's footprint there in metres.
+pub(super) fn hit_geometry(
+    camera: &Camera,
+    mesh: &TraceMesh,
+    tri: u32,
+    view: DVec3,
+    depth: f64,
+) -> (DVec3, DVec3, f64) {
+    let k = camera.intrinsics;
+    let point = camera.position + camera.rotation * (view * depth);
+    let normal = facing_normal(camera, mesh, tri, view);
+    // A pixel stretches over a surface seen at a slant (up to ten times, at grazing rays).
+    let slant = normal.dot(-(camera.rotation * view).normalize()).max(0.1);
+    (point, normal, depth / k.fx.min(k.fy) / slant)
+}
+
+/// Normalised Blinn–Phong lobe with Schlick's Fresnel, for a light along `l`.
+fn blinn_phong(n: DVec3, l: DVec3, to_eye: DVec3, s: &Surface) -> f64 {
+    let h = (l + to_eye).normalize_or_zero();
+    let alpha = (s.roughness * s.roughness).max(1e-3);
+    let exponent = (2.0 / (alpha * alpha) - 2.0).max(0.0);
+    let fresnel = s.specular + (1.0 - s.specular) * (1.0 - to_eye.dot(h).max(0.0)).powi(5);
+    fresnel * (exponent + 8.0) / (8.0 * PI) * n.dot(h).max(0.0).powf(exponent)
+}
+
 /// Linear colour → sRGB 8-bit.
 fn encode(linear: [f64; 3]) -> [u8; 3] {
     let lut = srgb_lut();
-    linear.map(|c| lut[(c * (LUT_SIZE - 1) as f64).round() as usize])
+    linear.map(|c| lut[(c.clamp(0.0, 1.0) * (LUT_SIZE - 1) as f64).round() as usize])
 }
 
 const LUT_SIZE: usize = 4096;
@@ -150,13 +387,4 @@ fn srgb_lut() -> &'static [u8; LUT_SIZE] {
             (s * 255.0).round() as u8
         })
     })
-}
-
-/// sRGB (0–1) → linear, for albedos given by users as sRGB colours.
-pub fn srgb_to_linear(s: f64) -> f64 {
-    if s <= 0.040_45 {
-        s / 12.92
-    } else {
-        ((s + 0.055) / 1.055).powf(2.4)
-    }
 }

@@ -120,11 +120,27 @@ impl TraceMesh {
         }
     }
 
-    /// The triangle first hit along `view` (camera axes) from the camera, if any.
-    pub fn first_hit(&self, camera: &Camera, view: DVec3) -> Option<u32> {
+    /// Planar depth and triangle first hit along `view` (camera axes, unit z), if any.
+    pub fn first_hit(&self, camera: &Camera, view: DVec3) -> Option<(f32, u32)> {
         let origin = camera.position - self.anchor;
         self.closest_hit(origin, origin.as_vec3a(), camera.rotation * view)
-            .map(|(_, tri)| tri)
+    }
+
+    /// Whether anything blocks the way from surface point `p` (world) with outward `normal`
+    /// towards `direction`. The ray starts a little off the surface so that it cannot hit the
+    /// triangle it leaves.
+    pub fn occluded(&self, p: DVec3, normal: DVec3, direction: DVec3) -> bool {
+        let (lo, hi) = self.local_bounds;
+        let lift = 1e-5 * (hi - lo).length();
+        let origin = (p - self.anchor + lift * normal).as_vec3a();
+        let dir = traversal_direction(direction.as_vec3a());
+        let sheared = ShearedRay::new(origin, dir);
+        let ray = Ray::new(origin, dir, 0.0, f32::INFINITY);
+        // Stops at the first blocker found.
+        !self.bvh.ray_traverse_miss(ray, |r, id| {
+            let [a, b, c] = self.triangles[id];
+            sheared.intersect(a, b, c, r.tmax)
+        })
     }
 
     /// Planar depth and original triangle of the first surface along `dir` (unit camera z).

@@ -138,47 +138,67 @@ impl AssemblySpec {
 
     /// The meshes of the shapes with their part labels. Chords stay within `tolerance` metres
     /// after placement (a scaled shape is tessellated more finely).
-    pub fn build(&self, tolerance: f64) -> Result<Vec<(Mesh, &str)>, String> {
+    pub fn build(&self, tolerance: f64) -> Result<Vec<BuiltShape<'_>>, String> {
         if self.shapes.is_empty() {
             return Err(format!("assembly \"{}\" has no shapes", self.name));
         }
         self.shapes
             .iter()
-            .map(|s| {
-                s.primitive.validate()?;
-                let m = s.affine();
-                if !m.is_finite() || m.matrix3.determinant().abs() < 1e-300 {
-                    return Err(format!(
-                        "assembly \"{}\": a shape of part \"{}\" has a degenerate placement",
-                        self.name, s.part
-                    ));
-                }
-                let local = tolerance / s.stretch();
-                let fixed = s
-                    .detail
-                    .and_then(|[n, rings]| s.primitive.fixed_mesh(n as usize, rings as usize));
-                let mut mesh = match (s.shell(), fixed) {
-                    (Some(shell), _) if !s.shell.is_empty() => {
-                        deformed_shell(&s.primitive, &shell, &s.shell, local)
-                    }
-                    (_, Some(mesh)) => mesh,
-                    _ => s.primitive.mesh(local),
-                };
-                if let Some(bending) = &s.bending {
-                    bend(&mut mesh, bending).map_err(|e| {
-                        format!("assembly \"{}\", part \"{}\": {e}", self.name, s.part)
-                    })?;
-                }
-                mesh.transform(&m);
-                Ok((mesh, s.part.as_str()))
-            })
+            .map(|s| self.build_shape(s, tolerance))
             .collect()
+    }
+
+    fn build_shape<'a>(&self, s: &'a ShapeSpec, tolerance: f64) -> Result<BuiltShape<'a>, String> {
+        s.primitive.validate()?;
+        let m = s.affine();
+        if !m.is_finite() || m.matrix3.determinant().abs() < 1e-300 {
+            return Err(format!(
+                "assembly \"{}\": a shape of part \"{}\" has a degenerate placement",
+                self.name, s.part
+            ));
+        }
+        let local = tolerance / s.stretch();
+        let fixed = s
+            .detail
+            .and_then(|[n, rings]| s.primitive.fixed_mesh(n as usize, rings as usize));
+        let shell = s.shell().filter(|_| !s.shell.is_empty());
+        let mut mesh = match (&shell, fixed) {
+            (Some(shell), _) => shell_mesh(&s.primitive, shell, &s.shell, local),
+            (_, Some(mesh)) => mesh,
+            _ => s.primitive.mesh(local),
+        };
+        let rest: Vec<DVec3> = mesh
+            .positions
+            .iter()
+            .map(|&p| m.transform_point3(p))
+            .collect();
+        if let Some(shell) = &shell {
+            displace_shell(&mut mesh, shell, &s.shell);
+        }
+        if let Some(bending) = &s.bending {
+            bend(&mut mesh, bending)
+                .map_err(|e| format!("assembly \"{}\", part \"{}\": {e}", self.name, s.part))?;
+        }
+        mesh.transform(&m);
+        Ok(BuiltShape {
+            mesh,
+            rest,
+            part: &s.part,
+        })
     }
 }
 
-/// A tube meshed finely enough for its patterns (chord rule on each pattern's curvature) with
-/// every vertex moved radially by the sum of the patterns.
-fn deformed_shell(
+/// One shape of an assembly, meshed, deformed and placed.
+#[derive(Debug)]
+pub struct BuiltShape<'a> {
+    pub mesh: Mesh,
+    /// Where each vertex lies before the shape was deformed (textures are fixed there).
+    pub rest: Vec<DVec3>,
+    pub part: &'a str,
+}
+
+/// A tube meshed finely enough for its patterns (chord rule on each pattern's curvature).
+fn shell_mesh(
     tube: &Primitive,
     shell: &Shell,
     patterns: &[LabelledPattern],
@@ -192,9 +212,12 @@ fn deformed_shell(
     // An even ring count puts a ring at mid-height, where wind lobes peak.
     let rings = need(shell.height, kz).next_multiple_of(2);
     let segments = need(2.0 * std::f64::consts::PI * shell.radius, ks);
-    let mut mesh = tube
-        .tube_mesh(tolerance, rings, segments)
-        .expect("shell patterns apply to tubes");
+    tube.tube_mesh(tolerance, rings, segments)
+        .expect("shell patterns apply to tubes")
+}
+
+/// Moves every vertex of the tube radially by the sum of the patterns.
+fn displace_shell(mesh: &mut Mesh, shell: &Shell, patterns: &[LabelledPattern]) {
     for p in &mut mesh.positions {
         let r = p.x.hypot(p.y);
         let theta = p.y.atan2(p.x);
@@ -204,7 +227,6 @@ fn deformed_shell(
             .sum();
         *p += DVec3::new(p.x / r, p.y / r, 0.0) * w;
     }
-    mesh
 }
 
 /// Smallest and largest coordinate of the mesh along `direction`.
@@ -283,7 +305,7 @@ mod tests {
             shapes: vec![shape],
             material: Material::default(),
         };
-        let bent = &a.build(1e-3).unwrap()[0].0;
+        let bent = &a.build(1e-3).unwrap()[0].mesh;
         let direct = beam.build(1e-3).unwrap().mesh;
         // Both are centred on x = 0 at rest: the beam mesher's tip section (its last four
         // vertices) must be corners of the bent box.
@@ -332,7 +354,7 @@ mod tests {
             shapes: vec![shape],
             material: Material::default(),
         };
-        let mesh = &a.build(1e-3).unwrap()[0].0;
+        let mesh = &a.build(1e-3).unwrap()[0].mesh;
         assert!(mesh.is_closed_and_oriented());
         // Outer surface: largest radius = r + 0.08 + 0.02 at mid-height on the lobe; smallest
         // = r − 0.08 + 0.02 between lobes (θ = π/3); ends stay at r + 0.02.
@@ -371,8 +393,9 @@ mod tests {
             shapes: vec![s],
             material: Material::default(),
         };
-        let (mesh, part) = &a.build(1e-3).unwrap()[0];
-        assert_eq!(*part, "body");
+        let shape = &a.build(1e-3).unwrap()[0];
+        let (mesh, part) = (&shape.mesh, shape.part);
+        assert_eq!(part, "body");
         assert!(
             (mesh.signed_volume() - 6.0 * 8.0).abs() < 1e-9,
             "{}",
@@ -396,6 +419,6 @@ mod tests {
             shapes: vec![m],
             material: Material::default(),
         };
-        assert!(mirrored.build(1e-3).unwrap()[0].0.signed_volume() > 0.0);
+        assert!(mirrored.build(1e-3).unwrap()[0].mesh.signed_volume() > 0.0);
     }
 }

@@ -3,8 +3,8 @@
 use crate::geometry::{Mesh, beam_mesh};
 use crate::materials::Material;
 use crate::mechanics::{
-    BeamProblem, Deformation, Load, Mapping, STEEL_E, STEEL_FY, STEEL_NU, Section, Support, Target,
-    Theory, kinks, section_frames,
+    BeamProblem, Deformation, Load, Mapping, STEEL_E, STEEL_FY, STEEL_NU, Section, SectionFrame,
+    Support, Target, Theory, kinks, section_frames,
 };
 use glam::{DMat3, DVec3};
 use serde::Serialize;
@@ -51,6 +51,8 @@ pub struct BeamSpec {
 /// A beam's mesh and the mechanics behind it.
 pub struct BuiltBeam {
     pub mesh: Mesh,
+    /// Where each vertex of `mesh` lies on the undeformed beam (textures are fixed there).
+    pub rest: Vec<DVec3>,
     pub deformation: Deformation,
     pub segments: usize,
 }
@@ -131,14 +133,27 @@ impl BeamSpec {
         };
         let stations = stations(self.length, segments, &self.kinks(&deformation));
         let frames = section_frames(&stations, self.mapping, |x| deformation.at(x));
-        let mesh = beam_mesh(
-            self.length,
-            &frames,
-            &outline,
-            DMat3::from_rotation_z(self.yaw),
-            DVec3::from_array(self.centre),
-        );
+        let unloaded: Vec<SectionFrame> = stations
+            .iter()
+            .map(|&x| SectionFrame {
+                x,
+                v: 0.0,
+                cos: 1.0,
+                sin: 0.0,
+            })
+            .collect();
+        let place = |frames: &[SectionFrame]| {
+            beam_mesh(
+                self.length,
+                frames,
+                &outline,
+                DMat3::from_rotation_z(self.yaw),
+                DVec3::from_array(self.centre),
+            )
+        };
+        let mesh = place(&frames);
         Ok(BuiltBeam {
+            rest: place(&unloaded).positions,
             mesh,
             deformation,
             segments,

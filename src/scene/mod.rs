@@ -7,9 +7,11 @@
 
 mod assembly;
 mod beam;
+mod light;
 
-pub use assembly::{AssemblySpec, Bending, LabelledPattern, ShapeSpec};
+pub use assembly::{AssemblySpec, Bending, BuiltShape, LabelledPattern, ShapeSpec};
 pub use beam::{BeamSpec, BuiltBeam, Tessellation};
+pub use light::{Background, ImageRecord, LightSpec, SkyGradient, SkySpec, SunSpec};
 
 use crate::cameras::CameraRig;
 use serde::Serialize;
@@ -27,8 +29,9 @@ pub struct DatasetSpec {
     pub views: u32,
     pub camera: CameraRig,
     pub outputs: Outputs,
-    /// Background colour, sRGB in [0, 1]; black as in the paper.
-    pub background: [f64; 3],
+    /// What RGB shows behind the structures; black as in the paper.
+    pub background: Background,
+    pub light: LightSpec,
     /// Anti-alias RGB where the image changes (silhouettes, creases); labels never are.
     pub antialias: bool,
 }
@@ -38,6 +41,8 @@ pub struct DatasetSpec {
 pub struct Outputs {
     pub rgb: bool,
     pub depth: bool,
+    /// Per-pixel crack mask (for materials with cracks).
+    pub cracks: bool,
     pub mask: bool,
     /// Per-pixel part ids (see the id table in each view's JSON).
     pub parts: bool,
@@ -46,7 +51,7 @@ pub struct Outputs {
 }
 
 impl Outputs {
-    pub const NAMES: [&'static str; 5] = ["rgb", "depth", "mask", "parts", "instances"];
+    pub const NAMES: [&'static str; 6] = ["rgb", "depth", "mask", "parts", "instances", "cracks"];
 }
 
 /// A structure in a scene.

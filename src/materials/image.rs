@@ -1,0 +1,177 @@
+//! Texture and background images: decoded once (PNG or JPEG, through the `image` crate) into
+//! linear light, with a box-filtered mip pyramid so a tile seen from afar is averaged rather
+//! than aliased.
+
+use std::path::Path;
+use std::sync::Arc;
+
+/// A decoded image with the name and hash it is recorded under.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageFile {
+    /// Path relative to the recipe's folder, with `/` separators.
+    pub name: String,
+    /// blake3 of the file's bytes.
+    pub hash: String,
+    pub image: Arc<TextureImage>,
+}
+
+/// A decoded image in linear RGB, with its mip levels (level 0 = full size).
+#[derive(Debug, PartialEq)]
+pub struct TextureImage {
+    levels: Vec<Level>,
+}
+
+#[derive(Debug, PartialEq)]
+struct Level {
+    width: usize,
+    height: usize,
+    texels: Vec<[f32; 3]>,
+}
+
+impl TextureImage {
+    /// Decodes `bytes`; `name` is only used in error messages.
+    pub fn decode(bytes: &[u8], name: &Path) -> Result<Self, String> {
+        let decoded = ::image::load_from_memory(bytes)
+            .map_err(|e| format!("cannot read image {}: {e}", name.display()))?
+            .into_rgb8();
+        let (width, height) = (decoded.width() as usize, decoded.height() as usize);
+        if width == 0 || height == 0 {
+            return Err(format!("image {} is empty", name.display()));
+        }
+        let lut: Vec<f32> = (0..256)
+            .map(|i| super::srgb_to_linear(f64::from(i) / 255.0) as f32)
+            .collect();
+        let texels = decoded
+            .pixels()
+            .map(|p| p.0.map(|c| lut[usize::from(c)]))
+            .collect();
+        let mut levels = vec![Level {
+            width,
+            height,
+            texels,
+        }];
+        while let Some(next) = levels.last().and_then(Level::halved) {
+            levels.push(next);
+        }
+        Ok(TextureImage { levels })
+    }
+
+    pub fn width(&self) -> usize {
+        self.levels[0].width
+    }
+
+    pub fn height(&self) -> usize {
+        self.levels[0].height
+    }
+
+    /// Bilinear sample at (u, v) in tile units (the image repeats every 1 in u and v; v grows
+    /// downwards in the image), from the mip level whose texels are about `texel` tile units
+    /// wide (the pixel footprint divided by the tile size).
+    pub fn sample(&self, u: f64, v: f64, texel: f64) -> [f64; 3] {
+        let wanted = (texel * self.width() as f64).max(1.0).log2().floor() as usize;
+        self.levels[wanted.min(self.levels.len() - 1)].bilinear(u, v)
+    }
+}
+
+impl Level {
+    /// The next mip level: 2 × 2 box filter (the last row or column repeats on odd sizes).
+    fn halved(&self) -> Option<Level> {
+        if self.width == 1 && self.height == 1 {
+            return None;
+        }
+        let (width, height) = (self.width.div_ceil(2), self.height.div_ceil(2));
+        let at = |x: usize, y: usize| {
+            self.texels[y.min(self.height - 1) * self.width + x.min(self.width - 1)]
+        };
+        let texels = (0..height)
+            .flat_map(|y| (0..width).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                let quad = [
+                    at(2 * x, 2 * y),
+                    at(2 * x + 1, 2 * y),
+                    at(2 * x, 2 * y + 1),
+                    at(2 * x + 1, 2 * y + 1),
+                ];
+                std::array::from_fn(|c| quad.iter().map(|t| t[c]).sum::<f32>() / 4.0)
+            })
+            .collect();
+        Some(Level {
+            width,
+            height,
+            texels,
+        })
+    }
+
+    fn bilinear(&self, u: f64, v: f64) -> [f64; 3] {
+        let x = u.rem_euclid(1.0) * self.width as f64 - 0.5;
+        let y = v.rem_euclid(1.0) * self.height as f64 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let wrap = |i: f64, n: usize| (i as i64).rem_euclid(n as i64) as usize;
+        let texel = |dx: f64, dy: f64| {
+            self.texels[wrap(y0 + dy, self.height) * self.width + wrap(x0 + dx, self.width)]
+        };
+        let (a, b, c, d) = (
+            texel(0.0, 0.0),
+            texel(1.0, 0.0),
+            texel(0.0, 1.0),
+            texel(1.0, 1.0),
+        );
+        std::array::from_fn(|k| {
+            let top = f64::from(a[k]) * (1.0 - fx) + f64::from(b[k]) * fx;
+            let bottom = f64::from(c[k]) * (1.0 - fx) + f64::from(d[k]) * fx;
+            top * (1.0 - fy) + bottom * fy
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A PNG encoded by the `png` crate (an independent writer), decoded here.
+    fn png(width: u32, height: u32, rgb: &[u8]) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut encoder = png::Encoder::new(&mut out, width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().unwrap();
+        writer.write_image_data(rgb).unwrap();
+        writer.finish().unwrap();
+        out
+    }
+
+    #[test]
+    fn texel_centres_read_back_and_tiles_repeat() {
+        // 2 × 1 image: black | white (sRGB 255 = linear 1).
+        let img =
+            TextureImage::decode(&png(2, 1, &[0, 0, 0, 255, 255, 255]), Path::new("t")).unwrap();
+        assert_eq!(img.sample(0.25, 0.5, 0.0), [0.0; 3]);
+        assert_eq!(img.sample(0.75, 0.5, 0.0), [1.0; 3]);
+        assert_eq!(img.sample(1.75, -3.5, 0.0), [1.0; 3]);
+        // Half-way between texel centres (and across the wrap) is the average.
+        assert!((img.sample(0.5, 0.5, 0.0)[0] - 0.5).abs() < 1e-6);
+        assert!((img.sample(0.0, 0.5, 0.0)[0] - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn far_away_tiles_read_their_mean() {
+        let checker: Vec<u8> = (0..64 * 64)
+            .flat_map(|i| {
+                let on = ((i % 64) + (i / 64)) % 2 == 0;
+                [if on { 255 } else { 0 }; 3]
+            })
+            .collect();
+        let img = TextureImage::decode(&png(64, 64, &checker), Path::new("c")).unwrap();
+        // A footprint of a whole tile reads the 1 × 1 level: the mean, 0.5 in linear light.
+        for (u, v) in [(0.1, 0.2), (0.77, 0.31)] {
+            assert!((img.sample(u, v, 1.0)[1] - 0.5).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn broken_files_are_errors_naming_the_file() {
+        let e = TextureImage::decode(b"not an image", Path::new("textures/rust.png")).unwrap_err();
+        assert!(e.contains("textures/rust.png"), "{e}");
+    }
+}

@@ -1,0 +1,746 @@
+//! Procedural materials: a `Material` made concrete for one sample (its noise seed and drawn
+//! variations) and evaluated at points of the undeformed surface.
+//!
+//! Every length is physical (metres, times the material's `scale`), every pattern is a function
+//! of the 3D rest position, and every feature finer than the pixel footprint is averaged out
+//! (fractal octaves fade, thin lines lighten by the fraction of the pixel they cover).
+
+use super::noise::{Noise, pair, smoothstep, unit};
+use super::{Base, Condition, ConditionKind, Material, Species, Texture};
+use crate::seeds::Stream;
+use glam::DVec3;
+use serde_json::{Value, json};
+
+/// Where a ray meets a surface, in the structure's undeformed state.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    /// Position on the undeformed surface (metres, world axes before deformation).
+    pub rest: DVec3,
+    /// Unit outward normal of the undeformed surface.
+    pub rest_normal: DVec3,
+    /// Size of the pixel on the surface (metres), widened at grazing incidence.
+    pub footprint: f64,
+}
+
+/// Direction along which wood grain, brushing and fibres run, and a point on the piece's axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grain {
+    pub axis: DVec3,
+    pub centre: DVec3,
+}
+
+/// What shading needs to know about a surface point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    /// Linear-light albedo.
+    pub albedo: [f64; 3],
+    pub roughness: f64,
+    pub specular: f64,
+    /// Whether the point lies on a crack (the crack mask label).
+    pub crack: bool,
+}
+
+/// A material with the random choices of one sample made: where its texture is cut from,
+/// where the pith of timber lies, and a small variation of its colour.
+#[derive(Clone, Debug)]
+pub struct Shader {
+    material: Material,
+    noise: Noise,
+    /// Added to every rest position, so each sample shows another part of the texture.
+    offset: DVec3,
+    /// Pith distance from the piece's axis as a multiple of 1 m, and its direction angle.
+    pith: (f64, f64),
+    brightness: f64,
+    /// The material's linear base colour times `brightness`.
+    albedo: [f64; 3],
+}
+
+/// Rust as it forms on structural steel: orange-brown to dark brown (sRGB).
+const RUST_LIGHT: [f64; 3] = [0.5, 0.27, 0.14];
+const RUST_DARK: [f64; 3] = [0.22, 0.11, 0.06];
+const MOSS: [f64; 3] = [0.27, 0.36, 0.12];
+const MORTAR: [f64; 3] = [0.66, 0.64, 0.6];
+/// Bare steel showing where paint has worn away.
+const BARE_STEEL: [f64; 3] = [0.45, 0.45, 0.46];
+
+impl Shader {
+    /// Draws the sample's choices for `material` from `stream` (a stream of its own, so a
+    /// change of material never shifts the scene's or the cameras' random values).
+    pub fn new(material: &Material, stream: &mut Stream) -> Self {
+        let seed = stream.next_u64();
+        let offset = DVec3::new(
+            stream.uniform(-500.0, 500.0),
+            stream.uniform(-500.0, 500.0),
+            stream.uniform(-500.0, 500.0),
+        );
+        let pith = (
+            stream.uniform(0.15, 0.6),
+            stream.uniform(0.0, std::f64::consts::TAU),
+        );
+        let variation = if material.base == Base::Plain {
+            0.0
+        } else {
+            0.05
+        };
+        let brightness = 1.0 + stream.uniform(-variation, variation);
+        Shader {
+            material: material.clone(),
+            noise: Noise::new(seed),
+            offset,
+            pith,
+            brightness,
+            albedo: material.albedo().map(|c| c * brightness),
+        }
+    }
+
+    pub fn material(&self) -> &Material {
+        &self.material
+    }
+
+    /// Whether the surface varies from point to point.
+    pub fn textured(&self) -> bool {
+        let m = &self.material;
+        m.base != Base::Plain || !m.conditions.is_empty() || m.texture != Texture::Procedural
+    }
+
+    /// Mean linear albedo, without texture.
+    pub fn albedo(&self) -> [f64; 3] {
+        self.albedo
+    }
+
+    /// The values drawn for this sample, for the JSON.
+    pub fn drawn(&self) -> Value {
+        json!({
+            "texture_offset": self.offset.to_array(),
+            "pith_distance": self.pith.0 * self.material.scale,
+            "brightness": self.brightness,
+        })
+    }
+
+    /// The surface at `p`, on a piece whose grain is `grain`.
+    pub fn surface(&self, p: &SurfacePoint, grain: &Grain) -> Surface {
+        let m = &self.material;
+        let base = self.albedo;
+        let mut s = Surface {
+            albedo: base,
+            roughness: m.roughness,
+            specular: m.specular,
+            crack: false,
+        };
+        if !self.textured() {
+            return s;
+        }
+        let at = Point {
+            p: (p.rest + self.offset) / m.scale,
+            rest: p.rest,
+            normal: p.rest_normal,
+            footprint: p.footprint / m.scale,
+            grain,
+            shader: self,
+        };
+        s.albedo = match &m.texture {
+            Texture::Image { pixels, size, .. } => {
+                triplanar(pixels, &at, *size / m.scale).map(|c| c * self.brightness)
+            }
+            Texture::Procedural => at.base(m.base, base),
+        };
+        let calm = m
+            .conditions
+            .iter()
+            .find(|c| c.kind == ConditionKind::New)
+            .map_or(1.0, |c| 1.0 - 0.7 * c.intensity);
+        if calm < 1.0 {
+            s.albedo = mix(base, s.albedo, calm);
+        }
+        for c in &m.conditions {
+            at.condition(*c, &mut s);
+        }
+        s
+    }
+
+    /// Whether `p` lies on a crack (cheaper than `surface` when only the mask is wanted).
+    pub fn crack(&self, p: &SurfacePoint, grain: &Grain) -> bool {
+        let m = &self.material;
+        m.conditions
+            .iter()
+            .filter(|c| c.kind == ConditionKind::Cracked)
+            .any(|c| {
+                let q = (p.rest + self.offset) / m.scale;
+                let (_, on) = self.cracks(q, c.intensity, p.footprint / m.scale, grain);
+                on
+            })
+    }
+
+    /// Crack network: borders between Voronoi cells (distorted so they wander), only some of
+    /// them open, each with its own width. Timber splits along its grain, so there the cells
+    /// are drawn out eight times along it. Returns (fraction of the pixel covered, whether the
+    /// crack passes through the pixel).
+    fn cracks(&self, q: DVec3, intensity: f64, footprint: f64, grain: &Grain) -> (f64, bool) {
+        let timber = matches!(self.material.base, Base::Timber(_));
+        let q = if timber {
+            q - grain.axis * (q.dot(grain.axis) * 7.0 / 8.0)
+        } else {
+            q
+        };
+        let size = 0.3 / (0.6 + intensity) * if timber { 0.5 } else { 1.0 };
+        let wander = DVec3::new(
+            self.noise.fractal(q, 0.15, 3, footprint),
+            self.noise
+                .fractal(q + DVec3::splat(31.0), 0.15, 3, footprint),
+            self.noise
+                .fractal(q + DVec3::splat(67.0), 0.15, 3, footprint),
+        );
+        let c = self.noise.cells(q + 0.25 * size * wander, size);
+        let edge = pair(c.id, c.neighbour);
+        if unit(edge, 7) > 0.3 + 0.5 * intensity {
+            return (0.0, false);
+        }
+        let width = (0.4e-3 + 2.5e-3 * intensity) * (0.4 + 1.2 * unit(edge, 8));
+        let covered = ((0.5 * (width + footprint) - c.border) / footprint).clamp(0.0, 1.0)
+            * (width / footprint).min(1.0);
+        (covered, c.border < 0.5 * width.max(footprint))
+    }
+}
+
+/// A surface point in texture space, with what the generators need around it.
+struct Point<'a> {
+    /// Texture-space position (offset, divided by the material scale).
+    p: DVec3,
+    rest: DVec3,
+    normal: DVec3,
+    footprint: f64,
+    grain: &'a Grain,
+    shader: &'a Shader,
+}
+
+impl Point<'_> {
+    fn fractal(&self, wavelength: f64, octaves: u32) -> f64 {
+        self.shader
+            .noise
+            .fractal(self.p, wavelength, octaves, self.footprint)
+    }
+
+    /// Fractal noise at a shifted position: an independent pattern from the same generator.
+    fn fractal_at(&self, shift: f64, wavelength: f64, octaves: u32) -> f64 {
+        self.shader.noise.fractal(
+            self.p + DVec3::splat(shift),
+            wavelength,
+            octaves,
+            self.footprint,
+        )
+    }
+
+    /// The base material's albedo (linear) at this point; `colour` is its mean.
+    fn base(&self, base: Base, colour: [f64; 3]) -> [f64; 3] {
+        match base {
+            Base::Plain => colour,
+            Base::Steel => scale(
+                colour,
+                1.0 + 0.12 * self.fractal(0.3, 4) + 0.05 * self.fractal_at(5.0, 0.02, 3),
+            ),
+            Base::GalvanisedSteel => {
+                // Spangle: zinc crystals a centimetre across, each with its own sheen.
+                let c = self.shader.noise.cells(self.p, 0.012);
+                let crystal = 0.12 * (unit(c.id, 3) - 0.5) * self.resolved(0.012);
+                scale(colour, 1.0 + crystal + 0.08 * self.fractal(0.5, 3))
+            }
+            Base::WeatheringSteel => {
+                let patina = smoothstep(-0.4, 0.5, self.fractal(0.15, 5));
+                mix(colour, linear(RUST_DARK), patina * 0.6)
+            }
+            Base::Aluminium => scale(colour, 1.0 + 0.06 * self.brushed(0.002)),
+            Base::Concrete => {
+                let pores = self.pores(0.008, 0.0012, 0.3);
+                scale(
+                    colour,
+                    (1.0 + 0.1 * self.fractal(0.4, 4) + 0.05 * self.fractal_at(9.0, 0.03, 3))
+                        * (1.0 - 0.55 * pores),
+                )
+            }
+            Base::Timber(species) => self.wood(species, colour),
+            Base::Plastic => scale(colour, 1.0 + 0.02 * self.fractal(0.05, 3)),
+            Base::Brick => self.brick(colour),
+            Base::Stone => self.stone(colour),
+            Base::Painted => scale(colour, 1.0 + 0.03 * self.fractal(0.1, 3)),
+        }
+    }
+
+    /// How visible a feature of `size` metres is: 1 when it spans several pixels, 0 when it
+    /// is smaller than one.
+    fn resolved(&self, size: f64) -> f64 {
+        (size / self.footprint - 1.0).clamp(0.0, 1.0)
+    }
+
+    /// Noise stretched along the grain: long fine streaks (brushed metal, wood fibres).
+    fn brushed(&self, width: f64) -> f64 {
+        let along = self.p.dot(self.grain.axis);
+        let across = self.p - along * self.grain.axis;
+        let stretched = across + self.grain.axis * (along * 0.02);
+        self.shader
+            .noise
+            .fractal(stretched, width * 4.0, 3, self.footprint)
+    }
+
+    /// Fraction of the point darkened by pores: small round holes in some cells.
+    fn pores(&self, cell: f64, radius: f64, share: f64) -> f64 {
+        let c = self.shader.noise.cells(self.p, cell);
+        if unit(c.id, 4) > share {
+            return 0.0;
+        }
+        let r = radius * (0.3 + unit(c.id, 5));
+        let edge = ((r - c.f1) / self.footprint + 0.5).clamp(0.0, 1.0);
+        edge * (r / self.footprint).min(1.0).powi(2)
+    }
+
+    /// Growth rings around a pith running along the grain, a little outside the piece (as in
+    /// a flat-sawn board), with early/late wood contrast, ring wander and fibres.
+    fn wood(&self, species: Species, colour: [f64; 3]) -> [f64; 3] {
+        let (spacing, contrast) = match species {
+            Species::Pine => (0.004, 0.35),
+            Species::Spruce => (0.003, 0.25),
+            Species::Oak => (0.0025, 0.3),
+            Species::Ash => (0.0025, 0.3),
+            Species::Birch => (0.002, 0.15),
+            Species::Cedar => (0.0025, 0.3),
+            Species::Teak => (0.003, 0.25),
+            Species::Walnut => (0.003, 0.3),
+            Species::Mahogany => (0.004, 0.2),
+            Species::Rosewood => (0.0015, 0.45),
+        };
+        let scale_m = self.shader.material.scale;
+        let axis = self.grain.axis;
+        let (e1, e2) = axis.any_orthonormal_pair();
+        let (distance, angle) = self.shader.pith;
+        let pith = self.grain.centre + distance * (angle.cos() * e1 + angle.sin() * e2);
+        let radial = (self.rest - pith) - (self.rest - pith).dot(axis) * axis;
+        let r = radial.length() / scale_m + 0.004 * self.fractal(0.25, 3);
+        let ring = (r / spacing).fract();
+        // Late wood: the dark band at the end of each year's growth.
+        let late = smoothstep(0.6, 0.9, ring) * (1.0 - smoothstep(0.95, 1.0, ring));
+        let visible = self.resolved(spacing);
+        // Seen from afar, rings merge into the figure: bands where growth was slower, a few
+        // centimetres wide and long along the grain (the arches of a flat-sawn board).
+        let along = self.rest.dot(axis) / scale_m;
+        let figure = self
+            .shader
+            .noise
+            .gradient(DVec3::new(r / (6.0 * spacing), along / 0.8, 0.0), 1.0);
+        let darkening = contrast * ((late - 0.3) * visible + 0.5 * figure);
+        let fibres = 0.06 * self.brushed(0.0008);
+        scale(colour, 1.0 - darkening + fibres)
+    }
+
+    /// Running-bond brickwork: 215 × 65 mm bricks with 10 mm mortar joints, courses
+    /// horizontal, laid on whichever coordinate plane the face is closest to.
+    fn brick(&self, colour: [f64; 3]) -> [f64; 3] {
+        let (u, v) = self.planar();
+        let (length, height, joint) = (0.225, 0.075, 0.01);
+        let course = (v / height).floor();
+        let shifted = u + if course.rem_euclid(2.0) == 1.0 {
+            0.5 * length
+        } else {
+            0.0
+        };
+        let column = (shifted / length).floor();
+        let to_joint = |x: f64, period: f64| {
+            let f = x.rem_euclid(period);
+            f.min(period - f)
+        };
+        let d = to_joint(shifted, length).min(to_joint(v, height));
+        let mortar = ((0.5 * joint - d) / self.footprint + 0.5).clamp(0.0, 1.0)
+            * (joint / self.footprint).min(1.0);
+        let id = pair(course as i64 as u64, column as i64 as u64);
+        let brick = scale(
+            colour,
+            1.0 + 0.24 * (unit(id, 6) - 0.5) + 0.06 * self.fractal(0.05, 3),
+        );
+        mix(brick, linear(MORTAR), mortar)
+    }
+
+    /// Random-rubble stone: Voronoi blocks about 0.3 m across, each its own shade, with joints.
+    fn stone(&self, colour: [f64; 3]) -> [f64; 3] {
+        let c = self.shader.noise.cells(self.p, 0.3);
+        let joint = 0.006;
+        let mortar = ((0.5 * joint - c.border) / self.footprint + 0.5).clamp(0.0, 1.0)
+            * (joint / self.footprint).min(1.0);
+        let block = scale(
+            colour,
+            1.0 + 0.3 * (unit(c.id, 9) - 0.5) + 0.08 * self.fractal(0.08, 4),
+        );
+        mix(block, scale(linear(MORTAR), 0.7), mortar)
+    }
+
+    /// Two coordinates on the coordinate plane closest to the face (v vertical on walls).
+    fn planar(&self) -> (f64, f64) {
+        let n = self.normal.abs();
+        let p = self.p;
+        if n.z >= n.x && n.z >= n.y {
+            (p.x, p.y)
+        } else if n.x >= n.y {
+            (p.y, p.z)
+        } else {
+            (p.x, p.z)
+        }
+    }
+
+    fn condition(&self, c: Condition, s: &mut Surface) {
+        let i = c.intensity;
+        match c.kind {
+            ConditionKind::Rusty | ConditionKind::Corroded => {
+                let corroded = c.kind == ConditionKind::Corroded;
+                let reach = if corroded { 0.85 * i + 0.15 } else { i };
+                // Patches cover about `reach` of the surface and have
+                // ragged edges: fine noise shifts the threshold locally.
+                let field = self.fractal(0.3, 6) + 0.35 * self.fractal_at(19.0, 0.02, 3);
+                let patch = smoothstep(-0.15, 0.15, coverage_threshold(reach) - field);
+                let tone = smoothstep(-0.7, 0.7, self.fractal_at(13.0, 0.05, 5));
+                let mut rust = mix(linear(RUST_LIGHT), linear(RUST_DARK), tone);
+                if corroded {
+                    rust = scale(rust, 1.0 - 0.6 * self.pores(0.004, 0.0015, 0.6));
+                }
+                let opacity = if self.shader.material.is_metal() {
+                    1.0
+                } else {
+                    0.6
+                };
+                // Outside the patches, a brown bloom dulls the surface.
+                let bloom = 0.45 * reach * smoothstep(-0.6, 0.2, -field);
+                let cover = (patch + (1.0 - patch) * bloom) * opacity;
+                s.albedo = mix(s.albedo, rust, cover);
+                s.roughness = lerp(s.roughness, 0.95, cover);
+                s.specular = lerp(s.specular, 0.03, cover);
+            }
+            ConditionKind::Cracked => {
+                let footprint = self.footprint.max(f64::MIN_POSITIVE);
+                let (covered, on) = self.shader.cracks(self.p, i, footprint, self.grain);
+                s.albedo = mix(s.albedo, scale(s.albedo, 0.08), covered);
+                s.crack |= on;
+            }
+            ConditionKind::Weathered => {
+                let grey = luminance(s.albedo);
+                let blotch = 1.0 + 0.18 * i * self.fractal_at(23.0, 0.5, 4);
+                s.albedo = scale(mix(s.albedo, [grey * 1.1; 3], 0.45 * i), blotch);
+                s.roughness = lerp(s.roughness, 1.0, 0.5 * i);
+            }
+            ConditionKind::Stained => {
+                // Streaks run down: stretch the noise 30× vertically.
+                let q = DVec3::new(self.p.x / 0.03, self.p.y / 0.03, self.p.z / 0.9);
+                let streak = smoothstep(
+                    0.1,
+                    0.5,
+                    self.shader.noise.fractal(q, 1.0, 3, self.footprint / 0.03) + i - 0.6,
+                );
+                s.albedo = scale(s.albedo, 1.0 - 0.45 * streak * i.sqrt());
+            }
+            ConditionKind::Mossy => {
+                let upward = 0.35 * self.normal.z;
+                let patch = smoothstep(
+                    -0.05,
+                    0.05,
+                    self.fractal_at(41.0, 0.3, 5) + upward + 0.8 * i - 0.75,
+                );
+                let moss = scale(linear(MOSS), 1.0 + 0.3 * self.fractal_at(43.0, 0.01, 3));
+                s.albedo = mix(s.albedo, moss, patch);
+                s.roughness = lerp(s.roughness, 1.0, patch);
+                s.specular = lerp(s.specular, 0.02, patch);
+            }
+            ConditionKind::New => {
+                s.roughness *= 1.0 - 0.3 * i;
+                s.specular = (s.specular * (1.0 + 0.3 * i)).min(1.0);
+            }
+            ConditionKind::Wet => {
+                // A water film darkens porous surfaces and adds a glossy layer (F0 ≈ 0.02).
+                s.albedo = s.albedo.map(|c| c.powf(1.0 + 0.6 * i) * (1.0 - 0.25 * i));
+                s.roughness *= 1.0 - 0.7 * i;
+                s.specular = s.specular.max(0.02 + 0.03 * i);
+            }
+            ConditionKind::Worn => {
+                // Paint wears through on about half the share rust of the same intensity covers.
+                let field = self.fractal_at(53.0, 0.12, 5);
+                let patch = smoothstep(-0.05, 0.05, coverage_threshold(0.5 * i) - field);
+                let bare = mix(
+                    linear(BARE_STEEL),
+                    linear(RUST_DARK),
+                    0.5 * smoothstep(-0.3, 0.3, self.fractal_at(59.0, 0.05, 3)),
+                );
+                s.albedo = mix(s.albedo, bare, patch);
+                s.roughness = lerp(s.roughness, 0.8, patch);
+            }
+        }
+    }
+}
+
+/// The level below which fractal noise lies on about `share` of the surface (the noise is
+/// roughly normal with a standard deviation near 0.35; linear in the middle is close enough).
+fn coverage_threshold(share: f64) -> f64 {
+    0.7 * (share - 0.5)
+}
+
+/// An image texture projected along the three axes of the undeformed structure and blended
+/// by the rest normal (sharply, so flat faces show one projection).
+fn triplanar(image: &super::image::TextureImage, at: &Point, size: f64) -> [f64; 3] {
+    let n = at.normal.abs();
+    let weights = [n.x.powi(4), n.y.powi(4), n.z.powi(4)];
+    let total: f64 = weights.iter().sum();
+    let p = at.p / size;
+    let texel = at.footprint / size;
+    // Image v runs downwards; world z runs up.
+    let planes = [(p.y, -p.z), (p.x, -p.z), (p.x, -p.y)];
+    let mut sum = [0.0; 3];
+    for (w, (u, v)) in weights.iter().zip(planes) {
+        if *w > 1e-4 * total {
+            let c = image.sample(u, v, texel);
+            sum = std::array::from_fn(|k| sum[k] + w / total * c[k]);
+        }
+    }
+    sum
+}
+
+/// An sRGB colour in linear light.
+fn linear(srgb: [f64; 3]) -> [f64; 3] {
+    srgb.map(super::srgb_to_linear)
+}
+
+fn mix(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
+    std::array::from_fn(|k| lerp(a[k], b[k], t))
+}
+
+fn lerp(a: f64, b: f64, t: f64) -> f64 {
+    a + (b - a) * t
+}
+
+fn scale(c: [f64; 3], f: f64) -> [f64; 3] {
+    c.map(|x| (x * f).clamp(0.0, 1.0))
+}
+
+/// Relative luminance of a linear colour (Rec. 709 weights).
+pub fn luminance(c: [f64; 3]) -> f64 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+impl Material {
+    fn is_metal(&self) -> bool {
+        matches!(
+            self.base,
+            Base::Steel
+                | Base::GalvanisedSteel
+                | Base::WeatheringSteel
+                | Base::Aluminium
+                | Base::Painted
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::materials::prompt::compile;
+    use crate::seeds::Scope;
+
+    fn shader(prompt: &str) -> Shader {
+        let material = compile(prompt, true).unwrap().material;
+        Shader::new(&material, &mut Stream::new(3, Scope::Sample(0), "material"))
+    }
+
+    const GRAIN: Grain = Grain {
+        axis: DVec3::X,
+        centre: DVec3::ZERO,
+    };
+
+    /// Points spread over a 2 m × 2 m wall facing −y.
+    fn wall(n: usize) -> impl Iterator<Item = SurfacePoint> {
+        (0..n).map(move |i| {
+            let t = i as f64;
+            SurfacePoint {
+                rest: DVec3::new(
+                    2.0 * (t * 0.618_034).fract(),
+                    0.0,
+                    2.0 * (t * 0.414_214).fract(),
+                ),
+                rest_normal: -DVec3::Y,
+                footprint: 1e-4,
+            }
+        })
+    }
+
+    fn is_rust(c: [f64; 3]) -> bool {
+        // Rust is clearly red-brown; steel is grey with a touch of blue.
+        c[0] > 1.5 * c[2]
+    }
+
+    #[test]
+    fn rust_covers_a_share_of_the_surface_that_grows_with_intensity() {
+        let shares: Vec<f64> = ["slightly rusty steel", "rusty steel", "heavily rusty steel"]
+            .iter()
+            .map(|p| {
+                let s = shader(p);
+                let n = 4000;
+                wall(n)
+                    .filter(|q| is_rust(s.surface(q, &GRAIN).albedo))
+                    .count() as f64
+                    / n as f64
+            })
+            .collect();
+        // Intensities 0.3, 0.6 and 1.0: the share of rust follows them within ±0.2.
+        for (share, intensity) in shares.iter().zip([0.3, 0.6, 1.0]) {
+            assert!((share - intensity).abs() < 0.2, "{shares:?}");
+        }
+        assert!(shares[0] < shares[1] && shares[1] < shares[2], "{shares:?}");
+        assert!(wall(4000).all(|q| !is_rust(shader("steel").surface(&q, &GRAIN).albedo)));
+    }
+
+    #[test]
+    fn every_material_is_continuous_in_the_rest_position() {
+        // Across an edge two triangles evaluate the same function at the same point, so
+        // continuity of the function is continuity across edges. With a pixel footprint of
+        // 1 mm, a 1 µm step may change the albedo by at most about a thousandth.
+        for prompt in [
+            "rusty steel",
+            "heavily corroded steel",
+            "cracked concrete",
+            "galvanised steel",
+            "rosewood",
+            "cracked timber",
+            "brick",
+            "stone",
+            "worn blue paint",
+            "mossy stained concrete",
+        ] {
+            let s = shader(prompt);
+            for q in wall(500) {
+                let q = SurfacePoint {
+                    footprint: 1e-3,
+                    ..q
+                };
+                let near = SurfacePoint {
+                    rest: q.rest + DVec3::new(1e-6, 0.0, 0.7e-6),
+                    ..q
+                };
+                let (a, b) = (s.surface(&q, &GRAIN), s.surface(&near, &GRAIN));
+                for k in 0..3 {
+                    assert!(
+                        (a.albedo[k] - b.albedo[k]).abs() < 5e-3,
+                        "{prompt}: {a:?} vs {b:?} at {}",
+                        q.rest
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn texture_seen_from_afar_averages_instead_of_aliasing() {
+        // A pixel 1 m wide on concrete spans every feature of it: each sample must lie near
+        // the mean of the fine texture, not on a random grain of it.
+        let s = shader("concrete");
+        let fine: Vec<f64> = wall(4000)
+            .map(|q| luminance(s.surface(&q, &GRAIN).albedo))
+            .collect();
+        let mean = fine.iter().sum::<f64>() / fine.len() as f64;
+        let spread =
+            |v: &[f64]| (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+        let far: Vec<f64> = wall(4000)
+            .map(|q| {
+                let q = SurfacePoint {
+                    footprint: 1.0,
+                    ..q
+                };
+                luminance(s.surface(&q, &GRAIN).albedo)
+            })
+            .collect();
+        assert!(
+            spread(&far) < 0.5 * spread(&fine),
+            "{} vs {}",
+            spread(&far),
+            spread(&fine)
+        );
+        let far_mean = far.iter().sum::<f64>() / far.len() as f64;
+        assert!((far_mean - mean).abs() < 0.1 * mean, "{far_mean} vs {mean}");
+    }
+
+    #[test]
+    fn cracks_grow_with_intensity_and_the_mask_matches_the_image() {
+        let share = |prompt: &str| {
+            let s = shader(prompt);
+            let mut cracked = 0;
+            for q in wall(20_000) {
+                let on = s.crack(&q, &GRAIN);
+                assert_eq!(on, s.surface(&q, &GRAIN).crack);
+                cracked += usize::from(on);
+            }
+            cracked as f64 / 20_000.0
+        };
+        let (light, heavy) = (
+            share("slightly cracked concrete"),
+            share("heavily cracked concrete"),
+        );
+        assert!(light > 0.0 && heavy > 2.0 * light, "{light} {heavy}");
+        assert_eq!(share("concrete"), 0.0);
+    }
+
+    #[test]
+    fn timber_grain_runs_along_the_piece() {
+        // Along the grain the colour changes slowly; across it, ring after ring.
+        let s = shader("oak");
+        let variation = |step: DVec3| {
+            (0..400)
+                .map(|i| {
+                    let at = |k: f64| SurfacePoint {
+                        rest: DVec3::new(0.3, -0.05, 0.2) + step * (f64::from(i) + k),
+                        rest_normal: -DVec3::Y,
+                        footprint: 1e-4,
+                    };
+                    let (a, b) = (s.surface(&at(0.0), &GRAIN), s.surface(&at(1.0), &GRAIN));
+                    (luminance(a.albedo) - luminance(b.albedo)).abs()
+                })
+                .sum::<f64>()
+        };
+        let (along, across) = (variation(DVec3::X * 5e-4), variation(DVec3::Z * 5e-4));
+        assert!(across > 3.0 * along, "along {along}, across {across}");
+    }
+
+    #[test]
+    fn brick_joints_fall_on_the_bond() {
+        // 65 mm bricks + 10 mm joints: 75 mm courses. Half-way between bed joints is brick,
+        // on a bed joint is mortar, whatever the sample's texture offset.
+        let s = shader("brick");
+        let mortar = linear(MORTAR);
+        let shift = s.offset.z;
+        for course in 0..20 {
+            let joint = 0.075 * f64::from(course) - shift.rem_euclid(0.075);
+            let at = |z: f64| SurfacePoint {
+                rest: DVec3::new(0.37, 0.0, z),
+                rest_normal: -DVec3::Y,
+                footprint: 1e-4,
+            };
+            let differs =
+                |c: [f64; 3]| (0..3).map(|k| (c[k] - mortar[k]).abs()).fold(0.0, f64::max);
+            assert!(differs(s.surface(&at(joint), &GRAIN).albedo) < 1e-12);
+            assert!(differs(s.surface(&at(joint + 0.0375), &GRAIN).albedo) > 0.01);
+        }
+    }
+
+    #[test]
+    fn each_sample_cuts_its_own_texture_and_plain_colours_stay_plain() {
+        let material = compile("rusty steel", true).unwrap().material;
+        let draw = |sample| {
+            Shader::new(
+                &material,
+                &mut Stream::new(3, Scope::Sample(sample), "material"),
+            )
+        };
+        let (a, again, b) = (draw(0), draw(0), draw(1));
+        let q = wall(1).next().unwrap();
+        assert_eq!(a.surface(&q, &GRAIN), again.surface(&q, &GRAIN));
+        assert_ne!(a.offset, b.offset);
+        let plain = Shader::new(
+            &Material::plain([0.2, 0.4, 0.6]),
+            &mut Stream::new(3, Scope::Sample(0), "material"),
+        );
+        assert!(!plain.textured());
+        assert_eq!(
+            plain.surface(&q, &GRAIN).albedo,
+            Material::plain([0.2, 0.4, 0.6]).albedo()
+        );
+    }
+}

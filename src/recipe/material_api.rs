@@ -1,0 +1,141 @@
+//! The material part of the recipe API: `.material("a photo of rusty steel")` and
+//! `.material("...", #{ ... })` on beams and assemblies, and `.colour([r, g, b])`.
+//!
+//! A prompt compiles into a procedural material (`materials::prompt`). An image in the recipe's
+//! `textures/` folder named after the prompt (`textures/rusty-steel.png` for "rusty steel")
+//! replaces the procedural albedo, so textures made elsewhere drop in without editing the
+//! recipe; `texture: "file.png"` names one explicitly.
+
+use super::api::Fallible;
+use super::diagnostics::Warnings;
+use super::files::RecipeFiles;
+use super::options::{self, OptResult, Options};
+use crate::materials::{Material, Texture, prompt};
+use crate::scene::{AssemblySpec, BeamSpec};
+use rhai::{Array, Dynamic, Engine, EvalAltResult, ImmutableString, Map, NativeCallContext};
+use std::sync::Arc;
+
+/// Where textures keyed by prompt live, relative to the recipe.
+pub const TEXTURES_FOLDER: &str = "textures";
+
+/// What the material calls need from the recipe.
+#[derive(Clone)]
+pub struct MaterialContext {
+    pub files: Arc<RecipeFiles>,
+    pub warnings: Arc<Warnings>,
+    /// Label of the recipe, for warnings raised where no other source is known.
+    pub label: String,
+}
+
+pub fn register(engine: &mut Engine, context: MaterialContext) {
+    register_for::<BeamSpec>(engine, &context, |b| &mut b.material);
+    register_for::<AssemblySpec>(engine, &context, |a| &mut a.material);
+}
+
+fn register_for<T: Clone + Send + Sync + 'static>(
+    engine: &mut Engine,
+    context: &MaterialContext,
+    material: fn(&mut T) -> &mut Material,
+) {
+    let c = context.clone();
+    engine.register_fn(
+        "material",
+        move |ctx: NativeCallContext, s: &mut T, text: ImmutableString| -> Fallible<T> {
+            *material(s) = compile(&ctx, &c, &text, Map::new())?;
+            Ok(s.clone())
+        },
+    );
+    let c = context.clone();
+    engine.register_fn(
+        "material",
+        move |ctx: NativeCallContext, s: &mut T, text: ImmutableString, o: Map| -> Fallible<T> {
+            *material(s) = compile(&ctx, &c, &text, o)?;
+            Ok(s.clone())
+        },
+    );
+    engine.register_fn("colour", move |s: &mut T, rgb: Array| -> Fallible<T> {
+        *material(s) = Material::plain(options::colour(&Dynamic::from(rgb), "colour")?);
+        Ok(s.clone())
+    });
+}
+
+/// Compiles `text` with the options of `.material(text, #{ ... })`, reporting warnings at the
+/// call.
+fn compile(
+    ctx: &NativeCallContext,
+    c: &MaterialContext,
+    text: &str,
+    options: Map,
+) -> Result<Material, Box<EvalAltResult>> {
+    let at = |msg: String| Box::new(EvalAltResult::ErrorRuntime(msg.into(), ctx.call_position()));
+    let mut o = Options::new(options, "material options");
+    let strict = o.flag("strict", false).map_err(at)?;
+    let compiled = prompt::compile(text, strict).map_err(at)?;
+    let label = ctx.call_source().unwrap_or(&c.label);
+    for warning in &compiled.warnings {
+        c.warnings.warn(warning, label, ctx.call_position());
+    }
+    let mut material = compiled.material;
+    adjust(&mut material, &mut o, &c.files, text).map_err(at)?;
+    o.finish().map_err(at)?;
+    Ok(material)
+}
+
+/// Applies the explicit options over the compiled prompt.
+fn adjust(m: &mut Material, o: &mut Options, files: &RecipeFiles, text: &str) -> OptResult<()> {
+    if let Some(v) = o.take("colour") {
+        m.colour = options::colour(&v, "material options.colour")?;
+    }
+    m.roughness = o.number("roughness", m.roughness)?;
+    m.specular = o.number("specular", m.specular)?;
+    m.scale = o.number("scale", m.scale)?;
+    let size = o.number("texture_size", 1.0)?;
+    for (name, value, range) in [
+        ("roughness", m.roughness, (0.0, 1.0)),
+        ("specular", m.specular, (0.0, 1.0)),
+    ] {
+        if !(value > range.0 && value <= range.1) && !(name == "specular" && value == 0.0) {
+            return Err(format!(
+                "material options.{name} = {value} must lie in ({}, {}]",
+                range.0, range.1
+            ));
+        }
+    }
+    for (name, value) in [("scale", m.scale), ("texture_size", size)] {
+        if value <= 0.0 {
+            return Err(format!(
+                "material options.{name} = {value} must be positive (metres)"
+            ));
+        }
+    }
+    let explicit = o.string("texture", "")?;
+    let chosen = if explicit.is_empty() {
+        files
+            .image_named(TEXTURES_FOLDER, &slug(text))?
+            .map(|f| (f, "prompt"))
+    } else {
+        Some((
+            files.image(&explicit, "material options.texture")?,
+            "explicit",
+        ))
+    };
+    if let Some((file, how)) = chosen {
+        m.texture = Texture::Image {
+            file: file.name,
+            hash: file.hash,
+            size,
+            chosen: how.to_string(),
+            pixels: file.image,
+        };
+    }
+    Ok(())
+}
+
+/// The file name a prompt's texture goes by: lower case, words joined by '-'.
+pub fn slug(text: &str) -> String {
+    text.to_lowercase()
+        .split(|c: char| !c.is_alphanumeric())
+        .filter(|w| !w.is_empty())
+        .collect::<Vec<_>>()
+        .join("-")
+}

@@ -1,0 +1,125 @@
+//! The surfaces of a sample's mesh: from a hit on the deformed mesh back to the undeformed
+//! surface, where the structure's material is evaluated. Textures therefore stay attached to
+//! the material as the structure bends, and are continuous across every shared edge.
+
+use super::shade::{Surfaces, hit_geometry};
+use super::trace::{GBuffer, NO_HIT, TraceMesh};
+use crate::cameras::Camera;
+use crate::geometry::Mesh;
+use crate::materials::{Grain, Shader, Surface, SurfacePoint};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// The materials of a sample, by triangle.
+pub struct SampleSurfaces<'a> {
+    /// The deformed mesh, as traced.
+    pub mesh: &'a Mesh,
+    /// Undeformed position of every vertex of `mesh`.
+    pub rest: &'a [DVec3],
+    /// Piece (a beam or one shape of an assembly) of every triangle.
+    pub piece: &'a [u32],
+    /// Shader index and grain of every piece.
+    pub pieces: &'a [(u32, Grain)],
+    pub shaders: &'a [Shader],
+}
+
+impl SampleSurfaces<'_> {
+    /// The undeformed surface point under world point `p` of triangle `tri`.
+    fn rest_point(&self, tri: u32, p: DVec3, footprint: f64) -> SurfacePoint {
+        let ids = self.mesh.triangles[tri as usize];
+        let [a, b, c] = ids.map(|i| self.mesh.positions[i as usize]);
+        let weights = barycentric(a, b, c, p);
+        let [ra, rb, rc] = ids.map(|i| self.rest[i as usize]);
+        SurfacePoint {
+            rest: weights[0] * ra + weights[1] * rb + weights[2] * rc,
+            rest_normal: (rb - ra).cross(rc - ra).normalize_or_zero(),
+            footprint,
+        }
+    }
+
+    fn shader_of(&self, tri: u32) -> (&Shader, &Grain) {
+        let (shader, grain) = &self.pieces[self.piece[tri as usize] as usize];
+        (&self.shaders[*shader as usize], grain)
+    }
+
+    /// 255 where the centre ray meets a crack, 0 elsewhere (see `Shader::crack`).
+    pub fn crack_mask(&self, g: &GBuffer, camera: &Camera, mesh: &TraceMesh) -> Vec<u8> {
+        let width = g.width as usize;
+        let mut mask = vec![0u8; g.triangle.len()];
+        mask.par_chunks_mut(width)
+            .enumerate()
+            .for_each(|(row, out)| {
+                for (col, m) in out.iter_mut().enumerate() {
+                    let i = row * width + col;
+                    let tri = g.triangle[i];
+                    if tri == NO_HIT {
+                        continue;
+                    }
+                    let (shader, grain) = self.shader_of(tri);
+                    if !shader.material().has_cracks() {
+                        continue;
+                    }
+                    let view = camera.intrinsics.ray_through_pixel(row as u32, col as u32);
+                    let (p, _, footprint) =
+                        hit_geometry(camera, mesh, tri, view, f64::from(g.depth[i]));
+                    if shader.crack(&self.rest_point(tri, p, footprint), grain) {
+                        *m = 255;
+                    }
+                }
+            });
+        mask
+    }
+}
+
+impl Surfaces for SampleSurfaces<'_> {
+    fn at(&self, tri: u32, p: DVec3, footprint: f64) -> Surface {
+        let (shader, grain) = self.shader_of(tri);
+        shader.surface(&self.rest_point(tri, p, footprint), grain)
+    }
+
+    fn flat(&self, tri: u32) -> [f64; 3] {
+        self.shader_of(tri).0.albedo()
+    }
+
+    fn textured(&self, tri: u32) -> bool {
+        self.shader_of(tri).0.textured()
+    }
+}
+
+/// Barycentric weights of the point of triangle (a, b, c) nearest to `p`'s projection,
+/// clamped onto the triangle (a hit can stray outside it by the f32 rounding of tracing).
+fn barycentric(a: DVec3, b: DVec3, c: DVec3, p: DVec3) -> [f64; 3] {
+    let (e1, e2, d) = (b - a, c - a, p - a);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (d1, d2) = (d.dot(e1), d.dot(e2));
+    let det = d11 * d22 - d12 * d12;
+    if det <= 0.0 {
+        return [1.0, 0.0, 0.0];
+    }
+    let v = ((d22 * d1 - d12 * d2) / det).max(0.0);
+    let w = ((d11 * d2 - d12 * d1) / det).max(0.0);
+    let total = (v + w).max(1.0);
+    let (v, w) = (v / total, w / total);
+    [1.0 - v - w, v, w]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn barycentric_weights_rebuild_the_point_and_clamp_outside() {
+        let (a, b, c) = (
+            DVec3::new(1.0, 2.0, 3.0),
+            DVec3::new(4.0, 2.5, 3.0),
+            DVec3::new(1.5, 6.0, 2.0),
+        );
+        for (v, w) in [(0.2, 0.3), (0.0, 0.0), (0.5, 0.5), (0.9, 0.05)] {
+            let p = a + v * (b - a) + w * (c - a);
+            let [x, y, z] = barycentric(a, b, c, p);
+            assert!((x * a + y * b + z * c - p).length() < 1e-12);
+        }
+        let outside = barycentric(a, b, c, a - (b - a));
+        assert_eq!(outside, [1.0, 0.0, 0.0]);
+    }
+}
