@@ -262,6 +262,40 @@ fn editing_a_module_in_another_folder_reloads() {
     editing_the_module_reloads(true);
 }
 
+/// A 4×4 PNG of one colour.
+fn write_png(path: &Path, rgb: [u8; 3]) {
+    let mut bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut bytes, 4, 4);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().unwrap();
+    writer.write_image_data(&rgb.repeat(16)).unwrap();
+    writer.finish().unwrap();
+    std::fs::write(path, bytes).unwrap();
+}
+
+#[test]
+fn a_texture_dropped_in_and_then_edited_reloads() {
+    // The block's prompt "steel" takes textures/steel.png as its texture once it exists.
+    let (dir, recipe) = project();
+    std::fs::write(
+        &recipe,
+        RECIPE.replace(".colour([0.8, 0.3, 0.2])", ".material(\"steel\")"),
+    )
+    .unwrap();
+    let textures = dir.path().join("textures");
+    std::fs::create_dir(&textures).unwrap();
+    let sheet = preview_of(&recipe);
+    let watch = Watch::start(&recipe, &[]);
+    let procedural = watch.wait_for_preview(1, &sheet);
+    write_png(&textures.join("steel.png"), [200, 30, 30]);
+    let red = watch.wait_for_preview(2, &sheet);
+    assert_ne!(procedural, red, "the image replaces the procedural texture");
+    write_png(&textures.join("steel.png"), [30, 200, 30]);
+    let green = watch.wait_for_preview(3, &sheet);
+    assert_ne!(red, green, "the edited image shows");
+}
+
 #[test]
 fn saving_the_same_content_or_touching_other_files_does_not_reload() {
     let (dir, recipe) = project();

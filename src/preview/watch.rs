@@ -8,7 +8,8 @@
 //!
 //! Folders, not files, are watched (non-recursively): an editor's atomic save replaces the
 //! file, and a watch on the file itself would be lost with the old inode
-//! (shared/research/crates.md §6.2).
+//! (shared/research/crates.md §6.2). Not recursively, because a recipe's folder may also hold
+//! datasets, whose thousands of files must neither cost watches nor trigger reloads.
 
 use super::serve::Server;
 use super::sheet::{self, Preview, PreviewOptions};
@@ -279,8 +280,9 @@ impl Watched {
         }
     }
 
-    /// Watches the folders of `files` (the recipe's dependencies after a good load) and of
-    /// the recipe, and stops watching folders no longer needed (an import was removed).
+    /// Watches the folders of `files` (the recipe's dependencies after a good load), the
+    /// recipe's folder and the folders directly inside it, and stops watching folders no
+    /// longer needed (an import was removed).
     fn watch(&mut self, watcher: &mut impl Watcher, files: Vec<PathBuf>) {
         self.files = files.iter().map(|f| absolute(f)).collect();
         self.files.insert(self.recipe.clone());
@@ -288,6 +290,7 @@ impl Watched {
             .files
             .iter()
             .filter_map(|f| f.parent().map(Path::to_path_buf))
+            .chain(subfolders(&self.recipe_folder))
             .collect();
         for gone in self.folders.difference(&wanted) {
             let _ = watcher.unwatch(gone);
@@ -351,6 +354,21 @@ impl Watched {
 /// Hash of a file's bytes; None when it cannot be read (deleted, say).
 fn content(path: &Path) -> Option<blake3::Hash> {
     std::fs::read(path).ok().map(|b| blake3::hash(&b))
+}
+
+/// The visible folders directly inside `folder`. A recipe's textures, meshes and backgrounds
+/// live there, and some count before the recipe has read them: an image dropped into
+/// `textures/` under a prompt's name becomes that prompt's texture.
+fn subfolders(folder: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(folder) else {
+        return Vec::new();
+    };
+    entries
+        .flatten()
+        .filter(|e| !e.file_name().to_string_lossy().starts_with('.'))
+        .map(|e| e.path())
+        .filter(|p| p.is_dir())
+        .collect()
 }
 
 fn is_scratch(name: &str) -> bool {
