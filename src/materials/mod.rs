@@ -4,8 +4,10 @@
 //! A material is a base (steel, concrete, a timber species, paint, …) with a colour, a finish
 //! (roughness and specular) and conditions layered on top (rust, cracks, moss, …). Text prompts
 //! compile into this description (`prompt`); `procedural` evaluates it at a point of the
-//! *undeformed* surface, in metres, so textures are continuous across faces and move with the
-//! deformation; `image` samples textures made elsewhere.
+//! *undeformed* surface, in metres, so textures move with the deformation and procedural
+//! patterns are continuous across every edge (moss, which prefers upward faces, and image
+//! textures, projected along the axis nearest each face, change at creases as real ones do);
+//! `image` samples textures made elsewhere.
 //!
 //! Owns: the material vocabulary, the generators and texture images. Must not touch: geometry,
 //! lights, cameras or writing files.

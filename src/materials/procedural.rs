@@ -330,10 +330,12 @@ impl Point<'_> {
         scale(colour, 1.0 - darkening + fibres)
     }
 
-    /// Running-bond brickwork: 215 × 65 mm bricks with 10 mm mortar joints, courses
-    /// horizontal, laid on whichever coordinate plane the face is closest to.
+    /// Running-bond brickwork: 215 × 65 mm bricks with 10 mm mortar joints in horizontal
+    /// courses. The bond is solid (a function of position, like every pattern here), so it
+    /// turns corners without a seam: bed joints are levels of z, head joints levels of x + y,
+    /// which runs along any wall face except one at exactly 45° to the axes.
     fn brick(&self, colour: [f64; 3]) -> [f64; 3] {
-        let (u, v) = self.planar();
+        let (u, v) = (self.p.x + self.p.y, self.p.z);
         let (length, height, joint) = (0.225, 0.075, 0.01);
         let course = (v / height).floor();
         let shifted = u + if course.rem_euclid(2.0) == 1.0 {
@@ -368,19 +370,6 @@ impl Point<'_> {
             1.0 + 0.3 * (unit(c.id, 9) - 0.5) + 0.08 * self.fractal(0.08, 4),
         );
         mix(block, scale(linear(MORTAR), 0.7), mortar)
-    }
-
-    /// Two coordinates on the coordinate plane closest to the face (v vertical on walls).
-    fn planar(&self) -> (f64, f64) {
-        let n = self.normal.abs();
-        let p = self.p;
-        if n.z >= n.x && n.z >= n.y {
-            (p.x, p.y)
-        } else if n.x >= n.y {
-            (p.y, p.z)
-        } else {
-            (p.x, p.z)
-        }
     }
 
     fn condition(&self, c: Condition, s: &mut Surface) {

@@ -1,6 +1,7 @@
 //! The surfaces of a sample's mesh: from a hit on the deformed mesh back to the undeformed
 //! surface, where the structure's material is evaluated. Textures therefore stay attached to
-//! the material as the structure bends, and are continuous across every shared edge.
+//! the material as the structure bends, and a shared edge reads the same point from either
+//! side.
 
 use super::shade::{Surfaces, hit_geometry};
 use super::trace::{GBuffer, NO_HIT, TraceMesh};
