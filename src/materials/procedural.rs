@@ -55,6 +55,9 @@ pub struct Shader {
     albedo: [f64; 3],
 }
 
+/// Share of a pixel a crack must cover for the pixel to be labelled a crack.
+pub const CRACK_LABEL_COVER: f64 = 0.2;
+
 /// Rust as it forms on structural steel: orange-brown to dark brown (sRGB).
 const RUST_LIGHT: [f64; 3] = [0.5, 0.27, 0.14];
 const RUST_DARK: [f64; 3] = [0.22, 0.11, 0.06];
@@ -173,8 +176,9 @@ impl Shader {
 
     /// Crack network: borders between Voronoi cells (distorted so they wander), only some of
     /// them open, each with its own width. Timber splits along its grain, so there the cells
-    /// are drawn out eight times along it. Returns (fraction of the pixel covered, whether the
-    /// crack passes through the pixel).
+    /// are drawn out eight times along it. Returns the fraction of the pixel the crack covers,
+    /// and whether that is enough to label the pixel a crack: a fifth or more, i.e. the pixel is
+    /// visibly darker (cracks much thinner than a pixel are invisible, and stay unlabelled).
     fn cracks(&self, q: DVec3, intensity: f64, footprint: f64, grain: &Grain) -> (f64, bool) {
         let timber = matches!(self.material.base, Base::Timber(_));
         let q = if timber {
@@ -198,7 +202,7 @@ impl Shader {
         let width = (0.4e-3 + 2.5e-3 * intensity) * (0.4 + 1.2 * unit(edge, 8));
         let covered = ((0.5 * (width + footprint) - c.border) / footprint).clamp(0.0, 1.0)
             * (width / footprint).min(1.0);
-        (covered, c.border < 0.5 * width.max(footprint))
+        (covered, covered >= CRACK_LABEL_COVER)
     }
 }
 

@@ -441,7 +441,7 @@ fn view_json(
         },
         "depth": { "kind": "planar_z", "unit": "m", "no_surface": 0.0, "channel": crate::output::DEPTH_CHANNEL },
         "mask": { "structure": 255, "background": 0 },
-        "cracks": { "crack": 255, "elsewhere": 0, "rule": "the centre ray meets the surface within half a crack width, or half a pixel footprint for cracks thinner than a pixel, of a crack's centre line" },
+        "cracks": { "crack": 255, "elsewhere": 0, "rule": "at the centre ray's surface point, a crack covers at least this share of the pixel's footprint", "min_cover": crate::materials::procedural::CRACK_LABEL_COVER },
         "segmentation": scene["segmentation"],
         "background": rendered.backdrop,
         "light": sample.lighting.1,
