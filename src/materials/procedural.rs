@@ -100,6 +100,16 @@ impl Shader {
         &self.material
     }
 
+    /// The surface without texture: the mean albedo and the material's finish.
+    pub fn untextured(&self) -> Surface {
+        Surface {
+            albedo: self.albedo,
+            roughness: self.material.roughness,
+            specular: self.material.specular,
+            crack: false,
+        }
+    }
+
     /// Whether the surface varies from point to point.
     pub fn textured(&self) -> bool {
         let m = &self.material;
@@ -124,12 +134,7 @@ impl Shader {
     pub fn surface(&self, p: &SurfacePoint, grain: &Grain) -> Surface {
         let m = &self.material;
         let base = self.albedo;
-        let mut s = Surface {
-            albedo: base,
-            roughness: m.roughness,
-            specular: m.specular,
-            crack: false,
-        };
+        let mut s = self.untextured();
         if !self.textured() {
             return s;
         }

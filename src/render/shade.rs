@@ -124,6 +124,8 @@ struct Shading<'a, S: Surfaces> {
     surfaces: &'a S,
     backdrop: &'a Backdrop,
     background: [f64; 3],
+    /// The studio lights in world axes, for this view.
+    studio: Option<[(DVec3, f64); 2]>,
 }
 
 /// RGB8 image (sRGB) of the G-buffer.
@@ -147,9 +149,14 @@ pub fn shade(
             Backdrop::Colour(c) => c.map(|c| srgb_to_linear(f64::from(c) / 255.0)),
             _ => [0.0; 3],
         },
+        studio: lighting
+            .studio
+            .map(|lights| lights.map(|(d, i)| (camera.rotation * d, i))),
     };
     let width = g.width as usize;
     let plain_background = matches!(backdrop, Backdrop::Colour(_)).then(|| encode(s.background));
+    // Only pixels next to a hit can be an edge, and on a plain background only hits need work.
+    let (rows, cols) = hit_bounds(g);
     // Centre rays: the shaded colour, and the untextured one that decides anti-aliasing.
     let mut centre = vec![0u8; g.triangle.len() * 3];
     let mut flat = vec![0u8; g.triangle.len() * 3];
@@ -160,13 +167,13 @@ pub fn shade(
         .for_each(|(row, (out, flat))| {
             for col in 0..width {
                 let i = row * width + col;
-                let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
                 let hit = (g.triangle[i] != NO_HIT).then(|| (g.depth[i], g.triangle[i]));
-                let colour = match (hit, plain_background) {
-                    // Most of a frame is plain background: nothing to compute.
-                    (None, Some(bytes)) => bytes,
-                    _ => encode(s.radiance(hit, u, v)),
-                };
+                if let (None, Some(bytes)) = (hit, plain_background) {
+                    out[3 * col..3 * col + 3].copy_from_slice(&bytes);
+                    continue;
+                }
+                let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
+                let colour = encode(s.radiance(hit, u, v));
                 out[3 * col..3 * col + 3].copy_from_slice(&colour);
                 let flat_colour = match hit {
                     Some((_, tri)) if s.surfaces.textured(tri) => {
@@ -195,8 +202,9 @@ pub fn shade(
     let mut rgb = centre.clone();
     rgb.par_chunks_mut(width * 3)
         .enumerate()
+        .filter(|(row, _)| rows.contains(row))
         .for_each(|(row, out)| {
-            for col in 0..width {
+            for col in cols.clone() {
                 let i = row * width + col;
                 let neighbours = [
                     (col > 0).then(|| i - 1),
@@ -217,6 +225,26 @@ pub fn shade(
             }
         });
     rgb
+}
+
+/// Rows and columns holding a hit, widened by one pixel (their neighbours).
+fn hit_bounds(g: &GBuffer) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+    let (width, height) = (g.width as usize, g.height as usize);
+    let (mut r0, mut r1, mut c0, mut c1) = (usize::MAX, 0, usize::MAX, 0);
+    for (row, line) in g.triangle.chunks(width).enumerate() {
+        let Some(first) = line.iter().position(|&t| t != NO_HIT) else {
+            continue;
+        };
+        let last = line.iter().rposition(|&t| t != NO_HIT).unwrap_or(first);
+        (r0, r1, c0, c1) = (r0.min(row), row, c0.min(first), c1.max(last));
+    }
+    if r0 == usize::MAX {
+        return (0..0, 0..0);
+    }
+    (
+        r0.saturating_sub(1)..(r1 + 2).min(height),
+        c0.saturating_sub(1)..(c1 + 2).min(width),
+    )
 }
 
 impl<S: Surfaces> Shading<'_, S> {
@@ -253,8 +281,12 @@ impl<S: Surfaces> Shading<'_, S> {
         at: Option<(DVec3, DVec3)>,
     ) -> [f64; 3] {
         let l = self.lighting;
-        let n = self.facing_normal(tri, view);
-        let to_eye = -(self.camera.rotation * view).normalize();
+        let n = match at {
+            Some((_, normal)) => normal,
+            None => self.facing_normal(tri, view),
+        };
+        let gloss = gloss.filter(|s| s.specular > 0.0);
+        let to_eye = gloss.map(|_| -(self.camera.rotation * view).normalize());
         let mut diffuse = [l.ambient; 3];
         let mut specular = [0.0; 3];
         let mut add = |direction: DVec3, colour: [f64; 3]| {
@@ -265,16 +297,16 @@ impl<S: Surfaces> Shading<'_, S> {
             for k in 0..3 {
                 diffuse[k] += colour[k] * cos;
             }
-            if let Some(s) = gloss.filter(|s| s.specular > 0.0) {
+            if let (Some(s), Some(to_eye)) = (gloss, to_eye) {
                 let glint = blinn_phong(n, direction, to_eye, s) * cos;
                 for k in 0..3 {
                     specular[k] += colour[k] * glint;
                 }
             }
         };
-        if let Some(lights) = &l.studio {
+        if let Some(lights) = &self.studio {
             for (direction, intensity) in lights {
-                add(self.camera.rotation * *direction, [*intensity; 3]);
+                add(*direction, [*intensity; 3]);
             }
         }
         if let Some(sun) = &l.sun {

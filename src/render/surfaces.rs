@@ -75,6 +75,10 @@ impl SampleSurfaces<'_> {
 impl Surfaces for SampleSurfaces<'_> {
     fn at(&self, tri: u32, p: DVec3, footprint: f64) -> Surface {
         let (shader, grain) = self.shader_of(tri);
+        if !shader.textured() {
+            // A plain colour needs no point on the undeformed surface.
+            return shader.untextured();
+        }
         shader.surface(&self.rest_point(tri, p, footprint), grain)
     }
 
