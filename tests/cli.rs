@@ -1,12 +1,13 @@
 //! The `shmgen run` command end to end: determinism across threads, shards and kill -9,
 //! the files read back through other readers, and every kind of bad input.
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::Path;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-const BIN: &str = env!("CARGO_BIN_EXE_shmgen");
+mod common;
+
+use common::{BIN, hashes, ok, read_json, run, write};
 
 /// A small recipe (low resolution so the suite stays fast) importing the stdlib beam module.
 const SMALL: &str = r#"
@@ -28,63 +29,10 @@ dataset(#{
 });
 "#;
 
-fn write_recipe(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-fn run(recipe: &Path, out: &Path, extra: &[&str]) -> Output {
-    Command::new(BIN)
-        .arg("run")
-        .arg(recipe)
-        .arg("--out")
-        .arg(out)
-        .args(extra)
-        .output()
-        .unwrap()
-}
-
-fn ok(output: Output) -> Output {
-    assert!(
-        output.status.success(),
-        "shmgen failed:\n{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    output
-}
-
-/// blake3 of every file under `root`, by relative path.
-fn hashes(root: &Path) -> BTreeMap<String, String> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![root.to_path_buf()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-            } else {
-                let rel = path
-                    .strip_prefix(root)
-                    .unwrap()
-                    .to_string_lossy()
-                    .to_string();
-                out.insert(
-                    rel,
-                    blake3::hash(&std::fs::read(&path).unwrap())
-                        .to_hex()
-                        .to_string(),
-                );
-            }
-        }
-    }
-    out
-}
-
 #[test]
 fn same_bytes_with_one_or_two_threads() {
     let dir = tempfile::tempdir().unwrap();
-    let recipe = write_recipe(dir.path(), "small.rhai", SMALL);
+    let recipe = write(dir.path(), "small.rhai", SMALL);
     ok(run(&recipe, &dir.path().join("t1"), &["--threads", "1"]));
     ok(run(&recipe, &dir.path().join("t2"), &["--threads", "2"]));
     let (a, b) = (
@@ -102,7 +50,7 @@ fn same_bytes_with_one_or_two_threads() {
 #[test]
 fn shards_merge_into_the_same_bytes_as_one_run() {
     let dir = tempfile::tempdir().unwrap();
-    let recipe = write_recipe(dir.path(), "small.rhai", SMALL);
+    let recipe = write(dir.path(), "small.rhai", SMALL);
     ok(run(&recipe, &dir.path().join("whole"), &[]));
     let sharded = dir.path().join("sharded");
     let first = ok(run(&recipe, &sharded, &["--shard", "1/2"]));
@@ -118,7 +66,7 @@ fn shards_merge_into_the_same_bytes_as_one_run() {
 #[test]
 fn killed_run_resumes_to_the_same_bytes() {
     let dir = tempfile::tempdir().unwrap();
-    let recipe = write_recipe(dir.path(), "small.rhai", SMALL);
+    let recipe = write(dir.path(), "small.rhai", SMALL);
     let args = [
         "--set",
         "samples=40",
@@ -170,7 +118,7 @@ fn killed_run_resumes_to_the_same_bytes() {
 #[test]
 fn written_files_round_trip_through_other_readers() {
     let dir = tempfile::tempdir().unwrap();
-    let recipe = write_recipe(
+    let recipe = write(
         dir.path(),
         "box.rhai",
         r#"dataset(#{
@@ -247,10 +195,6 @@ fn written_files_round_trip_through_other_readers() {
     }
 }
 
-fn read_json(path: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
-}
-
 fn read_exr(path: &Path) -> Vec<f32> {
     use exr::prelude::*;
     let image = read_first_flat_layer_from_file(path).unwrap();
@@ -273,7 +217,7 @@ fn read_png(path: &Path) -> Vec<u8> {
 /// leave no output folder behind.
 fn rejects(recipe_text: &str, extra: &[&str], expected: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
-    let recipe = write_recipe(dir.path(), "bad.rhai", recipe_text);
+    let recipe = write(dir.path(), "bad.rhai", recipe_text);
     let out = dir.path().join("out");
     let output = run(&recipe, &out, extra);
     let stderr =
@@ -295,7 +239,7 @@ fn with_scene(scene_body: &str) -> String {
 #[test]
 fn parameters_read_inside_the_scene_follow_set() {
     let dir = tempfile::tempdir().unwrap();
-    let recipe = write_recipe(
+    let recipe = write(
         dir.path(),
         "p.rhai",
         r#"dataset(#{ samples: 1, camera: #{ width: 32, height: 24 },
@@ -311,7 +255,7 @@ fn parameters_read_inside_the_scene_follow_set() {
 #[test]
 fn beam_api_reaches_the_labels() {
     let dir = tempfile::tempdir().unwrap();
-    let recipe = write_recipe(
+    let recipe = write(
         dir.path(),
         "api.rhai",
         r#"
@@ -395,7 +339,7 @@ fn bad_sections_and_loads_are_named() {
 #[test]
 fn a_user_written_structure_module_renders_with_parts_and_instances() {
     let dir = tempfile::tempdir().unwrap();
-    write_recipe(
+    write(
         dir.path(),
         "lamp_post.rhai",
         r#"
@@ -410,7 +354,7 @@ fn a_user_written_structure_module_renders_with_parts_and_instances() {
         }
         "#,
     );
-    let recipe = write_recipe(
+    let recipe = write(
         dir.path(),
         "street.rhai",
         r#"
@@ -470,7 +414,7 @@ fn a_user_written_structure_module_renders_with_parts_and_instances() {
 #[test]
 fn stdlib_structures_render_with_their_parts() {
     let dir = tempfile::tempdir().unwrap();
-    let recipe = write_recipe(
+    let recipe = write(
         dir.path(),
         "structures.rhai",
         r#"
@@ -520,7 +464,7 @@ fn imported_meshes_render_and_broken_files_are_reported_at_the_call() {
     for f in ["tetra.obj", "tetra.glb", "face_out_of_range.obj"] {
         std::fs::copy(corpus.join(f), dir.path().join("models").join(f)).unwrap();
     }
-    let recipe = write_recipe(
+    let recipe = write(
         dir.path(),
         "imported.rhai",
         r#"dataset(#{ samples: 1, views: 2, camera: #{ width: 64, height: 48 },
@@ -543,7 +487,7 @@ fn imported_meshes_render_and_broken_files_are_reported_at_the_call() {
         serde_json::json!([1.0, 0.0, 0.0])
     );
 
-    let bad = write_recipe(
+    let bad = write(
         dir.path(),
         "bad.rhai",
         "dataset(#{ scene: |rng| assembly(\"x\", [\n    shape::mesh(\"models/face_out_of_range.obj\")]) })\n",
@@ -557,7 +501,7 @@ fn imported_meshes_render_and_broken_files_are_reported_at_the_call() {
             && stderr.contains("out of range"),
         "{stderr}"
     );
-    let escape = write_recipe(
+    let escape = write(
         dir.path(),
         "escape.rhai",
         "dataset(#{ scene: |rng| assembly(\"x\", [shape::mesh(\"../secret.obj\")]) })\n",
@@ -745,12 +689,12 @@ fn a_failure_in_a_later_sample_writes_nothing() {
 #[test]
 fn errors_inside_imported_modules_point_into_the_module() {
     let dir = tempfile::tempdir().unwrap();
-    write_recipe(
+    write(
         dir.path(),
         "frames.rhai",
         "fn portal(span) {\n    beam(#{ length: span, width: 0.0, height: 0.3 })\n}\n",
     );
-    let recipe = write_recipe(
+    let recipe = write(
         dir.path(),
         "bad.rhai",
         "import \"frames\" as frames;\ndataset(#{ scene: |rng| frames::portal(3.0) })\n",
@@ -777,7 +721,7 @@ fn imports_cannot_leave_the_recipe_and_stdlib_folders() {
 #[test]
 fn a_folder_holding_another_dataset_is_refused_unless_forced() {
     let dir = tempfile::tempdir().unwrap();
-    let recipe = write_recipe(dir.path(), "small.rhai", SMALL);
+    let recipe = write(dir.path(), "small.rhai", SMALL);
     let out = dir.path().join("ds");
     ok(run(&recipe, &out, &["--set", "samples=2"]));
     let before = hashes(&out);

@@ -17,63 +17,22 @@
 use glam::DVec3;
 use shmgen::geometry::Mesh;
 use shmgen::materials::image::TextureImage;
-use shmgen::materials::{Grain, Material, Shader, SurfacePoint, Texture, prompt};
+use shmgen::materials::prompt::{self, PAPER_PROMPTS};
+use shmgen::materials::{Grain, Material, Shader, SurfacePoint, Texture};
 use shmgen::mechanics::{Load, Support, Target};
 use shmgen::render::{SampleSurfaces, Surfaces};
 use shmgen::scene::{BeamSpec, Tessellation};
 use shmgen::seeds::{Scope, Stream};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 use std::sync::Arc;
 
-const BIN: &str = env!("CARGO_BIN_EXE_shmgen");
+mod common;
 
-/// The prompts of the 3DGEN paper, in its words.
-const PAPER_PROMPTS: [&str; 7] = [
-    "A photo of rusty steel beam for construction",
-    "A photo of plastic board for construction",
-    "A photo of cracked timber for construction",
-    "A photo of a rosewood block for construction",
-    "A photo of a steel water silo",
-    "A photo of a blue water silo",
-    "A photo of a yellow water silo",
-];
+use common::{blake3_hex, hashes, ok, read_json, run, stderr, write};
 
 // ---------------------------------------------------------------------------------------------
 // Helpers: running the binary and reading what it wrote.
-
-fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-    std::fs::write(&path, bytes).unwrap();
-    path
-}
-
-fn run(recipe: &Path, out: &Path, extra: &[&str]) -> Output {
-    Command::new(BIN)
-        .arg("run")
-        .arg(recipe)
-        .arg("--out")
-        .arg(out)
-        .arg("--quiet")
-        .args(extra)
-        .output()
-        .unwrap()
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).to_string()
-}
-
-fn ok(output: Output) -> Output {
-    assert!(
-        output.status.success(),
-        "shmgen failed:\n{}",
-        stderr(&output)
-    );
-    output
-}
 
 /// Runs a bad recipe: it must fail, say every `expected` fragment, and write no output folder.
 fn rejects(dir: &Path, recipe: &Path, expected: &[&str]) -> String {
@@ -100,32 +59,6 @@ fn location(recipe: &Path, needle: &str) -> String {
         .find_map(|(i, l)| l.find(needle).map(|c| (i + 1, c + 1)))
         .unwrap_or_else(|| panic!("`{needle}` not in the recipe"));
     format!("{}:{line}:{col}", recipe.display())
-}
-
-/// blake3 of every file under `root`, by relative path.
-fn hashes(root: &Path) -> BTreeMap<String, String> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![root.to_path_buf()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-            } else {
-                let rel = path.strip_prefix(root).unwrap().display().to_string();
-                out.insert(rel, blake3_hex(&std::fs::read(&path).unwrap()));
-            }
-        }
-    }
-    out
-}
-
-fn blake3_hex(bytes: &[u8]) -> String {
-    blake3::hash(bytes).to_hex().to_string()
-}
-
-fn read_json(path: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
 
 /// 8-bit PNG through the `png` crate: (width, height, channels, samples).

@@ -66,6 +66,18 @@ use super::{Base, Condition, ConditionKind, Material, Species, Texture};
 use crate::words::{edit_distance, nearest};
 use std::sync::LazyLock;
 
+/// The texture prompts of the 3DGEN paper, in its words (experiments A1 and A2, and its
+/// Figure 3 example).
+pub const PAPER_PROMPTS: [&str; 7] = [
+    "A photo of rusty steel beam for construction",
+    "A photo of plastic board for construction",
+    "A photo of cracked timber for construction",
+    "A photo of a rosewood block for construction",
+    "A photo of a steel water silo",
+    "A photo of a blue water silo",
+    "A photo of a yellow water silo",
+];
+
 /// The result of compiling a prompt.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Compiled {
@@ -1167,40 +1179,30 @@ mod tests {
             .unwrap()
     }
 
-    const PAPER: [&str; 7] = [
-        "A photo of rusty steel beam for construction",
-        "A photo of plastic board for construction",
-        "A photo of cracked timber for construction",
-        "A photo of a rosewood block for construction",
-        "A photo of a steel water silo",
-        "A photo of a blue water silo",
-        "A photo of a yellow water silo",
-    ];
-
     #[test]
     fn paper_rusty_steel_beam() {
-        let c = compile(PAPER[0], true).unwrap();
+        let c = compile(PAPER_PROMPTS[0], true).unwrap();
         assert_eq!(c.material.base, Base::Steel);
         assert_eq!(
             conditions(&c.material),
             [(ConditionKind::Rusty, DEFAULT_INTENSITY)]
         );
         assert_eq!(c.recognised, ["rusty", "steel"]);
-        assert_eq!(c.material.prompt.as_deref(), Some(PAPER[0]));
+        assert_eq!(c.material.prompt.as_deref(), Some(PAPER_PROMPTS[0]));
         assert_eq!(c.material.texture, Texture::Procedural);
         assert_eq!(c.material.scale, 1.0);
     }
 
     #[test]
     fn paper_plastic_board() {
-        let m = material(PAPER[1]);
+        let m = material(PAPER_PROMPTS[1]);
         assert_eq!(m.base, Base::Plastic);
         assert!(m.conditions.is_empty());
     }
 
     #[test]
     fn paper_cracked_timber() {
-        let m = material(PAPER[2]);
+        let m = material(PAPER_PROMPTS[2]);
         assert_eq!(m.base, Base::Timber(Species::Pine));
         assert_eq!(
             conditions(&m),
@@ -1210,22 +1212,22 @@ mod tests {
 
     #[test]
     fn paper_rosewood_block() {
-        let m = material(PAPER[3]);
+        let m = material(PAPER_PROMPTS[3]);
         assert_eq!(m.base, Base::Timber(Species::Rosewood));
         assert!(m.conditions.is_empty());
     }
 
     #[test]
     fn paper_steel_silo_is_bare_steel() {
-        let m = material(PAPER[4]);
+        let m = material(PAPER_PROMPTS[4]);
         assert_eq!(m.base, Base::Steel);
         assert!(m.conditions.is_empty());
     }
 
     #[test]
     fn paper_coloured_silos_are_painted() {
-        let blue = material(PAPER[5]);
-        let yellow = material(PAPER[6]);
+        let blue = material(PAPER_PROMPTS[5]);
+        let yellow = material(PAPER_PROMPTS[6]);
         assert_eq!(blue.base, Base::Painted);
         assert_eq!(yellow.base, Base::Painted);
         assert_eq!(dominant(blue.colour), 2);
@@ -1236,7 +1238,7 @@ mod tests {
     #[test]
     fn paper_materials_are_pairwise_different() {
         // Without the prompt text, which alone would make them differ.
-        let all: Vec<Material> = PAPER
+        let all: Vec<Material> = PAPER_PROMPTS
             .iter()
             .map(|p| Material {
                 prompt: None,
@@ -1245,7 +1247,11 @@ mod tests {
             .collect();
         for i in 0..all.len() {
             for j in i + 1..all.len() {
-                assert_ne!(all[i], all[j], "{} vs {}", PAPER[i], PAPER[j]);
+                assert_ne!(
+                    all[i], all[j],
+                    "{} vs {}",
+                    PAPER_PROMPTS[i], PAPER_PROMPTS[j]
+                );
             }
         }
     }

@@ -208,6 +208,7 @@ pub fn colour(v: &Dynamic, path: &str) -> OptResult<[f64; 3]> {
 mod tests {
     use super::*;
 
+    #[test]
     fn unknown_and_bad_values_are_named() {
         let mut map = Map::new();
         map.insert("widht".into(), Dynamic::from(0.2));

@@ -1,0 +1,68 @@
+//! Helpers the integration tests share: running the binary and reading what it wrote.
+#![allow(dead_code)] // each test crate uses its own subset
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+pub const BIN: &str = env!("CARGO_BIN_EXE_shmgen");
+
+/// Writes `bytes` to `dir/name`, creating folders on the way.
+pub fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+/// `shmgen run RECIPE --out OUT --quiet EXTRA...`.
+pub fn run(recipe: &Path, out: &Path, extra: &[&str]) -> Output {
+    Command::new(BIN)
+        .arg("run")
+        .arg(recipe)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+pub fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).to_string()
+}
+
+pub fn ok(output: Output) -> Output {
+    assert!(
+        output.status.success(),
+        "shmgen failed:\n{}",
+        stderr(&output)
+    );
+    output
+}
+
+/// blake3 of every file under `root`, by relative path.
+pub fn hashes(root: &Path) -> BTreeMap<String, String> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![root.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                let rel = path.strip_prefix(root).unwrap().display().to_string();
+                out.insert(rel, blake3_hex(&std::fs::read(&path).unwrap()));
+            }
+        }
+    }
+    out
+}
+
+pub fn blake3_hex(bytes: &[u8]) -> String {
+    blake3::hash(bytes).to_hex().to_string()
+}
+
+pub fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
