@@ -1,5 +1,5 @@
 //! The contact sheet: the first samples and views of a recipe rendered small, one row per
-//! (sample, view): RGB | depth (colour-mapped) | mask | part ids | instance ids.
+//! (sample, view): RGB | depth (colour-mapped) | mask | part ids | instance ids | cracks.
 //!
 //! Owns: shrinking a recipe to preview size, the sheet's layout and its false colours. Must
 //! not touch: the renderer or the encoders (it calls `pipeline::prepare`, `SampleRenderer` and
@@ -51,6 +51,7 @@ enum Column {
     Mask,
     Parts,
     Instances,
+    Cracks,
 }
 
 /// The images of one (sample, view), still as raw buffers: depth is coloured only once the
@@ -61,6 +62,7 @@ struct Row {
     mask: Vec<u8>,
     parts: Vec<u16>,
     instances: Vec<u16>,
+    cracks: Vec<u8>,
 }
 
 /// Shrinks `recipe` to the preview and renders its sheet (in parallel over samples and views).
@@ -122,6 +124,9 @@ fn columns(recipe: &Recipe) -> Vec<Column> {
     if outputs.instances {
         columns.push(Column::Instances);
     }
+    if outputs.cracks {
+        columns.push(Column::Cracks);
+    }
     columns
 }
 
@@ -141,6 +146,7 @@ fn row(view: &RenderedView, sample: &PreparedSample, columns: &[Column]) -> Row 
         } else {
             Vec::new()
         },
+        cracks: view.cracks.clone().unwrap_or_default(),
     }
 }
 
@@ -191,6 +197,7 @@ fn cell(row: &Row, column: Column, depth_range: (f32, f32)) -> Vec<[u8; 3]> {
         Column::Mask => row.mask.iter().map(|&m| [m; 3]).collect(),
         Column::Parts => row.parts.iter().map(|&id| id_colour(id)).collect(),
         Column::Instances => row.instances.iter().map(|&id| id_colour(id)).collect(),
+        Column::Cracks => row.cracks.iter().map(|&m| [m; 3]).collect(),
     }
 }
 
