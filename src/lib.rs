@@ -5,7 +5,8 @@
 //! `recipe` (Rhai → plain descriptions) → `scene` (plain data) → `geometry` (meshes, deformed
 //! through `mechanics`) → `render` (BVH, rays, buffers; cameras from `cameras`, surfaces from
 //! `materials`) → `output` (encoders and the dataset folder). `pipeline` orders the work;
-//! `seeds` derives every random stream from (seed, sample, view, name).
+//! `seeds` derives every random stream from (seed, sample, view, name); `preview` serves the
+//! person writing a recipe (`watch`, `check`); `words` suggests corrections for typos.
 
 pub mod cameras;
 pub mod geometry;

@@ -1,10 +1,11 @@
 //! The recipe runtime: runs a Rhai recipe and turns it into plain scene descriptions.
 //!
 //! Owns: the sandboxed engine, module imports, recipe parameters (`param` and `--set`),
-//! the recipe API and error reporting with file:line:col. Must not touch: meshes, rendering
-//! or files other than the recipe, the modules it imports and the mesh files it names (all
-//! inside the recipe's folder or `stdlib/`). A recipe is evaluated once to
-//! get the dataset settings; its scene function is then called once per sample with a random
+//! the recipe API (structures, materials from prompts, light, backgrounds), error reporting
+//! with file:line:col and warnings. Must not touch: meshing, rendering, or files other than the
+//! recipe, the modules it imports and the mesh, texture and background images it names (all
+//! inside the recipe's folder or `stdlib/`). A recipe is evaluated once to get the dataset
+//! settings; its scene function is then called once per sample with a random
 //! source derived from (seed, sample, "scene"), so samples can be drawn in any order, on any
 //! thread, with the same result.
 
