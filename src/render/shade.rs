@@ -310,8 +310,11 @@ impl<S: Surfaces> Shading<'_, S> {
             }
         }
         if let Some(sun) = &l.sun {
+            // A face turned away from the sun needs no shadow ray: it is unlit either way.
             let lit = match at {
-                Some((p, normal)) if l.shadows => !self.mesh.occluded(p, normal, sun.direction),
+                Some((p, normal)) if l.shadows && n.dot(sun.direction) > 0.0 => {
+                    !self.mesh.occluded(p, normal, sun.direction)
+                }
                 _ => true,
             };
             if lit {
