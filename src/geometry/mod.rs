@@ -14,6 +14,16 @@ pub use sweep::{Frame3, sweep};
 
 use glam::DVec3;
 
+/// Axis-aligned bounds (min, max) of some points; None for none.
+pub fn bounds(points: &[DVec3]) -> Option<(DVec3, DVec3)> {
+    let first = *points.first()?;
+    Some(
+        points
+            .iter()
+            .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
+    )
+}
+
 /// An indexed triangle mesh. Triangles wind counter-clockwise seen from outside.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
@@ -32,12 +42,7 @@ impl Mesh {
 
     /// Axis-aligned bounds (min, max); None for an empty mesh.
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
-        let first = *self.positions.first()?;
-        Some(
-            self.positions
-                .iter()
-                .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
-        )
+        bounds(&self.positions)
     }
 
     /// A sphere around the bounding box's centre holding every vertex; None for an empty mesh.

@@ -153,6 +153,18 @@ impl Material {
         self.colour.map(srgb_to_linear)
     }
 
+    /// Whether a metal is what is seen (rust then replaces the surface rather than staining it).
+    pub fn is_metal(&self) -> bool {
+        matches!(
+            self.base,
+            Base::Steel
+                | Base::GalvanisedSteel
+                | Base::WeatheringSteel
+                | Base::Aluminium
+                | Base::Painted
+        )
+    }
+
     /// Whether the material draws a crack network (and so has a crack mask).
     pub fn has_cracks(&self) -> bool {
         self.conditions

@@ -136,11 +136,7 @@ struct Assembled {
 
 /// Grain along the longest side of a piece's undeformed bounding box.
 fn grain_of(rest: &[DVec3]) -> Grain {
-    let (lo, hi) = rest
-        .iter()
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        });
+    let (lo, hi) = crate::geometry::bounds(rest).unwrap_or_default();
     let size = hi - lo;
     let axis = if size.x >= size.y && size.x >= size.z {
         DVec3::X

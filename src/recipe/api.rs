@@ -5,7 +5,8 @@ use super::files::RecipeFiles;
 use super::options::{self, OptResult, Options, number};
 use crate::cameras::{CameraRig, Distance};
 use crate::scene::{
-    Background, DatasetSpec, ImageRecord, LightSpec, Outputs, SkyGradient, SkySpec, SunSpec,
+    Background, DatasetSpec, ImageRecord, LightSpec, OUTDOOR_AMBIENT, Outputs, SkyGradient,
+    SkySpec, SunSpec,
 };
 use crate::seeds::Stream;
 use rhai::{Array, Dynamic, Engine, EvalAltResult, FnPtr, ImmutableString, Map};
@@ -319,11 +320,12 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
     let sun = match o.sub("sun")? {
         None => None,
         Some(mut s) => {
+            let d = SunSpec::default();
             let spec = SunSpec {
-                elevation: s.range("elevation", [0.7, 0.7])?,
-                azimuth: s.range("azimuth", [0.0, std::f64::consts::TAU])?,
-                intensity: s.range("intensity", [1.2, 1.2])?,
-                colour: s.colour("colour", [1.0, 0.96, 0.9])?,
+                elevation: s.range("elevation", d.elevation)?,
+                azimuth: s.range("azimuth", d.azimuth)?,
+                intensity: s.range("intensity", d.intensity)?,
+                colour: s.colour("colour", d.colour)?,
             };
             let half_pi = std::f64::consts::FRAC_PI_2;
             if spec.elevation[0] < -half_pi || spec.elevation[1] > half_pi {
@@ -339,17 +341,23 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
     let sky = match o.sub("sky")? {
         None => None,
         Some(mut s) => {
+            let d = SkySpec::default();
             let spec = SkySpec {
-                intensity: s.range("intensity", [0.3, 0.3])?,
-                colour: s.colour("colour", [0.75, 0.83, 0.95])?,
-                ground: s.colour("ground", [0.4, 0.36, 0.3])?,
+                intensity: s.range("intensity", d.intensity)?,
+                colour: s.colour("colour", d.colour)?,
+                ground: s.colour("ground", d.ground)?,
             };
             s.finish()?;
             Some(spec)
         }
     };
     let outdoor = sun.is_some() || sky.is_some();
-    let ambient = o.range("ambient", if outdoor { [0.02; 2] } else { [0.12; 2] })?;
+    let default_ambient = if outdoor {
+        [OUTDOOR_AMBIENT; 2]
+    } else {
+        LightSpec::default().ambient
+    };
+    let ambient = o.range("ambient", default_ambient)?;
     let shadows = o.flag("shadows", outdoor)?;
     let studio = o.flag("studio", !outdoor)?;
     for (name, [lo, _]) in [("ambient", ambient)]

@@ -90,16 +90,17 @@ fn adjust(m: &mut Material, o: &mut Options, files: &RecipeFiles, text: &str) ->
     m.specular = o.number("specular", m.specular)?;
     m.scale = o.number("scale", m.scale)?;
     let size = o.number("texture_size", 1.0)?;
-    for (name, value, range) in [
-        ("roughness", m.roughness, (0.0, 1.0)),
-        ("specular", m.specular, (0.0, 1.0)),
-    ] {
-        if !(value > range.0 && value <= range.1) && !(name == "specular" && value == 0.0) {
-            return Err(format!(
-                "material options.{name} = {value} must lie in ({}, {}]",
-                range.0, range.1
-            ));
-        }
+    if !(m.roughness > 0.0 && m.roughness <= 1.0) {
+        return Err(format!(
+            "material options.roughness = {} must lie in (0, 1]",
+            m.roughness
+        ));
+    }
+    if !(0.0..=1.0).contains(&m.specular) {
+        return Err(format!(
+            "material options.specular = {} must lie in [0, 1]",
+            m.specular
+        ));
     }
     for (name, value) in [("scale", m.scale), ("texture_size", size)] {
         if value <= 0.0 {

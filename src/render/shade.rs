@@ -3,9 +3,9 @@
 //! the background is a colour, a sky gradient or an image.
 //!
 //! Anti-aliasing: a first pass shades one centre ray per pixel, as for the geometric labels.
-//! Where a pixel differs from a neighbour in what it sees (surface or background, another
-//! structure, or an untextured shade more than one 8-bit level apart: silhouettes, creases),
-//! it is re-shaded from four fixed sub-pixel rays averaged in linear light. Texture detail is
+//! Where a pixel differs from a neighbour in what it sees (surface or background, or an
+//! untextured shade more than one 8-bit level apart: silhouettes, creases, material
+//! boundaries), it is re-shaded from four fixed sub-pixel rays averaged in linear light. Texture detail is
 //! filtered by the materials themselves, so it never triggers extra rays.
 
 use super::trace::{GBuffer, NO_HIT, TraceMesh};

@@ -41,14 +41,41 @@ pub struct SkySpec {
     pub ground: [f64; 3],
 }
 
+/// Uniform light outdoors, where the sky already lights every face from some side.
+pub const OUTDOOR_AMBIENT: f64 = 0.02;
+
 impl Default for LightSpec {
+    /// The paper's look: studio lights, no sun, no shadows.
     fn default() -> Self {
         LightSpec {
             studio: true,
             sun: None,
             sky: None,
-            ambient: [0.12; 2],
+            ambient: [Lighting::default().ambient; 2],
             shadows: false,
+        }
+    }
+}
+
+impl Default for SunSpec {
+    /// A sun 40° up from any direction, slightly warm.
+    fn default() -> Self {
+        SunSpec {
+            elevation: [0.7; 2],
+            azimuth: [0.0, std::f64::consts::TAU],
+            intensity: [1.2; 2],
+            colour: [1.0, 0.96, 0.9],
+        }
+    }
+}
+
+impl Default for SkySpec {
+    /// A pale blue sky over brownish ground.
+    fn default() -> Self {
+        SkySpec {
+            intensity: [0.3; 2],
+            colour: [0.75, 0.83, 0.95],
+            ground: [0.4, 0.36, 0.3],
         }
     }
 }

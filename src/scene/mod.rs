@@ -11,7 +11,9 @@ mod light;
 
 pub use assembly::{AssemblySpec, Bending, BuiltShape, LabelledPattern, ShapeSpec};
 pub use beam::{BeamSpec, BuiltBeam, Tessellation};
-pub use light::{Background, ImageRecord, LightSpec, SkyGradient, SkySpec, SunSpec};
+pub use light::{
+    Background, ImageRecord, LightSpec, OUTDOOR_AMBIENT, SkyGradient, SkySpec, SunSpec,
+};
 
 use crate::cameras::CameraRig;
 use serde::Serialize;
