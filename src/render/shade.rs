@@ -5,8 +5,8 @@
 //! Anti-aliasing: a first pass shades one centre ray per pixel, as for the geometric labels.
 //! Where a pixel differs from a neighbour in what it sees (surface or background, or an
 //! untextured shade more than one 8-bit level apart: silhouettes, creases, material
-//! boundaries), it is re-shaded from four fixed sub-pixel rays averaged in linear light. Texture detail is
-//! filtered by the materials themselves, so it never triggers extra rays.
+//! boundaries), it is re-shaded from four fixed sub-pixel rays averaged in linear light.
+//! Texture detail is filtered by the materials themselves, so it never triggers extra rays.
 
 use super::trace::{GBuffer, NO_HIT, TraceMesh};
 use crate::cameras::Camera;
@@ -311,13 +311,10 @@ impl<S: Surfaces> Shading<'_, S> {
         }
         if let Some(sun) = &l.sun {
             // A face turned away from the sun needs no shadow ray: it is unlit either way.
-            let lit = match at {
-                Some((p, normal)) if l.shadows && n.dot(sun.direction) > 0.0 => {
-                    !self.mesh.occluded(p, normal, sun.direction)
-                }
-                _ => true,
-            };
-            if lit {
+            let shadowed = l.shadows
+                && n.dot(sun.direction) > 0.0
+                && at.is_some_and(|(p, normal)| self.mesh.occluded(p, normal, sun.direction));
+            if !shadowed {
                 add(sun.direction, sun.colour);
             }
         }
