@@ -5,8 +5,10 @@
 //!
 //!     cargo bench --bench materials
 
+use shmgen::build::BuiltSample;
 use shmgen::materials::{Material, Shader};
-use shmgen::pipeline::{PreparedSample, SampleRenderer, prepare};
+use shmgen::output::ViewLayers;
+use shmgen::pipeline::{SampleRenderer, prepare};
 use shmgen::recipe::Recipe;
 use shmgen::scene::Structure;
 use shmgen::seeds::{Scope, Stream};
@@ -22,8 +24,7 @@ fn main() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/prompt_gallery.rhai");
     let views = 6u32;
     let sets = [("views".to_string(), views.to_string())];
-    let mut recipe = Recipe::load(&path, &sets).expect("gallery loads");
-    recipe.dataset.outputs.cracks = false;
+    let recipe = Recipe::load(&path, &sets).expect("gallery loads");
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     println!(
         "shmgen materials benchmark: 960×960, {views} views per scene, 1 thread (machine: {cores} cores)"
@@ -70,18 +71,16 @@ fn main() {
 }
 
 /// Median milliseconds of tracing + shading one view, and the median share of pixels hit.
-fn time_views(recipe: &Recipe, sample: &PreparedSample, views: u32) -> (f64, f64) {
-    let renderer = SampleRenderer::new(recipe, sample);
+fn time_views(recipe: &Recipe, sample: &BuiltSample, views: u32) -> (f64, f64) {
+    let renderer = SampleRenderer::new(&recipe.dataset, sample);
     let mut times = Vec::new();
     let mut coverage = Vec::new();
     for view in 0..views {
         let t = Instant::now();
         let rendered = renderer.view(view);
+        std::hint::black_box(rendered.rgb());
         times.push(t.elapsed().as_secs_f64() * 1e3);
-        let g = &rendered.gbuffer;
-        coverage.push(
-            g.triangle.iter().filter(|&&t| t != u32::MAX).count() as f64 / g.triangle.len() as f64,
-        );
+        coverage.push(rendered.coverage());
     }
     (median(times), median(coverage))
 }

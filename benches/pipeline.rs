@@ -4,10 +4,11 @@
 //!
 //!     cargo bench --bench pipeline
 
+use shmgen::materials::Backdrop;
 use shmgen::output::{depth_exr, mask_png, rgb_png};
 use shmgen::pipeline::{self, RunOptions, Shard, prepare, view_camera};
 use shmgen::recipe::Recipe;
-use shmgen::render::{Backdrop, SampleSurfaces, TraceMesh, shade};
+use shmgen::render::{SampleSurfaces, TraceMesh, shade};
 use std::path::Path;
 use std::time::Instant;
 
@@ -97,7 +98,7 @@ fn main() {
                     &g,
                     &mesh,
                     &camera,
-                    &sample.lighting.0,
+                    &sample.lighting,
                     &surfaces,
                     &Backdrop::Colour([0, 0, 0]),
                     true,

@@ -4,6 +4,7 @@
 //!
 //!     cargo bench --bench tessellation
 
+use shmgen::build::{beam_radius, mesh_beam, problem};
 use shmgen::cameras::{CameraRig, Distance};
 use shmgen::mechanics::{Deformation, Load, Support, Target, Theory};
 use shmgen::render::{NO_HIT, TraceMesh};
@@ -113,10 +114,10 @@ fn main() {
         .unwrap();
     pool.install(|| {
         for (name, beam) in beams() {
-            let footprint = rig.nearest_pixel_footprint(beam.radius());
+            let footprint = rig.nearest_pixel_footprint(beam_radius(&beam));
             let mut reference = beam.clone();
             reference.tessellation = Tessellation::Segments(4096);
-            let reference_mesh = reference.build(footprint).unwrap().mesh;
+            let reference_mesh = mesh_beam(&reference, footprint).unwrap().mesh;
             let (centre, radius) = reference_mesh.bounding_sphere().unwrap();
             let cameras: Vec<_> = (0..views).map(|v| rig.draw(&mut Stream::new(1, Scope::View(0, v), "camera"), centre, radius).0).collect();
             let reference_trace = TraceMesh::build(&reference_mesh);
@@ -127,7 +128,7 @@ fn main() {
                 let mut b = beam.clone();
                 b.tessellation = *tess;
                 let t = Instant::now();
-                let mesh = b.build(footprint).unwrap().mesh;
+                let mesh = mesh_beam(&b, footprint).unwrap().mesh;
                 let trace = TraceMesh::build(&mesh);
                 let build_ms = t.elapsed().as_secs_f64() * 1e3;
                 let (mut err, mut silhouette, mut times) = (0.0f64, 0usize, Vec::new());
@@ -169,12 +170,12 @@ fn main() {
         modal.vibration = vec![(1, 0.02), (5, 0.002), (100, 0.0001)];
         cases.push(("vibration, modes 1 + 5 + 100", modal));
         for (name, b) in cases {
-            let problem = b.problem();
+            let problem = problem(&b);
             let time = |f: &dyn Fn()| {
                 median((0..200).map(|_| { let t = Instant::now(); f(); t.elapsed().as_secs_f64() * 1e6 }).collect())
             };
             let solve = time(&|| { std::hint::black_box(Deformation::solve(&problem).unwrap()); });
-            let build = time(&|| { std::hint::black_box(b.build(7e-4).unwrap()); });
+            let build = time(&|| { std::hint::black_box(mesh_beam(&b, 7e-4).unwrap()); });
             println!("  {name:<34} solve {solve:>7.1} µs   solve + mesh {build:>8.1} µs");
         }
     });

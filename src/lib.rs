@@ -2,12 +2,26 @@
 //! ray-traced RGB, metric planar depth, masks and exact cameras, reproducible from a seed.
 //!
 //! Data flows one way, one module per step:
-//! `recipe` (Rhai → plain descriptions) → `scene` (plain data) → `geometry` (meshes, deformed
-//! through `mechanics`) → `render` (BVH, rays, buffers; cameras from `cameras`, surfaces from
-//! `materials`) → `output` (encoders and the dataset folder). `pipeline` orders the work;
-//! `seeds` derives every random stream from (seed, sample, view, name); `preview` serves the
-//! person writing a recipe (`watch`, `check`); `words` suggests corrections for typos.
+//!
+//! ```text
+//! recipe ─→ scene ─→ build ─→ render ─→ output
+//! (Rhai)   (plain    (deform,  (BVH,     (writers, folder)
+//!           data)     mesh,     rays,
+//!                     label)    buffers)
+//! ```
+//!
+//! `pipeline` drives the steps for every sample and writes the typed records; `preview` serves
+//! the person writing a recipe (`watch`, `check`). Below them sit the domain modules the steps
+//! use: `mechanics` (beam theories, shells), `geometry` (meshes, outlines, mesh files),
+//! `materials` (how surfaces, light and backdrops look) and `cameras`. `seeds` derives every
+//! random stream from (seed, sample, view, name); `words` suggests corrections for typos.
+//!
+//! Imports only point down this order: main → preview → pipeline → {recipe, build, render,
+//! output}; recipe → scene; build → {scene, mechanics, geometry, materials, cameras};
+//! render → {geometry, cameras, materials}. `output` and `geometry` import nothing else of the
+//! crate; the recipe asks `output` only which outputs exist.
 
+pub mod build;
 pub mod cameras;
 pub mod geometry;
 pub mod materials;

@@ -15,6 +15,7 @@
 //! Images are small (≤ 200 × 150) so the whole file runs in seconds.
 
 use glam::DVec3;
+use shmgen::build::mesh_beam;
 use shmgen::geometry::Mesh;
 use shmgen::materials::image::TextureImage;
 use shmgen::materials::prompt::{self, PAPER_PROMPTS};
@@ -838,7 +839,7 @@ struct Jumps {
 }
 
 fn edge_jumps(material: &Material) -> Jumps {
-    let built = test_beam().build(1e-3).unwrap();
+    let built = mesh_beam(&test_beam(), 1e-3).unwrap();
     let shaders = [Shader::new(
         material,
         &mut Stream::new(3, Scope::Sample(0), "material"),
@@ -952,8 +953,8 @@ fn texture_moves_with_the_material_when_the_beam_bends() {
         force: 1.0,
     }];
     loaded.target = Target::Peak { deflection: 0.3 };
-    let bent = loaded.build(1e-3).unwrap();
-    let straight = test_beam().build(1e-3).unwrap();
+    let bent = mesh_beam(&loaded, 1e-3).unwrap();
+    let straight = mesh_beam(&test_beam(), 1e-3).unwrap();
     // Same tessellation: the unloaded mesh is the bent beam's rest state, vertex for vertex.
     assert_eq!(bent.mesh.triangles, straight.mesh.triangles);
     for (r, p) in bent.rest.iter().zip(&straight.mesh.positions) {

@@ -2,6 +2,7 @@
 //! triangles, and back-projection onto the mesh.
 
 use glam::{DMat3, DVec2, DVec3};
+use shmgen::build::mesh_beam;
 use shmgen::cameras::{Camera, CameraRig, Distance, Intrinsics, ViewDraw};
 use shmgen::geometry::Mesh;
 use shmgen::mechanics::{Load, Section, Support, Target};
@@ -16,7 +17,7 @@ fn box_mesh(centre: DVec3) -> Mesh {
     let mut b = BeamSpec::rectangular(2.0 * HALF.x, 2.0 * HALF.y, 2.0 * HALF.z);
     b.tessellation = Tessellation::Segments(7);
     b.centre = centre.to_array();
-    b.build(1e-3).unwrap().mesh
+    mesh_beam(&b, 1e-3).unwrap().mesh
 }
 
 /// Planar depth of the first intersection of the pixel ray with the box (slab method, f64).
@@ -215,7 +216,7 @@ fn deformed_beams() -> Vec<BeamSpec> {
 }
 
 fn built(beam: &BeamSpec) -> Mesh {
-    beam.build(2e-3).unwrap().mesh
+    mesh_beam(&beam, 2e-3).unwrap().mesh
 }
 
 /// Pixel centres strictly inside a projected triangle (more than 1e-3 px from its edges) must
@@ -483,7 +484,8 @@ fn a_deformed_beam_one_kilometre_away_renders_like_one_at_the_origin() {
 #[test]
 fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() {
     use shmgen::materials::srgb_to_linear;
-    use shmgen::render::{Backdrop, Lighting, shade};
+    use shmgen::materials::{Backdrop, Lighting};
+    use shmgen::render::shade;
     // Head-on, the box shows one face of uniform colour on black: a silhouette pixel's linear
     // value must be the face's times the fraction of the 2 × 2 sub-pixel rays that hit it.
     let k = Intrinsics::from_fov_y(240, 180, 0.8);

@@ -54,6 +54,33 @@ pub struct ViewDraw {
 }
 
 impl CameraRig {
+    /// Checks what the ranges alone cannot: a field of view inside (0, π), pitches on the
+    /// sphere, a positive distance or framing margin. Messages name the recipe's option.
+    pub fn validate(&self) -> Result<(), String> {
+        let fov_y = self.fov_y;
+        if !(fov_y > 0.0 && fov_y < std::f64::consts::PI) {
+            return Err(format!(
+                "dataset.camera.fov_y = {fov_y} must lie strictly between 0 and π radians"
+            ));
+        }
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        if self.pitch[0] < -half_pi - 1e-12 || self.pitch[1] > half_pi + 1e-12 {
+            return Err(format!(
+                "dataset.camera.pitch = [{}, {}] must lie within [-π/2, π/2]",
+                self.pitch[0], self.pitch[1]
+            ));
+        }
+        match self.distance {
+            Distance::Range { min, .. } if min <= 0.0 => Err(format!(
+                "dataset.camera.distance = {min} must be positive (metres) or \"frame\""
+            )),
+            Distance::Frame { margin } if margin <= 0.0 => {
+                Err(format!("dataset.camera.margin = {margin} must be positive"))
+            }
+            _ => Ok(()),
+        }
+    }
+
     pub fn intrinsics(&self) -> Intrinsics {
         Intrinsics::from_fov_y(self.width, self.height, self.fov_y)
     }

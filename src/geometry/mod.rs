@@ -1,15 +1,16 @@
 //! Triangle meshes of structures, in f64, in world coordinates.
 //!
-//! Owns: the indexed mesh type, the sweep mesher, the tessellation of beams and primitives, and
-//! (in `import` alone) reading and writing mesh files. Must not touch: mechanics formulas (it
-//! asks `mechanics` where section points go), cameras, rendering, or any other file.
+//! Owns: the indexed mesh type, section outlines, the sweep mesher, the tessellation of
+//! primitives, and (in `import` alone) reading and writing mesh files. A leaf: it imports no
+//! other module of the crate, so it knows nothing of mechanics (the build stage tells it where
+//! each section goes), cameras, rendering or recipes.
 
-mod beam;
 pub mod import;
+pub mod outline;
 pub mod primitives;
 mod sweep;
 
-pub use beam::beam_mesh;
+pub use outline::SectionOutline;
 pub use sweep::{Frame3, sweep};
 
 use glam::DVec3;

@@ -4,11 +4,10 @@
 //! than the given tolerance from the true surface — the same rule as beams.
 
 use super::Mesh;
+use super::outline::{annulus, circle, circle_segments, disc, polygon, rectangle};
 use super::sweep::{Frame3, sweep};
-use crate::mechanics::{SectionOutline, annulus, circle_segments, rectangle_grid};
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 use serde::Serialize;
-use std::f64::consts::TAU;
 use std::sync::Arc;
 
 /// A primitive in its own frame (z up).
@@ -176,7 +175,7 @@ impl Primitive {
     pub fn mesh(&self, tolerance: f64) -> Mesh {
         match self {
             Primitive::Box { size: [w, d, h] } => sweep(
-                &rectangle_grid(*w, *d, 1),
+                &rectangle(*w, *d, 1),
                 &straight(-0.5 * h, 0.5 * h, 1.0, 1.0, 1),
             ),
             Primitive::Frustum {
@@ -245,7 +244,7 @@ impl Primitive {
                 height,
                 wall,
             } => Some(sweep(
-                &annulus(circle(n, radius), circle(n, radius - wall)),
+                &annulus(circle(radius, n), circle(radius - wall, n)),
                 &straight(0.0, height, 1.0, 1.0, rings),
             )),
             Primitive::Frustum {
@@ -304,88 +303,10 @@ fn arc_steps(radius: f64, angle: f64, tolerance: f64) -> usize {
     }
 }
 
-fn circle(n: usize, r: f64) -> Vec<DVec2> {
-    (0..n)
-        .map(|k| DVec2::from_angle(TAU * k as f64 / n as f64) * r)
-        .collect()
-}
-
-/// The unit disc as an n-gon fanned from its centre.
-fn disc(n: usize) -> SectionOutline {
-    let n32 = n as u32;
-    SectionOutline {
-        loops: vec![circle(n, 1.0)],
-        interior: vec![DVec2::ZERO],
-        cap: (0..n32).map(|k| [n32, k, (k + 1) % n32]).collect(),
-    }
-}
-
-/// A simple polygon, made counter-clockwise, with its face triangulated by ear clipping.
-fn polygon(profile: &[[f64; 2]]) -> Result<SectionOutline, String> {
-    let mut points: Vec<DVec2> = profile.iter().map(|&p| DVec2::from_array(p)).collect();
-    if points.len() < 3 || points.iter().any(|p| !p.is_finite()) {
-        return Err(format!(
-            "a profile needs at least 3 finite points, got {profile:?}"
-        ));
-    }
-    let area: f64 = (0..points.len())
-        .map(|i| points[i].perp_dot(points[(i + 1) % points.len()]))
-        .sum::<f64>()
-        / 2.0;
-    if area.abs() < 1e-12 {
-        return Err(format!("the profile {profile:?} encloses no area"));
-    }
-    if area < 0.0 {
-        points.reverse();
-    }
-    let cap = ear_clip(&points).ok_or_else(|| {
-        format!("the profile {profile:?} is not a simple polygon (its edges cross)")
-    })?;
-    Ok(SectionOutline {
-        loops: vec![points],
-        interior: Vec::new(),
-        cap,
-    })
-}
-
-/// Triangulates a counter-clockwise simple polygon; None if it is not simple.
-fn ear_clip(points: &[DVec2]) -> Option<Vec<[u32; 3]>> {
-    let mut left: Vec<usize> = (0..points.len()).collect();
-    let mut triangles = Vec::with_capacity(points.len() - 2);
-    while left.len() > 3 {
-        let n = left.len();
-        let ear = (0..n).find(|&i| {
-            let (a, b, c) = (
-                points[left[(i + n - 1) % n]],
-                points[left[i]],
-                points[left[(i + 1) % n]],
-            );
-            (b - a).perp_dot(c - b) > 0.0
-                && left.iter().all(|&j| {
-                    let p = points[j];
-                    p == a
-                        || p == b
-                        || p == c
-                        || !((b - a).perp_dot(p - a) >= 0.0
-                            && (c - b).perp_dot(p - b) >= 0.0
-                            && (a - c).perp_dot(p - c) >= 0.0)
-                })
-        })?;
-        triangles.push([
-            left[(ear + n - 1) % n] as u32,
-            left[ear] as u32,
-            left[(ear + 1) % n] as u32,
-        ]);
-        left.remove(ear);
-    }
-    triangles.push([left[0] as u32, left[1] as u32, left[2] as u32]);
-    Some(triangles)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::f64::consts::PI;
+    use std::f64::consts::{PI, TAU};
 
     /// Area of a regular n-gon of circumradius r: the exact face of our tessellated circles.
     fn ngon(n: usize, r: f64) -> f64 {

@@ -4,7 +4,7 @@
 //! and consistently oriented whenever the frames advance along u × v.
 
 use super::Mesh;
-use crate::mechanics::SectionOutline;
+use super::outline::SectionOutline;
 use glam::{DVec2, DVec3};
 
 /// Where the outline's (u, v) coordinates land: `origin + p.x·u + p.y·v`. The axes carry any

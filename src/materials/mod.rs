@@ -7,17 +7,21 @@
 //! *undeformed* surface, in metres, so textures move with the deformation and procedural
 //! patterns are continuous across every edge (moss, which prefers upward faces, and image
 //! textures, projected along the axis nearest each face, change at creases as real ones do);
-//! `image` samples textures made elsewhere.
+//! `image` samples textures made elsewhere; `light` holds the light and backdrops a surface is
+//! seen under.
 //!
-//! Owns: the material vocabulary, the generators and texture images. Must not touch: geometry,
-//! lights, cameras or writing files.
+//! Owns: how things look — the material vocabulary, the generators, texture images, and the
+//! light and backdrop values shading uses. Must not touch: geometry, cameras, recipes or
+//! writing files.
 
 pub mod image;
+pub mod light;
 pub mod noise;
 pub mod procedural;
 pub mod prompt;
 
-pub use procedural::{Grain, Shader, Surface, SurfacePoint};
+pub use light::{Backdrop, Lighting, Sky, Sun};
+pub use procedural::{Grain, MaterialDraw, Shader, Surface, SurfacePoint};
 
 use serde::Serialize;
 use std::sync::Arc;

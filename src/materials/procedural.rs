@@ -9,7 +9,18 @@ use super::noise::{Noise, pair, smoothstep, unit};
 use super::{Base, Condition, ConditionKind, Material, Species, Texture};
 use crate::seeds::Stream;
 use glam::DVec3;
-use serde_json::{Value, json};
+use serde::Serialize;
+
+/// What a sample drew for its material: where its texture is cut from, how far the wood's
+/// pith lies from the piece's axis (metres) and a brightness variation.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct MaterialDraw {
+    /// Offset of the sample's cut of the procedural textures (metres).
+    pub texture_offset: [f64; 3],
+    pub pith_distance: f64,
+    /// Factor on the albedo (1 for plain colours).
+    pub brightness: f64,
+}
 
 /// Where a ray meets a surface, in the structure's undeformed state.
 #[derive(Clone, Copy, Debug)]
@@ -121,13 +132,13 @@ impl Shader {
         self.albedo
     }
 
-    /// The values drawn for this sample, for the JSON.
-    pub fn drawn(&self) -> Value {
-        json!({
-            "texture_offset": self.offset.to_array(),
-            "pith_distance": self.pith.0 * self.material.scale,
-            "brightness": self.brightness,
-        })
+    /// The values drawn for this sample.
+    pub fn drawn(&self) -> MaterialDraw {
+        MaterialDraw {
+            texture_offset: self.offset.to_array(),
+            pith_distance: self.pith.0 * self.material.scale,
+            brightness: self.brightness,
+        }
     }
 
     /// The surface at `p`, on a piece whose grain is `grain`.

@@ -4,9 +4,9 @@
 //! Owns: the linear theories (Euler–Bernoulli, Timoshenko) for four support cases and any mix
 //! of loads, the cantilever elastica, vibration mode shapes, the choice of theory by estimated
 //! error, the derived labels (load, moment, stress, plausibility), the mapping of section
-//! points onto the deformed axis, cross-sections, and silo shell patterns with their plausible
-//! amplitudes. Must not touch: meshes, cameras or files; it works on plain numbers in the
-//! beam's own frame (axis along x from 0 to L, deflection v positive downward).
+//! points onto the deformed axis, cross-section properties, and silo shell patterns with
+//! their plausible amplitudes. Must not touch: meshes, cameras or files; it works on plain
+//! numbers in the beam's own frame (axis along x from 0 to L, deflection v positive downward).
 //!
 //! Formulas, reference values and traps: `shared/research/mechanics.md`.
 
@@ -24,8 +24,7 @@ pub use model::{BeamProblem, Deformation, Labels, Target, Theory};
 pub use modes::ModeShape;
 #[cfg(test)]
 pub(crate) use section::examples as section_examples;
-pub use section::{PAPER_DIVISIONS, Section, SectionOutline, SectionProperties, circle_segments};
-pub(crate) use section::{annulus, rectangle_grid};
+pub use section::{Section, SectionProperties};
 pub use shell::{Shell, ShellPattern};
 
 use serde::Serialize;

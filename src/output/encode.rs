@@ -47,26 +47,30 @@ pub fn mask_png(width: u32, height: u32, mask: &[u8]) -> Vec<u8> {
 }
 
 /// Id image (0 = background): 8-bit grey when every id fits, else 16-bit (big-endian, as PNG
-/// stores it).
-pub fn id_png(width: u32, height: u32, ids: &[u16]) -> Vec<u8> {
-    if ids.iter().all(|&i| i <= 255) {
+/// stores it). An id beyond 16 bits is an error, never wrapped.
+pub fn id_png(width: u32, height: u32, ids: &[u32]) -> anyhow::Result<Vec<u8>> {
+    let largest = ids.iter().copied().max().unwrap_or(0);
+    if largest <= 255 {
         let bytes: Vec<u8> = ids.iter().map(|&i| i as u8).collect();
-        return png(
+        return Ok(png(
             width,
             height,
             ::png::ColorType::Grayscale,
             ::png::BitDepth::Eight,
             &bytes,
-        );
+        ));
     }
-    let bytes: Vec<u8> = ids.iter().flat_map(|i| i.to_be_bytes()).collect();
-    png(
+    let Ok(_) = u16::try_from(largest) else {
+        anyhow::bail!("segmentation id {largest} does not fit a 16-bit PNG (at most 65535)");
+    };
+    let bytes: Vec<u8> = ids.iter().flat_map(|&i| (i as u16).to_be_bytes()).collect();
+    Ok(png(
         width,
         height,
         ::png::ColorType::Grayscale,
         ::png::BitDepth::Sixteen,
         &bytes,
-    )
+    ))
 }
 
 /// Planar depth in metres, 0 where no surface was hit.
@@ -163,13 +167,14 @@ mod tests {
             (info.bit_depth, buf)
         };
         assert_eq!(
-            decode(id_png(3, 1, &[0, 7, 255])),
+            decode(id_png(3, 1, &[0, 7, 255]).unwrap()),
             (::png::BitDepth::Eight, vec![0, 7, 255])
         );
         assert_eq!(
-            decode(id_png(2, 1, &[1, 300])),
+            decode(id_png(2, 1, &[1, 300]).unwrap()),
             (::png::BitDepth::Sixteen, vec![0, 1, 1, 44])
         );
+        assert!(id_png(1, 1, &[65_536]).is_err(), "never wrapped");
     }
 
     #[test]

@@ -1,16 +1,19 @@
-//! Writing datasets: file encodings, the folder layout, run.json, manifest.jsonl, and the
-//! atomic, resumable commit of each sample.
+//! Writing datasets: the writers of every output kind, file encodings, the folder layout and
+//! the atomic, resumable commit of each sample.
 //!
 //! Owns: bytes on disk. Must not touch: recipes, mechanics or tracing; it receives finished
-//! buffers and plain metadata. Every file is written under a temporary name and renamed into
-//! place, so a killed run never leaves a truncated file under a final name, and a sample
-//! appears in the manifest only after all of its files are complete.
+//! per-pixel layers and serialised records, and imports nothing else of the crate. Every file
+//! is written under a temporary name and renamed into place, so a killed run never leaves a
+//! truncated file under a final name, and a sample appears in the manifest only after all of
+//! its files are complete.
 
 mod encode;
 mod folder;
+mod writers;
 
 pub use encode::{DEPTH_CHANNEL, depth_exr, id_png, mask_png, rgb_png};
 pub use folder::{DatasetFolder, SampleStage, write_atomic};
+pub use writers::{DEFAULT_OUTPUTS, ViewFile, ViewLayers, WRITERS, Writer, output_names};
 
 /// Relative path of one view's file of the given kind (`rgb.png`, `depth.exr`, ...):
 /// samples are grouped a thousand to a folder so no folder grows unboundedly.

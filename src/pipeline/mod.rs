@@ -1,29 +1,29 @@
-//! Running a recipe into a dataset folder: validation, sharding, threads, resume, progress.
+//! Running a recipe into a dataset folder: validation, sharding, threads, resume, progress,
+//! and the typed records written beside every view.
 //!
-//! Owns: the order of work and its bookkeeping. Must not touch: how scenes are described,
-//! meshed, traced or encoded (it calls those modules). The result never depends on the thread
-//! count, the shard split or interruptions: every sample is a pure function of
-//! (recipe, seed, sample index) and is committed atomically.
+//! Owns: the order of work and its bookkeeping — recipe → scene → `build` → `render` →
+//! `output` writers — and the records (`run.json`, each view's JSON). Must not touch: how
+//! scenes are described, meshed, traced or encoded (it calls those modules). The result never
+//! depends on the thread count, the shard split or interruptions: every sample is a pure
+//! function of (recipe, seed, sample index) and is committed atomically.
 
 mod progress;
+mod record;
 mod sample;
+mod view;
 
-pub use sample::{
-    PreparedSample, RenderedView, SampleRenderer, VIEW_SCHEMA, prepare, render, view_camera,
-};
+pub use record::{RunRecord, ViewRecord, json_bytes, run_json};
+pub use sample::{prepare, write_sample};
+pub use view::{RenderedView, SampleRenderer, view_camera};
 
 use crate::output::DatasetFolder;
 use crate::recipe::Recipe;
 use anyhow::{Context, Result, bail};
 use progress::Progress;
 use rayon::prelude::*;
-use serde_json::json;
 use std::path::PathBuf;
 use std::str::FromStr;
 use std::time::Instant;
-
-/// Identifies run.json's layout.
-pub const RUN_SCHEMA: &str = "shmgen.run/1";
 
 /// This process renders the samples whose index ≡ `index` (mod `count`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -76,29 +76,6 @@ pub struct RunSummary {
     pub complete: bool,
 }
 
-/// Everything that identifies a dataset, and nothing about how it was run (threads, shard,
-/// output path), so every shard and every resumed run agrees on it byte for byte.
-pub fn run_json(recipe: &Recipe) -> Result<Vec<u8>> {
-    let file = recipe
-        .path
-        .file_name()
-        .map(|f| f.to_string_lossy().to_string())
-        .unwrap_or_default();
-    let value = json!({
-        "schema": RUN_SCHEMA,
-        "tool": { "name": "shmgen", "version": env!("CARGO_PKG_VERSION") },
-        "recipe": { "file": file, "hash": recipe.hash },
-        "params": recipe.params,
-        "dataset": recipe.dataset,
-        "view_schema": VIEW_SCHEMA,
-        "layout": "samples/{sample/1000:04}/{sample:06}_{view:02}.{rgb.png,depth.exr,mask.png,json}",
-        "manifest": "manifest.jsonl: one line per finished sample, in sample order once the dataset is complete",
-    });
-    let mut bytes = serde_json::to_vec_pretty(&value)?;
-    bytes.push(b'\n');
-    Ok(bytes)
-}
-
 /// Renders this shard's unfinished samples of `recipe` into `options.out`.
 pub fn run(recipe: &Recipe, options: &RunOptions) -> Result<RunSummary> {
     let start = Instant::now();
@@ -122,7 +99,7 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
         .map(|&index| -> Result<u64> {
             let sample = prepare(recipe, index)?;
             let mut stage = folder.stage(index)?;
-            let views = render(recipe, &sample, &mut stage)?;
+            let views = write_sample(recipe, &sample, &mut stage)?;
             let bytes = stage.bytes;
             folder
                 .commit(stage, views)

@@ -5,9 +5,10 @@
 //! not touch: the renderer or the dataset format: the estimate times a real `pipeline::run`
 //! of a few samples into a temporary folder, which is removed.
 
-use crate::pipeline::{self, PreparedSample, RunOptions, Shard, prepare};
+use crate::build::BuiltSample;
+use crate::pipeline::{self, RunOptions, Shard, prepare};
 use crate::recipe::Recipe;
-use crate::scene::{Outputs, Structure};
+use crate::scene::Structure;
 use anyhow::Result;
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashSet};
@@ -31,17 +32,7 @@ pub fn check(path: &Path, sets: &[(String, String)], threads: Option<usize>) -> 
 
 fn print_dataset(recipe: &Recipe) {
     let d = &recipe.dataset;
-    let outputs: Vec<&str> = Outputs::NAMES
-        .into_iter()
-        .zip([
-            d.outputs.rgb,
-            d.outputs.depth,
-            d.outputs.mask,
-            d.outputs.parts,
-            d.outputs.instances,
-        ])
-        .filter_map(|(name, on)| on.then_some(name))
-        .collect();
+    let outputs: Vec<&str> = d.outputs.chosen().collect();
     println!(
         "{}: dataset \"{}\", seed {}",
         recipe.path.display(),
@@ -60,7 +51,7 @@ fn print_dataset(recipe: &Recipe) {
 }
 
 /// Per kind of structure: how many, and min / median / max of vertices and triangles.
-fn print_structures(samples: &[PreparedSample]) {
+fn print_structures(samples: &[BuiltSample]) {
     let mut kinds: BTreeMap<String, Vec<(usize, usize)>> = BTreeMap::new();
     for sample in samples {
         for (kind, size) in structure_sizes(sample) {
@@ -83,7 +74,7 @@ fn print_structures(samples: &[PreparedSample]) {
 }
 
 /// (kind, (vertices, triangles)) of every structure of a sample.
-fn structure_sizes(sample: &PreparedSample) -> Vec<(String, (usize, usize))> {
+fn structure_sizes(sample: &BuiltSample) -> Vec<(String, (usize, usize))> {
     let structures = &sample.scene.structures;
     let mut vertices = vec![HashSet::<u32>::new(); structures.len()];
     let mut triangles = vec![0; structures.len()];

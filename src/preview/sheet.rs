@@ -5,8 +5,8 @@
 //! not touch: the renderer or the encoders (it calls `pipeline::prepare`, `SampleRenderer` and
 //! `output::rgb_png`), nor the recipe's files.
 
-use crate::output::rgb_png;
-use crate::pipeline::{PreparedSample, RenderedView, SampleRenderer, prepare};
+use crate::output::{ViewLayers, rgb_png};
+use crate::pipeline::{SampleRenderer, prepare};
 use crate::recipe::Recipe;
 use anyhow::Result;
 use rayon::prelude::*;
@@ -60,8 +60,8 @@ struct Row {
     rgb: Vec<u8>,
     depth: Vec<f32>,
     mask: Vec<u8>,
-    parts: Vec<u16>,
-    instances: Vec<u16>,
+    parts: Vec<u32>,
+    instances: Vec<u32>,
     cracks: Vec<u8>,
 }
 
@@ -74,10 +74,10 @@ pub fn render(recipe: &mut Recipe, options: &PreviewOptions) -> Result<Preview> 
         .into_par_iter()
         .map(|index| -> Result<Vec<Row>> {
             let sample = prepare(recipe, index)?;
-            let renderer = SampleRenderer::new(recipe, &sample);
+            let renderer = SampleRenderer::new(&recipe.dataset, &sample);
             Ok((0..views)
                 .into_par_iter()
-                .map(|view| row(&renderer.view(view), &sample, &columns))
+                .map(|view| row(&renderer.view(view), &columns))
                 .collect())
         })
         .collect::<Result<Vec<Vec<Row>>>>()?
@@ -97,8 +97,8 @@ pub fn render(recipe: &mut Recipe, options: &PreviewOptions) -> Result<Preview> 
 }
 
 /// Cuts the dataset down to the preview's samples, views and resolution (aspect kept, at
-/// least one pixel) and makes sure RGB is rendered. The mesher follows the smaller pixels, so
-/// the preview also tessellates less.
+/// least one pixel). The mesher follows the smaller pixels, so the preview also tessellates
+/// less.
 fn shrink(recipe: &mut Recipe, options: &PreviewOptions) -> (u64, u32) {
     let dataset = &mut recipe.dataset;
     let samples = options.samples.clamp(1, dataset.samples.max(1));
@@ -110,7 +110,6 @@ fn shrink(recipe: &mut Recipe, options: &PreviewOptions) -> (u64, u32) {
     };
     let scaled = |n: u32| ((f64::from(n) * scale).round() as u32).max(1);
     (camera.width, camera.height) = (scaled(camera.width), scaled(camera.height));
-    dataset.outputs.rgb = true;
     (samples, views)
 }
 
@@ -118,35 +117,39 @@ fn shrink(recipe: &mut Recipe, options: &PreviewOptions) -> (u64, u32) {
 fn columns(recipe: &Recipe) -> Vec<Column> {
     let outputs = &recipe.dataset.outputs;
     let mut columns = vec![Column::Rgb, Column::Depth, Column::Mask];
-    if outputs.parts {
-        columns.push(Column::Parts);
-    }
-    if outputs.instances {
-        columns.push(Column::Instances);
-    }
-    if outputs.cracks {
-        columns.push(Column::Cracks);
+    for (name, column) in [
+        ("parts", Column::Parts),
+        ("instances", Column::Instances),
+        ("cracks", Column::Cracks),
+    ] {
+        if outputs.wants(name) {
+            columns.push(column);
+        }
     }
     columns
 }
 
-fn row(view: &RenderedView, sample: &PreparedSample, columns: &[Column]) -> Row {
+fn row(view: &impl ViewLayers, columns: &[Column]) -> Row {
     let wanted = |c: Column| columns.contains(&c);
     Row {
-        rgb: view.rgb.clone().expect("the preview always renders RGB"),
-        depth: view.gbuffer.depth.clone(),
+        rgb: view.rgb().to_vec(),
+        depth: view.depth().to_vec(),
         mask: view.mask(),
         parts: if wanted(Column::Parts) {
-            view.part_ids(sample)
+            view.part_ids()
         } else {
             Vec::new()
         },
         instances: if wanted(Column::Instances) {
-            view.instance_ids(sample)
+            view.instance_ids()
         } else {
             Vec::new()
         },
-        cracks: view.cracks.clone().unwrap_or_default(),
+        cracks: if wanted(Column::Cracks) {
+            view.cracks().to_vec()
+        } else {
+            Vec::new()
+        },
     }
 }
 
@@ -263,7 +266,7 @@ fn turbo(x: f64) -> [u8; 3] {
 
 /// A deterministic, well-spread colour for a label id (0 = background = black): hues step by
 /// the golden angle so consecutive ids never look alike.
-fn id_colour(id: u16) -> [u8; 3] {
+fn id_colour(id: u32) -> [u8; 3] {
     if id == 0 {
         return [0; 3];
     }

@@ -3,21 +3,17 @@
 
 use super::files::RecipeFiles;
 use super::options::{self, OptResult, Options, number};
+use super::result::{Fallible, fail};
 use crate::cameras::{CameraRig, Distance};
+use crate::output::{DEFAULT_OUTPUTS, output_names};
 use crate::scene::{
     Background, DatasetSpec, ImageRecord, LightSpec, OUTDOOR_AMBIENT, Outputs, SkyGradient,
     SkySpec, SunSpec,
 };
 use crate::seeds::Stream;
-use rhai::{Array, Dynamic, Engine, EvalAltResult, FnPtr, ImmutableString, Map};
+use rhai::{Array, Dynamic, Engine, FnPtr, ImmutableString, Map};
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
-
-pub type Fallible<T> = Result<T, Box<EvalAltResult>>;
-
-pub fn fail<T>(msg: String) -> Fallible<T> {
-    Err(msg.into())
-}
 
 /// What `dataset(#{...})` returns: the dataset settings plus the function that draws a scene.
 #[derive(Clone)]
@@ -161,49 +157,32 @@ fn dataset(map: Map, files: &RecipeFiles) -> OptResult<Dataset> {
     })
 }
 
+/// `outputs: ["rgb", "depth", ...]`: names of writers (see `output::WRITERS`).
 fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {
+    let known = output_names();
     let Some(value) = value else {
-        return Ok(Outputs {
-            rgb: true,
-            depth: true,
-            mask: true,
-            parts: false,
-            instances: false,
-            cracks: false,
-        });
+        return Ok(Outputs::new(&known, &DEFAULT_OUTPUTS));
     };
     let list = value
         .try_cast::<Array>()
         .ok_or("dataset.outputs must be a list like [\"rgb\", \"depth\", \"mask\"]")?;
-    let mut out = Outputs {
-        rgb: false,
-        depth: false,
-        mask: false,
-        parts: false,
-        instances: false,
-        cracks: false,
-    };
+    let mut chosen = Vec::new();
     for item in list {
         let name = item.to_string();
-        match name.as_str() {
-            "rgb" => out.rgb = true,
-            "depth" => out.depth = true,
-            "mask" => out.mask = true,
-            "parts" => out.parts = true,
-            "instances" => out.instances = true,
-            "cracks" => out.cracks = true,
-            _ => {
-                let hint = crate::words::nearest(&name, &Outputs::NAMES)
+        match known.iter().find(|k| **k == name) {
+            Some(&k) => chosen.push(k),
+            None => {
+                let hint = crate::words::nearest(&name, &known)
                     .map(|k| format!("; did you mean \"{k}\"?"))
                     .unwrap_or_default();
                 return Err(format!(
                     "unknown output \"{name}\" in dataset.outputs{hint} (known: {})",
-                    Outputs::NAMES.join(", ")
+                    known.join(", ")
                 ));
             }
         }
     }
-    Ok(out)
+    Ok(Outputs::new(&known, &chosen))
 }
 
 fn camera(mut o: Options) -> OptResult<CameraRig> {
@@ -211,20 +190,8 @@ fn camera(mut o: Options) -> OptResult<CameraRig> {
     let width = o.integer("width", i64::from(d.width), 1, 16_384)? as u32;
     let height = o.integer("height", i64::from(d.height), 1, 16_384)? as u32;
     let fov_y = o.number("fov_y", d.fov_y)?;
-    if !(fov_y > 0.0 && fov_y < std::f64::consts::PI) {
-        return Err(format!(
-            "dataset.camera.fov_y = {fov_y} must lie strictly between 0 and π radians"
-        ));
-    }
     let yaw = o.range("yaw", d.yaw)?;
     let pitch = o.range("pitch", d.pitch)?;
-    let half_pi = std::f64::consts::FRAC_PI_2;
-    if pitch[0] < -half_pi - 1e-12 || pitch[1] > half_pi + 1e-12 {
-        return Err(format!(
-            "dataset.camera.pitch = [{}, {}] must lie within [-π/2, π/2]",
-            pitch[0], pitch[1]
-        ));
-    }
     let roll = o.range("roll", d.roll)?;
     let margin = o.number("margin", 1.05)?;
     let distance = match o.take("distance") {
@@ -234,19 +201,11 @@ fn camera(mut o: Options) -> OptResult<CameraRig> {
             let mut wrap = Map::new();
             wrap.insert("distance".into(), v);
             let [min, max] = Options::new(wrap, "dataset.camera").range("distance", [0.0, 0.0])?;
-            if min <= 0.0 {
-                return Err(format!(
-                    "dataset.camera.distance = {min} must be positive (metres) or \"frame\""
-                ));
-            }
             Distance::Range { min, max }
         }
     };
-    if margin <= 0.0 {
-        return Err(format!("dataset.camera.margin = {margin} must be positive"));
-    }
     o.finish()?;
-    Ok(CameraRig {
+    let rig = CameraRig {
         width,
         height,
         fov_y,
@@ -254,7 +213,9 @@ fn camera(mut o: Options) -> OptResult<CameraRig> {
         pitch,
         roll,
         distance,
-    })
+    };
+    rig.validate()?;
+    Ok(rig)
 }
 
 /// `background: [r, g, b]`, `"black"`, `"sky"`, `#{ sky: #{ zenith, horizon, ground } }` or
@@ -327,13 +288,6 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
                 intensity: s.range("intensity", d.intensity)?,
                 colour: s.colour("colour", d.colour)?,
             };
-            let half_pi = std::f64::consts::FRAC_PI_2;
-            if spec.elevation[0] < -half_pi || spec.elevation[1] > half_pi {
-                return Err(format!(
-                    "dataset.light.sun.elevation = [{}, {}] must lie within [-π/2, π/2]",
-                    spec.elevation[0], spec.elevation[1]
-                ));
-            }
             s.finish()?;
             Some(spec)
         }
@@ -360,25 +314,16 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
     let ambient = o.range("ambient", default_ambient)?;
     let shadows = o.flag("shadows", outdoor)?;
     let studio = o.flag("studio", !outdoor)?;
-    for (name, [lo, _]) in [("ambient", ambient)]
-        .into_iter()
-        .chain(sun.iter().map(|s| ("sun.intensity", s.intensity)))
-        .chain(sky.iter().map(|s| ("sky.intensity", s.intensity)))
-    {
-        if lo < 0.0 {
-            return Err(format!(
-                "dataset.light.{name} must not be negative (got {lo})"
-            ));
-        }
-    }
     o.finish()?;
-    Ok(LightSpec {
+    let spec = LightSpec {
         studio,
         sun,
         sky,
         ambient,
         shadows,
-    })
+    };
+    spec.validate()?;
+    Ok(spec)
 }
 
 fn register_rng(engine: &mut Engine) {

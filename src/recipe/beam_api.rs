@@ -1,8 +1,8 @@
 //! The beam part of the recipe API: sections, supports, loads, theory, tessellation.
 //! Every method edits the beam in place and returns it, so calls chain.
 
-use super::api::{Fallible, fail};
 use super::options::{OptResult, Options, number, positive};
+use super::result::{Fallible, fail};
 use crate::mechanics::{Load, Mapping, Section, Support, Target, Theory};
 use crate::scene::{BeamSpec, Tessellation};
 use rhai::{Array, Dynamic, Engine, ImmutableString, Map};

@@ -6,10 +6,10 @@
 //! replaces the procedural albedo, so textures made elsewhere drop in without editing the
 //! recipe; `texture: "file.png"` names one explicitly.
 
-use super::api::Fallible;
 use super::diagnostics::Warnings;
 use super::files::RecipeFiles;
 use super::options::{self, OptResult, Options};
+use super::result::Fallible;
 use crate::materials::{Material, Texture, prompt};
 use crate::scene::{AssemblySpec, BeamSpec};
 use rhai::{Array, Dynamic, Engine, EvalAltResult, ImmutableString, Map, NativeCallContext};

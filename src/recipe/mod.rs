@@ -16,6 +16,7 @@ mod engine;
 mod files;
 mod material_api;
 mod options;
+mod result;
 mod shape_api;
 
 pub use diagnostics::RecipeError;

@@ -2,12 +2,12 @@
 //! and `assembly(name, [...])`, which gathers shapes (and merges other assemblies) into one
 //! structure. Descriptions only: tessellation happens in Rust when the scene is built.
 
-use super::api::{Fallible, fail};
 use super::files::RecipeFiles;
-use super::options::{Options, number};
+use super::options::{Options, number, positive};
+use super::result::{Fallible, fail};
 use crate::geometry::primitives::Primitive;
 use crate::mechanics::ShellPattern;
-use crate::scene::{AssemblySpec, BeamSpec, Bending, LabelledPattern, ShapeSpec};
+use crate::scene::{AssemblySpec, BeamSpec, Bending, LabelledPattern, ShapeSpec, Tolerance};
 use glam::{DAffine3, DVec3};
 use rhai::{
     Array, Dynamic, Engine, EvalAltResult, ImmutableString, Map, Module, NativeCallContext,
@@ -43,6 +43,7 @@ pub fn register(engine: &mut Engine, files: Arc<RecipeFiles>) {
         Ok(s.clone())
     });
     register_shell_patterns(engine);
+    register_tolerances(engine);
     engine.register_fn(
         "detail",
         |s: &mut ShapeSpec, segments: i64, rings: i64| -> Fallible<ShapeSpec> {
@@ -62,11 +63,7 @@ pub fn register(engine: &mut Engine, files: Arc<RecipeFiles>) {
     engine.register_fn(
         "assembly",
         |name: ImmutableString, items: Array| -> Fallible<AssemblySpec> {
-            let mut assembly = AssemblySpec {
-                name: name.to_string(),
-                shapes: Vec::new(),
-                material: Default::default(),
-            };
+            let mut assembly = AssemblySpec::new(&name);
             for item in items {
                 let item = match item.try_cast_result::<ShapeSpec>() {
                     Ok(shape) => {
@@ -280,6 +277,25 @@ fn register_shell_patterns(engine: &mut Engine) {
                     height: number(&height, "elephant_foot height")?,
                 },
             )
+        },
+    );
+}
+
+/// `.pixel_tolerance(px)` and `.chord_tolerance(m)` on assemblies, as on beams: how closely
+/// curved surfaces are followed.
+fn register_tolerances(engine: &mut Engine) {
+    engine.register_fn(
+        "chord_tolerance",
+        |a: &mut AssemblySpec, metres: Dynamic| -> Fallible<AssemblySpec> {
+            a.tessellation = Tolerance::Chord(positive(&metres, "chord_tolerance", "metres")?);
+            Ok(a.clone())
+        },
+    );
+    engine.register_fn(
+        "pixel_tolerance",
+        |a: &mut AssemblySpec, pixels: Dynamic| -> Fallible<AssemblySpec> {
+            a.tessellation = Tolerance::Pixels(positive(&pixels, "pixel_tolerance", "pixels")?);
+            Ok(a.clone())
         },
     );
 }

@@ -4,14 +4,15 @@
 //! ray–triangle test, screen-space culling, the per-pixel geometric buffers (planar depth,
 //! hit triangle), texture lookup on the undeformed surface (through `materials`), shading into
 //! RGB with sun, sky, studio lights and shadows, anti-aliased with fixed sub-pixel rays only
-//! where the image changes, and backdrops. Must not touch: recipes, mechanics or files. One
-//! centre ray per pixel for every geometric label; nothing here draws random numbers.
+//! where the image changes, and backdrops. Must not touch: recipes, scenes, mechanics or files;
+//! it sees meshes, cameras and materials only. One centre ray per pixel for every geometric
+//! label; nothing here draws random numbers.
 
 mod shade;
 mod surfaces;
 mod trace;
 mod watertight;
 
-pub use shade::{Backdrop, Lighting, Sky, Sun, Surfaces, shade};
+pub use shade::{Surfaces, shade};
 pub use surfaces::SampleSurfaces;
 pub use trace::{GBuffer, NO_HIT, TraceMesh};

@@ -10,76 +10,11 @@
 
 use super::trace::{GBuffer, NO_HIT, TraceMesh};
 use crate::cameras::Camera;
-use crate::materials::{Surface, image::TextureImage, srgb_to_linear};
+use crate::materials::{Backdrop, Lighting, Surface, srgb_to_linear};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
-use std::sync::{Arc, OnceLock};
-
-/// The light of one sample. Directions point towards the light.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Lighting {
-    /// Uniform light from everywhere (linear, per channel).
-    pub ambient: f64,
-    /// Key and fill lights fixed to the camera (camera axes: x right, y down, z forward), so
-    /// every view is lit alike; the default when a recipe sets no light.
-    pub studio: Option<[(DVec3, f64); 2]>,
-    /// A directional light fixed in the world.
-    pub sun: Option<Sun>,
-    /// Hemispherical light: `sky` from above, `ground` bounce from below.
-    pub sky: Option<Sky>,
-    /// Whether the sun casts shadows.
-    pub shadows: bool,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sun {
-    pub direction: DVec3,
-    /// Linear radiance per channel.
-    pub colour: [f64; 3],
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sky {
-    pub sky: [f64; 3],
-    pub ground: [f64; 3],
-}
-
-impl Default for Lighting {
-    fn default() -> Self {
-        Lighting {
-            ambient: 0.12,
-            // Key above-left and behind the camera; fill from the right, weaker.
-            studio: Some([
-                (DVec3::new(-0.45, -0.6, -0.66).normalize(), 0.85),
-                (DVec3::new(0.7, -0.1, -0.7).normalize(), 0.3),
-            ]),
-            sun: None,
-            sky: None,
-            shadows: false,
-        }
-    }
-}
-
-/// What a view shows where no structure is.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Backdrop {
-    /// sRGB 8-bit.
-    Colour([u8; 3]),
-    /// Linear colours: a gradient from the horizon up to the zenith, flat ground below.
-    Sky {
-        zenith: [f64; 3],
-        horizon: [f64; 3],
-        ground: [f64; 3],
-    },
-    /// A window of an image filling the frame: top-left `origin` and `size` (width, height), in
-    /// image units (1 = the whole image), with square pixels.
-    Image {
-        image: Arc<TextureImage>,
-        origin: (f64, f64),
-        size: (f64, f64),
-    },
-}
+use std::sync::OnceLock;
 
 /// The surfaces of a mesh, by triangle.
 pub trait Surfaces: Sync {

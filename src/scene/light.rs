@@ -1,13 +1,9 @@
-//! Light and backdrop of a dataset, as declared (with ranges), and their draw for one sample
-//! or view.
+//! Light and backdrop of a dataset, as declared (any value may be a range to draw from).
+//! The build stage draws them for each sample or view.
 
+use crate::materials::Lighting;
 use crate::materials::image::ImageFile;
-use crate::materials::srgb_to_linear;
-use crate::render::{Backdrop, Lighting, Sky, Sun};
-use crate::seeds::Stream;
-use glam::DVec3;
 use serde::Serialize;
-use serde_json::{Value, json};
 
 /// The light of a dataset. Without sun and sky, the studio lights fixed to the camera light
 /// every view alike (the paper's renders); with them, the light is fixed in the world and
@@ -57,6 +53,34 @@ impl Default for LightSpec {
     }
 }
 
+impl LightSpec {
+    /// Checks what the ranges alone cannot: a sun above or on the horizon's sphere and no
+    /// negative light. Messages name the recipe's option.
+    pub fn validate(&self) -> Result<(), String> {
+        if let Some(sun) = &self.sun {
+            let half_pi = std::f64::consts::FRAC_PI_2;
+            if sun.elevation[0] < -half_pi || sun.elevation[1] > half_pi {
+                return Err(format!(
+                    "dataset.light.sun.elevation = [{}, {}] must lie within [-π/2, π/2]",
+                    sun.elevation[0], sun.elevation[1]
+                ));
+            }
+        }
+        for (name, [lo, _]) in [("ambient", self.ambient)]
+            .into_iter()
+            .chain(self.sun.iter().map(|s| ("sun.intensity", s.intensity)))
+            .chain(self.sky.iter().map(|s| ("sky.intensity", s.intensity)))
+        {
+            if lo < 0.0 {
+                return Err(format!(
+                    "dataset.light.{name} must not be negative (got {lo})"
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 impl Default for SunSpec {
     /// A sun 40° up from any direction, slightly warm.
     fn default() -> Self {
@@ -77,52 +101,6 @@ impl Default for SkySpec {
             colour: [0.75, 0.83, 0.95],
             ground: [0.4, 0.36, 0.3],
         }
-    }
-}
-
-impl LightSpec {
-    /// The light of one sample, and what was drawn (for the JSON).
-    pub fn draw(&self, stream: &mut Stream) -> (Lighting, Value) {
-        let mut pick = |[lo, hi]: [f64; 2]| if lo == hi { lo } else { stream.uniform(lo, hi) };
-        let ambient = pick(self.ambient);
-        let sun = self.sun.as_ref().map(|s| {
-            let (elevation, azimuth, intensity) =
-                (pick(s.elevation), pick(s.azimuth), pick(s.intensity));
-            let direction = DVec3::new(
-                elevation.cos() * azimuth.cos(),
-                elevation.cos() * azimuth.sin(),
-                elevation.sin(),
-            );
-            let light = Sun {
-                direction,
-                colour: s.colour.map(|c| srgb_to_linear(c) * intensity),
-            };
-            (light, json!({ "elevation": elevation, "azimuth": azimuth, "intensity": intensity, "direction": direction.to_array() }))
-        });
-        let sky = self.sky.as_ref().map(|s| {
-            let intensity = pick(s.intensity);
-            let light = Sky {
-                sky: s.colour.map(|c| srgb_to_linear(c) * intensity),
-                ground: s.ground.map(|c| srgb_to_linear(c) * intensity),
-            };
-            (light, json!({ "intensity": intensity }))
-        });
-        let defaults = Lighting::default();
-        let drawn = json!({
-            "studio": self.studio,
-            "ambient": ambient,
-            "sun": sun.as_ref().map(|s| s.1.clone()),
-            "sky": sky.as_ref().map(|s| s.1.clone()),
-            "shadows": self.shadows,
-        });
-        let lighting = Lighting {
-            ambient,
-            studio: defaults.studio.filter(|_| self.studio),
-            sun: sun.map(|s| s.0),
-            sky: sky.map(|s| s.0),
-            shadows: self.shadows,
-        };
-        (lighting, drawn)
     }
 }
 
@@ -166,47 +144,4 @@ impl Default for SkyGradient {
 pub struct ImageRecord {
     pub file: String,
     pub hash: String,
-}
-
-impl Background {
-    /// The backdrop of one view of `frame` (width, height) pixels, and what was drawn (for the
-    /// JSON).
-    pub fn draw(&self, stream: &mut Stream, frame: (u32, u32)) -> (Backdrop, Value) {
-        match self {
-            Background::Colour(c) => (
-                Backdrop::Colour(c.map(|c| (c * 255.0).round() as u8)),
-                json!({ "colour": c }),
-            ),
-            Background::Sky { sky } => (
-                Backdrop::Sky {
-                    zenith: sky.zenith.map(srgb_to_linear),
-                    horizon: sky.horizon.map(srgb_to_linear),
-                    ground: sky.ground.map(srgb_to_linear),
-                },
-                json!({ "sky": sky }),
-            ),
-            Background::Images { decoded, .. } => {
-                let chosen = &decoded[stream.integer(0, decoded.len() as i64 - 1) as usize];
-                let (w, h) = (f64::from(frame.0), f64::from(frame.1));
-                let (iw, ih) = (chosen.image.width() as f64, chosen.image.height() as f64);
-                // The widest window with the frame's aspect that fits the image, then 50–100 %
-                // of it, anywhere inside the image.
-                let widest = (ih * w / (iw * h)).min(1.0);
-                let width = stream.uniform(0.5, 1.0) * widest;
-                let size = (width, width * iw * h / (ih * w));
-                let origin = (
-                    stream.uniform(0.0, 1.0 - size.0),
-                    stream.uniform(0.0, 1.0 - size.1),
-                );
-                (
-                    Backdrop::Image {
-                        image: chosen.image.clone(),
-                        origin,
-                        size,
-                    },
-                    json!({ "image": chosen.name, "hash": chosen.hash, "window_origin": [origin.0, origin.1], "window_size": [size.0, size.1] }),
-                )
-            }
-        }
-    }
 }

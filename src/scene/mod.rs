@@ -1,26 +1,38 @@
 //! Scene descriptions: plain data produced by recipes and consumed by everything downstream.
 //!
 //! Owns: what a dataset and one of its samples *are* (structures, supports, loads,
-//! materials, camera distribution, outputs), with every value resolved and validated, and the
-//! derived mechanical labels. Must not touch: Rhai (recipes build these), tracing or files.
-//! Everything here serialises into the per-view JSON.
+//! materials, camera distribution, light, outputs), with every value resolved and validated.
+//! Must not touch: Rhai (recipes build these), meshing, drawing random values, tracing or
+//! files: the build stage turns a scene into meshes, and everything here serialises into the
+//! records of a dataset.
 
 mod assembly;
 mod beam;
 mod light;
 
-pub use assembly::{AssemblySpec, Bending, BuiltShape, LabelledPattern, ShapeSpec};
-pub use beam::{BeamSpec, BuiltBeam, Tessellation};
+pub use assembly::{AssemblySpec, Bending, LabelledPattern, ShapeSpec};
+pub use beam::{BeamSpec, Tessellation};
 pub use light::{
     Background, ImageRecord, LightSpec, OUTDOOR_AMBIENT, SkyGradient, SkySpec, SunSpec,
 };
 
 use crate::cameras::CameraRig;
 use serde::Serialize;
+use std::collections::BTreeMap;
 
 /// Default chord tolerance of every curved surface, beams and primitives alike: this fraction of
 /// a pixel at the nearest camera the rig can place.
 pub const PIXEL_TOLERANCE: f64 = 0.1;
+
+/// How closely a tessellated surface follows the true one: the largest chord (sagitta) error.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", content = "value", rename_all = "snake_case")]
+pub enum Tolerance {
+    /// In metres.
+    Chord(f64),
+    /// As a fraction of a pixel at the nearest camera the rig can place.
+    Pixels(f64),
+}
 
 /// Dataset-wide settings declared by a recipe.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -38,22 +50,35 @@ pub struct DatasetSpec {
     pub antialias: bool,
 }
 
-/// Which per-view files are written.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-pub struct Outputs {
-    pub rgb: bool,
-    pub depth: bool,
-    /// Per-pixel crack mask (for materials with cracks).
-    pub cracks: bool,
-    pub mask: bool,
-    /// Per-pixel part ids (see the id table in each view's JSON).
-    pub parts: bool,
-    /// Per-pixel structure (instance) ids.
-    pub instances: bool,
-}
+/// Which per-view outputs are written: every output shmgen knows, by name, with whether this
+/// dataset writes it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(transparent)]
+pub struct Outputs(BTreeMap<String, bool>);
 
 impl Outputs {
-    pub const NAMES: [&'static str; 6] = ["rgb", "depth", "mask", "parts", "instances", "cracks"];
+    /// Of the outputs named in `known`, those in `chosen` are on.
+    pub fn new(known: &[&str], chosen: &[&str]) -> Self {
+        Outputs(
+            known
+                .iter()
+                .map(|name| (name.to_string(), chosen.contains(name)))
+                .collect(),
+        )
+    }
+
+    /// Whether the output called `name` is written.
+    pub fn wants(&self, name: &str) -> bool {
+        self.0.get(name).copied().unwrap_or(false)
+    }
+
+    /// The names of the outputs written, in alphabetical order.
+    pub fn chosen(&self) -> impl Iterator<Item = &str> {
+        self.0
+            .iter()
+            .filter(|(_, on)| **on)
+            .map(|(k, _)| k.as_str())
+    }
 }
 
 /// A structure in a scene.
@@ -73,7 +98,7 @@ impl Structure {
     }
 }
 
-/// One sample: the structures in the scene, already deformed by their loads.
+/// One sample: the structures in the scene, with their loads (not yet applied).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SceneSpec {
     pub structures: Vec<Structure>,

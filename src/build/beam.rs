@@ -1,0 +1,253 @@
+//! Solving and meshing a straight beam: the mechanics gives the deflected axis, sections are
+//! placed along it at stations fine enough for the chord rule, and the section outline is swept
+//! through them, once loaded and once at rest (where textures are evaluated).
+
+use super::tessellation::{chord_tolerance, segments_for_chord};
+use crate::geometry::outline::{self, PAPER_DIVISIONS, SectionOutline};
+use crate::geometry::{Frame3, Mesh, sweep};
+use crate::mechanics::{BeamProblem, Deformation, Section, SectionFrame, kinks, section_frames};
+use crate::scene::{BeamSpec, Tessellation};
+use glam::{DMat3, DVec3};
+
+/// A beam's mesh and the mechanics behind it.
+pub struct BuiltBeam {
+    pub mesh: Mesh,
+    /// Where each vertex of `mesh` lies on the undeformed beam (textures are fixed there).
+    pub rest: Vec<DVec3>,
+    pub deformation: Deformation,
+    /// Intervals along the length.
+    pub segments: usize,
+}
+
+/// The mechanics problem a beam description poses.
+pub fn problem(beam: &BeamSpec) -> BeamProblem {
+    BeamProblem {
+        support: beam.support,
+        length: beam.length,
+        loads: beam.loads.clone(),
+        target: beam.target,
+        section: beam.section.properties(beam.poisson),
+        elastic_modulus: beam.elastic_modulus,
+        poisson: beam.poisson,
+        yield_strength: beam.yield_strength,
+        theory: beam.theory,
+        tolerance: beam.model_tolerance,
+        vibration: beam.vibration.clone(),
+    }
+}
+
+/// Radius of the undeformed beam's bounding sphere.
+pub fn beam_radius(beam: &BeamSpec) -> f64 {
+    0.5 * (beam.length.powi(2) + beam.section.width().powi(2) + beam.section.height().powi(2))
+        .sqrt()
+}
+
+/// Solves the mechanics and meshes the deformed beam. `pixel_footprint` is the size of a
+/// pixel (metres) at the nearest distance a camera can be from this beam.
+pub fn mesh_beam(beam: &BeamSpec, pixel_footprint: f64) -> Result<BuiltBeam, String> {
+    let deformation = Deformation::solve(&problem(beam))?;
+    let tolerance = chord_tolerance(beam.tessellation.tolerance(), pixel_footprint);
+    let segments = match beam.tessellation {
+        Tessellation::Segments(n) => n as usize,
+        Tessellation::Paper => PAPER_DIVISIONS,
+        Tessellation::Chord(_) | Tessellation::Pixels(_) => segments_for_chord(
+            beam.length,
+            deformation.max_curvature(beam.length),
+            tolerance,
+        ),
+    };
+    let outline = match beam.tessellation {
+        Tessellation::Paper => paper_outline(&beam.section)
+            .ok_or("the paper's mesh exists only for the rectangular section")?,
+        _ => section_outline(&beam.section, tolerance),
+    };
+    let mut at = kinks(&beam.loads);
+    at.push(deformation.labels.max_deflection_at);
+    let stations = stations(beam.length, segments, &at);
+    let frames = section_frames(&stations, beam.mapping, |x| deformation.at(x));
+    let unloaded: Vec<SectionFrame> = stations
+        .iter()
+        .map(|&x| SectionFrame {
+            x,
+            v: 0.0,
+            cos: 1.0,
+            sin: 0.0,
+        })
+        .collect();
+    let place = |frames: &[SectionFrame]| {
+        sweep_beam(
+            beam.length,
+            frames,
+            &outline,
+            DMat3::from_rotation_z(beam.yaw),
+            DVec3::from_array(beam.centre),
+        )
+    };
+    let mesh = place(&frames);
+    Ok(BuiltBeam {
+        rest: place(&unloaded).positions,
+        mesh,
+        deformation,
+        segments,
+    })
+}
+
+/// The outline with no more vertices than the shape needs: polygons exactly, circles with
+/// sagitta ≤ `chord_tolerance`.
+pub fn section_outline(section: &Section, chord_tolerance: f64) -> SectionOutline {
+    match *section {
+        Section::Rectangle { width, height } => outline::rectangle(width, height, 1),
+        Section::ISection {
+            width,
+            height,
+            flange,
+            web,
+        } => outline::i_shape(width, height, flange, web),
+        Section::HollowBox {
+            width,
+            height,
+            wall,
+        } => outline::hollow_rectangle(width, height, wall),
+        Section::CircularHollow { diameter, wall } => {
+            outline::hollow_circle(diameter, wall, chord_tolerance)
+        }
+    }
+}
+
+/// The paper's meshing of its cuboid: every face divided into a 32 × 32 grid.
+fn paper_outline(section: &Section) -> Option<SectionOutline> {
+    match *section {
+        Section::Rectangle { width, height } => {
+            Some(outline::rectangle(width, height, PAPER_DIVISIONS))
+        }
+        _ => None,
+    }
+}
+
+/// Sweeps `outline` through the section frames (one per station) and closes both ends.
+/// The beam's own frame (axis along x from 0 to `length`, y across, z up) is centred on the
+/// undeformed beam and placed in the world by `rotation` and `centre`. Side faces between
+/// stations are flat quads: the beam kinematics is affine across a section, so sections need
+/// no interior vertices and only the length is subdivided.
+fn sweep_beam(
+    length: f64,
+    frames: &[SectionFrame],
+    outline: &SectionOutline,
+    rotation: DMat3,
+    centre: DVec3,
+) -> Mesh {
+    let frames: Vec<Frame3> = frames
+        .iter()
+        .map(|f| Frame3 {
+            origin: centre + rotation * DVec3::new(f.x - 0.5 * length, 0.0, -f.v),
+            // Section y stays across the beam; section z turns with the section.
+            u: rotation * DVec3::Y,
+            v: rotation * DVec3::new(f.sin, 0.0, f.cos),
+        })
+        .collect();
+    sweep(outline, &frames)
+}
+
+/// `segments` equal intervals plus the kinks, without slivers closer than 1e-9 L.
+pub fn stations(length: f64, segments: usize, kinks: &[f64]) -> Vec<f64> {
+    let n = segments.max(1);
+    let mut s: Vec<f64> = (0..=n).map(|i| length * i as f64 / n as f64).collect();
+    s.extend(kinks.iter().copied().filter(|k| *k > 0.0 && *k < length));
+    s.sort_by(f64::total_cmp);
+    let min_gap = length * 1e-9;
+    let mut out: Vec<f64> = Vec::with_capacity(s.len());
+    for x in s {
+        match out.last() {
+            Some(&prev) if x - prev <= min_gap => {}
+            _ => out.push(x),
+        }
+    }
+    *out.last_mut().expect("at least two stations") = length;
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mechanics::{Load, Support, Target, section_examples};
+
+    #[test]
+    fn section_outlines_have_the_section_properties() {
+        for s in section_examples() {
+            let p = s.properties(0.3);
+            // Polygons are exact; the tube is an inscribed polygon at 1e-7 m sagitta.
+            let (area, second_moment) = section_outline(&s, 1e-7).area_and_second_moment();
+            assert!(
+                (area / p.area - 1.0).abs() < 1e-5,
+                "{s:?}: area {area} vs {}",
+                p.area
+            );
+            assert!(
+                (second_moment / p.second_moment - 1.0).abs() < 1e-5,
+                "{s:?}: I {second_moment} vs {}",
+                p.second_moment
+            );
+        }
+    }
+
+    #[test]
+    fn every_section_gives_a_closed_mesh_with_the_section_volume() {
+        for section in section_examples() {
+            let mut b = BeamSpec::new(4.0, section.clone());
+            b.tessellation = Tessellation::Chord(1e-5);
+            let mesh = mesh_beam(&b, 1e-3).unwrap().mesh;
+            assert!(mesh.is_closed_and_oriented());
+            let area = section.properties(0.3).area;
+            // Circles are inscribed polygons: their area is short by O(tolerance/r).
+            let tol = if matches!(section, Section::CircularHollow { .. }) {
+                1e-3
+            } else {
+                1e-12
+            };
+            assert!(
+                (mesh.signed_volume() / (4.0 * area) - 1.0).abs() < tol,
+                "{section:?}: {}",
+                mesh.signed_volume() / (4.0 * area)
+            );
+        }
+    }
+
+    #[test]
+    fn paper_mesh_has_the_papers_face_count() {
+        let mut b = BeamSpec::rectangular(2.0, 0.2, 0.1);
+        b.tessellation = Tessellation::Paper;
+        let mesh = mesh_beam(&b, 1e-3).unwrap().mesh;
+        assert_eq!(mesh.triangles.len(), 12_288);
+        assert!(mesh.is_closed_and_oriented());
+        assert!((mesh.signed_volume() - 2.0 * 0.2 * 0.1).abs() < 1e-12);
+        let mut tube = BeamSpec::new(2.0, section_examples()[3].clone());
+        tube.tessellation = Tessellation::Paper;
+        assert!(mesh_beam(&tube, 1e-3).is_err());
+    }
+
+    #[test]
+    fn deformed_axis_passes_through_the_target_deflection() {
+        let mut b = BeamSpec::rectangular(3.0, 0.3, 0.5);
+        b.support = Support::Cantilever;
+        b.loads = vec![Load::Point {
+            at: 3.0,
+            force: 1.0,
+        }];
+        b.target = Target::Peak { deflection: 0.12 };
+        let built = mesh_beam(&b, 1e-3).unwrap();
+        let n = built.mesh.positions.len();
+        let tip: DVec3 = built.mesh.positions[n - 4..].iter().sum::<DVec3>() / 4.0;
+        assert!((tip.z + 0.12).abs() < 1e-12, "{tip}");
+        assert!(built.mesh.is_closed_and_oriented());
+        // Bending keeps the volume to second order in the rotation.
+        assert!((built.mesh.signed_volume() / (3.0 * 0.15) - 1.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn stations_include_kinks_and_both_ends() {
+        assert_eq!(
+            stations(2.0, 4, &[0.3, 1.0, 2.0, 0.0]),
+            vec![0.0, 0.3, 0.5, 1.0, 1.5, 2.0]
+        );
+    }
+}
