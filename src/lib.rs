@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! shmgen turns a Rhai recipe into a synthetic dataset of deformed civil structures:
 //! ray-traced RGB, metric planar depth, masks and exact cameras, reproducible from a seed.
 //!

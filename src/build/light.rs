@@ -8,7 +8,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 /// The light values drawn for a sample.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct LightDraw {
     /// Whether the studio key and fill lights (fixed to the camera) are on.
     pub studio: bool,
@@ -21,7 +21,7 @@ pub struct LightDraw {
 }
 
 /// The sun drawn for a sample.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SunDraw {
     /// Radians above the horizon.
     pub elevation: f64,
@@ -33,13 +33,13 @@ pub struct SunDraw {
 }
 
 /// The sky drawn for a sample.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SkyDraw {
     pub intensity: f64,
 }
 
 /// The backdrop drawn for a view.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum BackdropDraw {
     /// A plain colour, sRGB 0–1.

@@ -6,7 +6,7 @@ use glam::{DMat3, DVec3};
 use serde::Serialize;
 
 /// How far the camera is from the target.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Distance {
     /// Fixed distance in metres (drawn uniformly from the range).
@@ -19,7 +19,7 @@ pub enum Distance {
 /// Where views are drawn from: yaw (azimuth from +x towards +y), pitch (elevation above the
 /// horizontal plane through the target; +π/2 looks straight down) and roll about the view
 /// axis, each uniform in its range; pitch is drawn uniform in area on the sphere.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct CameraRig {
     pub width: u32,
     pub height: u32,
@@ -45,7 +45,7 @@ impl Default for CameraRig {
 }
 
 /// The values actually drawn for one view, recorded in its JSON.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ViewDraw {
     pub yaw: f64,
     pub pitch: f64,

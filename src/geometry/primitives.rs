@@ -11,7 +11,7 @@ use serde::Serialize;
 use std::sync::Arc;
 
 /// A primitive in its own frame (z up).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Primitive {
     /// Centred on the origin.

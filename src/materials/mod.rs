@@ -27,7 +27,7 @@ use serde::Serialize;
 use std::sync::Arc;
 
 /// How a surface looks: everything here is written to each view's JSON.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Material {
     /// The text the material was compiled from, if any.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -47,7 +47,7 @@ pub struct Material {
 }
 
 /// The substance under any condition.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Base {
     /// A flat colour, no texture (the default, and `.colour([r, g, b])`).
@@ -66,7 +66,7 @@ pub enum Base {
 }
 
 /// Wood species, for colour and ring spacing.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Species {
     Pine,
@@ -82,13 +82,13 @@ pub enum Species {
 }
 
 /// A condition of the surface with its intensity in (0, 1].
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Condition {
     pub kind: ConditionKind,
     pub intensity: f64,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ConditionKind {
     /// Rust patches (steel) or iron staining (other bases).
@@ -112,7 +112,7 @@ pub enum ConditionKind {
 }
 
 /// Where the albedo comes from.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "source", rename_all = "snake_case")]
 pub enum Texture {
     Procedural,

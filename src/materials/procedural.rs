@@ -13,7 +13,7 @@ use serde::Serialize;
 
 /// What a sample drew for its material: where its texture is cut from, how far the wood's
 /// pith lies from the piece's axis (metres) and a brightness variation.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct MaterialDraw {
     /// Offset of the sample's cut of the procedural textures (metres).
     pub texture_offset: [f64; 3],

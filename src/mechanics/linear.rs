@@ -12,7 +12,7 @@ use super::Support;
 use serde::Serialize;
 
 /// A load on the span, in physical units (N, N/m, N·m), downward and sagging positive.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Load {
     Point {

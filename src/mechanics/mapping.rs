@@ -15,7 +15,7 @@ pub struct AxisPoint {
 }
 
 /// How a point of the undeformed cross-section follows the deflected axis.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Mapping {
     /// Plane sections stay plane and turn with the bending rotation; the axis shortens by ½∫v′².

@@ -35,7 +35,7 @@ pub const STEEL_E: f64 = 210e9;
 pub const STEEL_NU: f64 = 0.3;
 pub const STEEL_FY: f64 = 355e6;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Support {
     /// Pin at x = 0, roller at x = L.

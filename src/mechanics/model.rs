@@ -11,7 +11,7 @@ use super::linear::{LinearBeam, Load};
 use super::{ModeShape, SectionProperties, Support};
 use serde::Serialize;
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Theory {
     #[default]
@@ -23,7 +23,7 @@ pub enum Theory {
 }
 
 /// What the loads' magnitudes mean.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Target {
     /// Loads are physical (N, N/m, N·m).
@@ -52,7 +52,7 @@ pub struct BeamProblem {
 }
 
 /// Labels written next to each sample.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Labels {
     pub theory: Theory,
     /// Estimated model error as a fraction of the peak deflection: the larger of the shear
@@ -78,7 +78,7 @@ pub struct Labels {
     pub linear_theory_error: Option<f64>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ModeLabel {
     pub mode: u32,
     pub beta_l: f64,

@@ -9,7 +9,7 @@
 use serde::Serialize;
 use std::f64::consts::PI;
 
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "pattern", rename_all = "snake_case")]
 pub enum ShellPattern {
     /// Uniform hoop expansion under internal pressure.
@@ -45,7 +45,7 @@ pub enum ShellPattern {
 }
 
 /// The shell the patterns act on: radius, wall thickness, height; steel.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Shell {
     pub radius: f64,
     pub wall: f64,

@@ -12,7 +12,7 @@ mod record;
 mod sample;
 mod view;
 
-pub use record::{RunRecord, ViewRecord, json_bytes, run_json};
+pub use record::{RunRecord, ViewRecord, json_bytes, run_json, run_schema, view_schema};
 pub use sample::{prepare, write_sample};
 pub use view::{RenderedView, SampleRenderer, view_camera};
 

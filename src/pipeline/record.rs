@@ -17,14 +17,14 @@ use serde_json::Value;
 use std::collections::BTreeMap;
 
 /// Tags `run.json`; bump when a field changes meaning.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Copy, Debug, Serialize, schemars::JsonSchema)]
 pub enum RunSchema {
     #[serde(rename = "shmgen.run/1")]
     V1,
 }
 
 /// Tags each view's JSON; bump when a field changes meaning.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Copy, Debug, Serialize, schemars::JsonSchema)]
 pub enum ViewSchema {
     #[serde(rename = "shmgen.view/1")]
     V1,
@@ -32,7 +32,7 @@ pub enum ViewSchema {
 
 /// `run.json`: everything that identifies a dataset, and nothing about how it was run
 /// (threads, shard, output path), so every shard and every resumed run agrees on it.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct RunRecord<'a> {
     pub schema: RunSchema,
     pub tool: Tool,
@@ -47,7 +47,7 @@ pub struct RunRecord<'a> {
 }
 
 /// The program that wrote a dataset.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct Tool {
     pub name: &'static str,
     pub version: &'static str,
@@ -55,14 +55,14 @@ pub struct Tool {
 
 /// The recipe a dataset was built from: its file name and the blake3 hash of its sources
 /// (the recipe and every module it imports).
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct RecipeRecord<'a> {
     pub file: String,
     pub hash: &'a str,
 }
 
 /// The JSON of one view: everything needed to re-create and interpret its files.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct ViewRecord<'a> {
     pub schema: ViewSchema,
     /// The dataset's name.
@@ -91,20 +91,20 @@ pub struct ViewRecord<'a> {
 
 /// Where the random values of a view came from: streams derived from the run seed, a scope
 /// (sample, or sample and view) and a name.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct Seeds {
     pub run_seed: u64,
     pub scene_stream: StreamRecord,
     pub camera_stream: StreamRecord,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct StreamRecord {
     pub scope: Vec<u64>,
     pub name: &'static str,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub enum CameraModel {
     #[serde(rename = "pinhole")]
     Pinhole,
@@ -112,7 +112,7 @@ pub enum CameraModel {
 
 /// The camera of a view. Matrices are row-major; OpenCV axes are x right, y down, z forward,
 /// and `c2w_opengl = c2w_opencv · diag(1, −1, −1, 1)`.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct CameraRecord {
     pub model: CameraModel,
     pub width: u32,
@@ -134,21 +134,21 @@ pub struct CameraRecord {
     pub drawn: ViewDraw,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum DepthKind {
     /// Distance along the optical axis.
     PlanarZ,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub enum Unit {
     #[serde(rename = "m")]
     Metre,
 }
 
 /// How to read the depth file.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct DepthConvention {
     pub kind: DepthKind,
     pub unit: Unit,
@@ -159,14 +159,14 @@ pub struct DepthConvention {
 }
 
 /// How to read the mask file.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct MaskConvention {
     pub structure: u8,
     pub background: u8,
 }
 
 /// How to read the crack file.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct CrackConvention {
     pub crack: u8,
     pub elsewhere: u8,
@@ -175,7 +175,7 @@ pub struct CrackConvention {
 }
 
 /// The id tables of the segmentation images, shared by every view of a sample.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct Segmentation {
     /// Part names by id; id 0 is "background".
     pub part_ids: Vec<String>,
@@ -185,21 +185,21 @@ pub struct Segmentation {
 }
 
 /// A structure of the scene, as an instance id names it.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Instance {
     Beam { structure: usize },
     Assembly { structure: usize, name: String },
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct SceneRecord<'a> {
     pub structures: &'a [StructureRecord<'a>],
 }
 
 /// A structure as described, with what its sample drew and, for beams, what the mechanics
 /// found.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct StructureRecord<'a> {
     #[serde(flatten)]
     pub structure: &'a Structure,
@@ -209,7 +209,7 @@ pub struct StructureRecord<'a> {
 }
 
 /// What the mechanics of a beam found.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct BeamRecord<'a> {
     pub section_properties: SectionProperties,
     /// Intervals along the length of the mesh.
@@ -218,7 +218,7 @@ pub struct BeamRecord<'a> {
 }
 
 /// Size of the sample's deformed mesh.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct MeshRecord {
     pub vertices: usize,
     pub triangles: usize,
@@ -379,4 +379,15 @@ impl<'a> SampleRecord<'a> {
             coverage: rendered.coverage(),
         }
     }
+}
+
+/// The JSON Schema (draft 2020-12) of each view's JSON, generated from [`ViewRecord`].
+pub fn view_schema() -> Value {
+    serde_json::to_value(schemars::schema_for!(ViewRecord<'static>))
+        .expect("a schema is plain JSON")
+}
+
+/// The JSON Schema (draft 2020-12) of `run.json`, generated from [`RunRecord`].
+pub fn run_schema() -> Value {
+    serde_json::to_value(schemars::schema_for!(RunRecord<'static>)).expect("a schema is plain JSON")
 }

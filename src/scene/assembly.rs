@@ -9,7 +9,7 @@ use glam::{DAffine3, DMat3, DVec3};
 use serde::Serialize;
 
 /// A primitive placed in its assembly, with the part it belongs to (for segmentation).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ShapeSpec {
     pub primitive: Primitive,
     /// Affine map from the primitive's frame to the assembly's: rows of a 3 × 4 matrix.
@@ -25,7 +25,7 @@ pub struct ShapeSpec {
 }
 
 /// A shell pattern with what a physical load would plausibly give (written into the JSON).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct LabelledPattern {
     #[serde(flatten)]
     pub pattern: ShellPattern,
@@ -48,14 +48,14 @@ impl LabelledPattern {
 /// on it, which is the beam's x = 0), and positive deflection moves material along `towards`.
 /// The beam's length must equal the shape's extent along the axis; its section gives the
 /// stiffness for the labels and Timoshenko, and the shape's bounds give the neutral axis.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Bending {
     pub axis: [f64; 3],
     pub towards: [f64; 3],
     pub beam: BeamSpec,
 }
 
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct AssemblySpec {
     pub name: String,
     pub shapes: Vec<ShapeSpec>,

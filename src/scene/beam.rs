@@ -10,7 +10,7 @@ use serde::Serialize;
 
 /// How finely the beam is meshed along its length (sections get exactly the vertices their
 /// shape needs, circles to the same chord tolerance).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", content = "value", rename_all = "snake_case")]
 pub enum Tessellation {
     /// Equal intervals along the length.
@@ -40,7 +40,7 @@ impl Tessellation {
     }
 }
 
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct BeamSpec {
     pub length: f64,
     pub section: Section,

@@ -8,7 +8,7 @@ use serde::Serialize;
 /// The light of a dataset. Without sun and sky, the studio lights fixed to the camera light
 /// every view alike (the paper's renders); with them, the light is fixed in the world and
 /// drawn per sample, so all views of a sample share one sun.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct LightSpec {
     pub studio: bool,
     pub sun: Option<SunSpec>,
@@ -18,7 +18,7 @@ pub struct LightSpec {
     pub shadows: bool,
 }
 
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SunSpec {
     /// Angle above the horizon (radians), range.
     pub elevation: [f64; 2],
@@ -29,7 +29,7 @@ pub struct SunSpec {
     pub colour: [f64; 3],
 }
 
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SkySpec {
     pub intensity: [f64; 2],
     /// sRGB colours of the sky's light from above and the ground's from below.
@@ -105,7 +105,7 @@ impl Default for SkySpec {
 }
 
 /// What the RGB images show where no structure is. Depth, masks and labels are unaffected.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum Background {
     /// sRGB colour; black by default, as in the paper.
@@ -122,7 +122,7 @@ pub enum Background {
     },
 }
 
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SkyGradient {
     pub zenith: [f64; 3],
     pub horizon: [f64; 3],
@@ -140,7 +140,7 @@ impl Default for SkyGradient {
 }
 
 /// A background image as recorded in run.json.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ImageRecord {
     pub file: String,
     pub hash: String,

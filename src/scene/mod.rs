@@ -25,7 +25,7 @@ use std::collections::BTreeMap;
 pub const PIXEL_TOLERANCE: f64 = 0.1;
 
 /// How closely a tessellated surface follows the true one: the largest chord (sagitta) error.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", content = "value", rename_all = "snake_case")]
 pub enum Tolerance {
     /// In metres.
@@ -35,7 +35,7 @@ pub enum Tolerance {
 }
 
 /// Dataset-wide settings declared by a recipe.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct DatasetSpec {
     pub name: String,
     pub seed: u64,
@@ -52,7 +52,7 @@ pub struct DatasetSpec {
 
 /// Which per-view outputs are written: every output shmgen knows, by name, with whether this
 /// dataset writes it.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(transparent)]
 pub struct Outputs(BTreeMap<String, bool>);
 
@@ -82,7 +82,7 @@ impl Outputs {
 }
 
 /// A structure in a scene.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Structure {
     Beam(BeamSpec),
@@ -99,7 +99,7 @@ impl Structure {
 }
 
 /// One sample: the structures in the scene, with their loads (not yet applied).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SceneSpec {
     pub structures: Vec<Structure>,
 }

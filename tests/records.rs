@@ -1,0 +1,362 @@
+//! The records of a dataset — `run.json` and every view's JSON — against their published JSON
+//! Schemas, checked by a validator that is not ours (the `jsonschema` crate); the published
+//! schemas against the types they are generated from; and the README's field reference
+//! against the schemas.
+//!
+//! After changing a record type: `SHMGEN_BLESS=1 cargo test --release --test records`
+//! rewrites `docs/schema/*.json` and the README's field reference.
+
+mod common;
+
+use common::{ok, read_json, run};
+use serde_json::{Value, json};
+use shmgen::pipeline::{run_schema, view_schema};
+use std::collections::{BTreeSet, VecDeque};
+use std::path::{Path, PathBuf};
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn blessing() -> bool {
+    std::env::var_os("SHMGEN_BLESS").is_some()
+}
+
+fn pretty(value: &Value) -> String {
+    serde_json::to_string_pretty(value).unwrap() + "\n"
+}
+
+/// Compares `path` with `expected`, or rewrites it when blessing.
+fn check_generated(path: &Path, expected: &str) {
+    if blessing() {
+        std::fs::write(path, expected).unwrap();
+        return;
+    }
+    let actual = std::fs::read_to_string(path).unwrap_or_default();
+    assert!(
+        actual == expected,
+        "{} is out of date; regenerate it with SHMGEN_BLESS=1 cargo test --release --test records",
+        path.display()
+    );
+}
+
+#[test]
+fn published_schemas_are_generated_from_the_record_types() {
+    for (name, schema) in [("view", view_schema()), ("run", run_schema())] {
+        let path = repo().join(format!("docs/schema/{name}.schema.json"));
+        check_generated(&path, &pretty(&schema));
+    }
+}
+
+fn published(name: &str) -> Value {
+    read_json(&repo().join(format!("docs/schema/{name}.schema.json")))
+}
+
+fn validator(name: &str) -> jsonschema::Validator {
+    jsonschema::validator_for(&published(name)).expect("the published schema compiles")
+}
+
+fn assert_valid(validator: &jsonschema::Validator, file: &Path) {
+    let record = read_json(file);
+    let errors: Vec<String> = validator
+        .iter_errors(&record)
+        .map(|e| format!("{} at {}", e, e.instance_path()))
+        .take(5)
+        .collect();
+    assert!(errors.is_empty(), "{}: {errors:#?}", file.display());
+}
+
+/// The small values of the parameters a recipe declares, so every recipe runs in seconds.
+fn smoke_settings(recipe: &str) -> Vec<String> {
+    let small = [
+        ("samples", "2"),
+        ("views", "2"),
+        ("size", "160"),
+        ("damage", "1.0"),
+    ];
+    small
+        .iter()
+        .filter(|(name, _)| recipe.contains(&format!("param(\"{name}\"")))
+        .flat_map(|(name, value)| ["--set".to_string(), format!("{name}={value}")])
+        .collect()
+}
+
+#[test]
+fn every_recipe_in_scripts_writes_records_that_validate() {
+    let (views, runs) = (validator("view"), validator("run"));
+    let dir = tempfile::tempdir().unwrap();
+    let mut recipes: Vec<PathBuf> = std::fs::read_dir(repo().join("scripts"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "rhai"))
+        .collect();
+    recipes.sort();
+    assert!(recipes.len() >= 4, "{recipes:?}");
+    for recipe in &recipes {
+        let out = dir.path().join(recipe.file_stem().unwrap());
+        let settings = smoke_settings(&std::fs::read_to_string(recipe).unwrap());
+        let args: Vec<&str> = settings.iter().map(String::as_str).collect();
+        ok(run(recipe, &out, &args));
+        assert_valid(&runs, &out.join("run.json"));
+        let mut checked = 0;
+        for line in std::fs::read_to_string(out.join("manifest.jsonl"))
+            .unwrap()
+            .lines()
+        {
+            let entry: Value = serde_json::from_str(line).unwrap();
+            for file in entry["files"].as_array().unwrap() {
+                let file = file.as_str().unwrap();
+                if file.ends_with(".json") {
+                    assert_valid(&views, &out.join(file));
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked >= 2, "{}: {checked} views", recipe.display());
+    }
+}
+
+#[test]
+fn the_validator_rejects_records_that_break_the_schema() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = repo().join("scripts/quickstart.rhai");
+    ok(run(
+        &recipe,
+        dir.path(),
+        &["--set", "samples=1", "--set", "views=1"],
+    ));
+    let views = validator("view");
+    let record = read_json(&dir.path().join("samples/0000/000000_00.json"));
+    assert!(views.is_valid(&record));
+    let broken: [(&str, fn(&mut Value)); 4] = [
+        ("a non-finite matrix entry (written as null)", |r| {
+            r["camera"]["K"][0][0] = Value::Null
+        }),
+        ("another schema version", |r| {
+            r["schema"] = json!("shmgen.view/2")
+        }),
+        ("a missing field", |r| {
+            r["camera"].as_object_mut().unwrap().remove("c2w_opencv");
+        }),
+        ("a wrong type", |r| r["sample"] = json!("zero")),
+    ];
+    for (what, damage) in broken {
+        let mut bad = record.clone();
+        damage(&mut bad);
+        assert!(!views.is_valid(&bad), "accepted {what}");
+    }
+}
+
+#[test]
+fn the_readme_field_reference_is_generated_from_the_schemas() {
+    let reference = field_reference(&[
+        ("run.json", published("run")),
+        ("view JSON", published("view")),
+    ]);
+    let path = repo().join("README.md");
+    let readme = std::fs::read_to_string(&path).unwrap();
+    let (begin, end) = (
+        "<!-- field reference: generated from docs/schema -->\n",
+        "<!-- end of field reference -->",
+    );
+    let start = readme
+        .find(begin)
+        .expect("README has the field reference markers")
+        + begin.len();
+    let stop = readme
+        .find(end)
+        .expect("README has the field reference end marker");
+    let expected = format!("{}{reference}{}", &readme[..start], &readme[stop..]);
+    check_generated(&path, &expected);
+    // Every field is described.
+    let undocumented: Vec<&str> = reference
+        .lines()
+        .filter(|l| l.starts_with("| `") && l.ends_with("|  |"))
+        .collect();
+    assert!(undocumented.is_empty(), "{undocumented:#?}");
+}
+
+/// Markdown tables of every record and every type they use, each type once, in the order
+/// they are first met from the records.
+fn field_reference(records: &[(&str, Value)]) -> String {
+    let mut out = String::new();
+    let mut seen = BTreeSet::new();
+    let mut queue = VecDeque::new();
+    for (title, schema) in records {
+        let tag = schema["properties"]["schema"]["enum"][0]
+            .as_str()
+            .unwrap_or_default();
+        out += &format!("#### {title} (`{tag}`)\n\n");
+        out += &describe(schema, schema, &mut queue);
+        while let Some(name) = queue.pop_front() {
+            if seen.insert(name.clone()) {
+                out += &format!("#### {name}\n\n");
+                out += &describe(schema, &schema["$defs"][&name], &mut queue);
+            }
+        }
+    }
+    out
+}
+
+/// A type's description and its fields (or, for a choice of forms, each form's).
+fn describe(root: &Value, node: &Value, queue: &mut VecDeque<String>) -> String {
+    let mut out = String::new();
+    if let Some(text) = node["description"].as_str() {
+        out += &format!("{}\n\n", one_line(text));
+    }
+    if node.get("properties").is_some() {
+        out += &table(root, node, queue);
+    }
+    for key in ["oneOf", "anyOf"] {
+        for form in node[key].as_array().into_iter().flatten() {
+            let name = form_name(form);
+            let text = form["description"].as_str().map(one_line);
+            match (name, form.get("properties")) {
+                (Some(name), Some(_)) => {
+                    out += &format!(
+                        "- {name}{}\n\n",
+                        text.map(|t| format!(": {t}")).unwrap_or_default()
+                    );
+                    out += &table(root, form, queue);
+                }
+                (None, Some(_)) => {
+                    out += &format!("- {}\n\n", text.unwrap_or_default());
+                    out += &table(root, form, queue);
+                }
+                (Some(name), None) => {
+                    out += &format!(
+                        "- {name}{}\n",
+                        text.map(|t| format!(": {t}")).unwrap_or_default()
+                    );
+                }
+                (None, None) => {
+                    out += &format!("- {}\n", type_name(form, queue));
+                }
+            }
+        }
+        if node.get(key).is_some() {
+            out += "\n";
+        }
+    }
+    if node.get("enum").is_some() || node.get("const").is_some() {
+        out += &format!("Values: {}\n\n", type_name(node, queue));
+    }
+    let _ = root;
+    out
+}
+
+/// How a form of a choice is told apart: its tag's value, or its single key.
+fn form_name(form: &Value) -> Option<String> {
+    if let Some(value) = form.get("const") {
+        return Some(format!("`{value}`"));
+    }
+    if let Some(values) = form["enum"].as_array() {
+        return Some(
+            values
+                .iter()
+                .map(|v| format!("`{v}`"))
+                .collect::<Vec<_>>()
+                .join(", "),
+        );
+    }
+    let properties = form["properties"].as_object()?;
+    properties.iter().find_map(|(key, p)| {
+        let value = p.get("const").or_else(|| {
+            p["enum"]
+                .get(0)
+                .filter(|_| p["enum"].as_array().is_some_and(|e| e.len() == 1))
+        })?;
+        Some(format!("`{key}: {value}`"))
+    })
+}
+
+fn table(root: &Value, node: &Value, queue: &mut VecDeque<String>) -> String {
+    let mut out = String::from("| field | type | meaning |\n|---|---|---|\n");
+    let required: BTreeSet<&str> = node["required"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(Value::as_str)
+        .collect();
+    for (name, property) in node["properties"].as_object().unwrap() {
+        let optional = if required.contains(name.as_str()) {
+            ""
+        } else {
+            " (optional)"
+        };
+        let meaning = property["description"]
+            .as_str()
+            .map(one_line)
+            .unwrap_or_default();
+        out += &format!(
+            "| `{name}`{optional} | {} | {meaning} |\n",
+            type_name(property, queue).replace('|', "\\|")
+        );
+    }
+    let _ = root;
+    out + "\n"
+}
+
+/// A short name for a schema's type; referenced definitions are queued for their own table.
+fn type_name(node: &Value, queue: &mut VecDeque<String>) -> String {
+    if let Some(reference) = node["$ref"].as_str() {
+        let name = reference.trim_start_matches("#/$defs/").to_string();
+        queue.push_back(name.clone());
+        return format!("[{name}](#{})", name.to_lowercase());
+    }
+    if let Some(value) = node.get("const") {
+        return format!("`{value}`");
+    }
+    if let Some(values) = node["enum"].as_array() {
+        return values
+            .iter()
+            .map(|v| format!("`{v}`"))
+            .collect::<Vec<_>>()
+            .join(" or ");
+    }
+    for key in ["anyOf", "oneOf"] {
+        if let Some(forms) = node[key].as_array() {
+            return forms
+                .iter()
+                .map(|f| type_name(f, queue))
+                .collect::<Vec<_>>()
+                .join(" or ");
+        }
+    }
+    let kind = match &node["type"] {
+        Value::String(s) => s.clone(),
+        Value::Array(kinds) => {
+            return kinds
+                .iter()
+                .map(|k| type_name(&json!({ "type": k, "items": node["items"], "prefixItems": node["prefixItems"], "additionalProperties": node["additionalProperties"], "minItems": node["minItems"], "maxItems": node["maxItems"] }), queue))
+                .collect::<Vec<_>>()
+                .join(" or ");
+        }
+        _ => return "any".into(),
+    };
+    match kind.as_str() {
+        "array" => {
+            if let Some(items) = node["prefixItems"].as_array() {
+                let parts: Vec<String> = items.iter().map(|i| type_name(i, queue)).collect();
+                return format!("({})", parts.join(", "));
+            }
+            let item = type_name(&node["items"], queue);
+            match (node["minItems"].as_u64(), node["maxItems"].as_u64()) {
+                (Some(a), Some(b)) if a == b => format!("[{item}; {a}]"),
+                _ => format!("[{item}]"),
+            }
+        }
+        "object" => match node.get("additionalProperties") {
+            Some(values) if values.is_object() => format!("map of {}", type_name(values, queue)),
+            _ => "object".into(),
+        },
+        other => other.to_string(),
+    }
+}
+
+fn one_line(text: &str) -> String {
+    text.split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+        .replace('|', "\\|")
+}
