@@ -21,7 +21,7 @@ pub use tessellation::{chord_tolerance, segments_for_chord};
 use crate::geometry::{self, Mesh};
 use crate::materials::{Grain, Lighting, Shader};
 use crate::mechanics::Labels;
-use crate::scene::{DatasetSpec, SceneSpec, Structure};
+use crate::scene::{DatasetSpec, SceneSpec, SourceSite, Structure};
 use crate::seeds::{Scope, Stream};
 use glam::{DMat3, DVec3};
 
@@ -61,17 +61,38 @@ pub struct BeamOutcome {
     pub segments: usize,
 }
 
+/// Why a sample could not be built, and where the recipe declared what failed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BuildError {
+    /// What is wrong, naming the structure and the value at fault.
+    pub message: String,
+    /// The recipe call behind the failing structure, when known.
+    pub site: Option<SourceSite>,
+}
+
+impl BuildError {
+    fn whole_scene(message: String) -> Self {
+        BuildError {
+            message,
+            site: None,
+        }
+    }
+}
+
 /// Builds the deformed meshes of sample `index` of `dataset`, whose scene the recipe drew as
 /// `scene`; fails on anything that would make non-finite output.
 pub fn build_sample(
     dataset: &DatasetSpec,
     index: u64,
     scene: SceneSpec,
-) -> Result<BuiltSample, String> {
+) -> Result<BuiltSample, BuildError> {
     let mut assembled = Assembled::default();
     let mut beams = Vec::new();
     for (i, structure) in scene.structures.iter().enumerate() {
-        let failed = |m: String| format!("sample {index}, structure {i}: {m}");
+        let failed = |m: String| BuildError {
+            message: format!("structure {i}: {m}"),
+            site: structure.declared_at().cloned(),
+        };
         match structure {
             Structure::Beam(beam) => {
                 let footprint = dataset.camera.nearest_pixel_footprint(beam_radius(beam));
@@ -106,17 +127,18 @@ pub fn build_sample(
         pieces,
     } = assembled;
     if !mesh.is_finite() {
-        return Err(format!(
-            "sample {index}: the deformed mesh has non-finite vertices (check the structure's dimensions and loads)"
+        return Err(BuildError::whole_scene(
+            "the deformed mesh has non-finite vertices (check the structure's dimensions and loads)"
+                .to_string(),
         ));
     }
     let (centre, radius) = mesh
         .bounding_sphere()
         .expect("a scene has at least one structure");
     if !(radius > 0.0 && radius.is_finite()) {
-        return Err(format!(
-            "sample {index}: the scene has no extent (radius {radius})"
-        ));
+        return Err(BuildError::whole_scene(format!(
+            "the scene has no extent (radius {radius})"
+        )));
     }
     let mut materials = Stream::new(dataset.seed, Scope::Sample(index), "material");
     let shaders = scene

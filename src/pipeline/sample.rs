@@ -13,7 +13,10 @@ use std::collections::BTreeMap;
 /// would make non-finite output.
 pub fn prepare(recipe: &Recipe, index: u64) -> Result<BuiltSample> {
     let scene = recipe.scene(index)?;
-    build_sample(&recipe.dataset, index, scene).map_err(anyhow::Error::msg)
+    build_sample(&recipe.dataset, index, scene).map_err(|e| {
+        let context = format!("while building sample {index}");
+        recipe.locate(&e.message, e.site.as_ref(), &context).into()
+    })
 }
 
 /// Renders every view of the sample and stages its files. Returns the number of views written.

@@ -1,18 +1,24 @@
 //! The beam part of the recipe API: sections, supports, loads, theory, tessellation.
 //! Every method edits the beam in place and returns it, so calls chain.
 
+use super::diagnostics::call_site;
 use super::options::{OptResult, Options, number, positive};
 use super::result::{Fallible, fail};
 use crate::mechanics::{Load, Mapping, Section, Support, Target, Theory};
 use crate::scene::{BeamSpec, Tessellation};
-use rhai::{Array, Dynamic, Engine, ImmutableString, Map};
+use rhai::{Array, Dynamic, Engine, ImmutableString, Map, NativeCallContext};
 
 pub fn register(engine: &mut Engine) {
     register_sections(engine);
     engine.register_type_with_name::<BeamSpec>("Beam");
-    engine.register_fn("beam", |map: Map| -> Fallible<BeamSpec> {
-        Ok(beam_from_map(map)?)
-    });
+    engine.register_fn(
+        "beam",
+        |ctx: NativeCallContext, map: Map| -> Fallible<BeamSpec> {
+            let mut beam = beam_from_map(map)?;
+            beam.declared_at = Some(call_site(&ctx));
+            Ok(beam)
+        },
+    );
     engine.register_get("length", |b: &mut BeamSpec| b.length);
     engine.register_get("width", |b: &mut BeamSpec| b.section.width());
     engine.register_get("height", |b: &mut BeamSpec| b.section.height());
@@ -100,7 +106,8 @@ fn register_supports(engine: &mut Engine) {
         ("fixed_fixed", Support::FixedFixed),
         ("propped_cantilever", Support::ProppedCantilever),
     ] {
-        engine.register_fn(name, move |b: &mut BeamSpec| {
+        engine.register_fn(name, move |ctx: NativeCallContext, b: &mut BeamSpec| {
+            b.declared_at = Some(call_site(&ctx));
             b.support = support;
             b.clone()
         });
@@ -127,7 +134,12 @@ fn register_loads(engine: &mut Engine) {
     // Shape form: a unit load, scaled so that the beam's largest deflection is `deflection`.
     engine.register_fn(
         "point_load",
-        |b: &mut BeamSpec, at: Dynamic, deflection: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext,
+         b: &mut BeamSpec,
+         at: Dynamic,
+         deflection: Dynamic|
+         -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
             let at = on_span(
                 b,
                 "point_load position",
@@ -141,7 +153,12 @@ fn register_loads(engine: &mut Engine) {
     );
     engine.register_fn(
         "point_force",
-        |b: &mut BeamSpec, at: Dynamic, force: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext,
+         b: &mut BeamSpec,
+         at: Dynamic,
+         force: Dynamic|
+         -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
             let at = on_span(
                 b,
                 "point_force position",
@@ -156,7 +173,8 @@ fn register_loads(engine: &mut Engine) {
     );
     engine.register_fn(
         "distributed_load",
-        |b: &mut BeamSpec, q: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext, b: &mut BeamSpec, q: Dynamic| -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
             b.loads.push(Load::Distributed {
                 from: 0.0,
                 to: b.length,
@@ -167,7 +185,13 @@ fn register_loads(engine: &mut Engine) {
     );
     engine.register_fn(
         "distributed_load",
-        |b: &mut BeamSpec, from: Dynamic, to: Dynamic, q: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext,
+         b: &mut BeamSpec,
+         from: Dynamic,
+         to: Dynamic,
+         q: Dynamic|
+         -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
             let from = on_span(
                 b,
                 "distributed_load from",
@@ -193,7 +217,12 @@ fn register_loads(engine: &mut Engine) {
     );
     engine.register_fn(
         "end_moments",
-        |b: &mut BeamSpec, start: Dynamic, end: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext,
+         b: &mut BeamSpec,
+         start: Dynamic,
+         end: Dynamic|
+         -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
             b.loads.push(Load::EndMoments {
                 start: number(&start, "end_moments start")?,
                 end: number(&end, "end_moments end")?,
@@ -204,7 +233,8 @@ fn register_loads(engine: &mut Engine) {
     // A snapshot of free vibration: [[mode, amplitude], ...], amplitudes in metres.
     engine.register_fn(
         "vibration",
-        |b: &mut BeamSpec, modes: Array| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext, b: &mut BeamSpec, modes: Array| -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
             let mut snapshot = Vec::with_capacity(modes.len());
             for m in &modes {
                 let pair = m.clone().try_cast::<Array>().filter(|p| p.len() == 2);
@@ -229,7 +259,8 @@ fn register_loads(engine: &mut Engine) {
     );
     engine.register_fn(
         "target_deflection",
-        |b: &mut BeamSpec, deflection: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext, b: &mut BeamSpec, deflection: Dynamic| -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
             b.target = Target::Peak {
                 deflection: number(&deflection, "target_deflection")?,
             };
@@ -238,7 +269,12 @@ fn register_loads(engine: &mut Engine) {
     );
     engine.register_fn(
         "target_deflection_at",
-        |b: &mut BeamSpec, at: Dynamic, deflection: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext,
+         b: &mut BeamSpec,
+         at: Dynamic,
+         deflection: Dynamic|
+         -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
             let at = on_span(
                 b,
                 "target_deflection_at position",
@@ -254,7 +290,8 @@ fn register_loads(engine: &mut Engine) {
 }
 
 fn register_settings(engine: &mut Engine) {
-    engine.register_fn("theory", |b: &mut BeamSpec, name: ImmutableString| -> Fallible<BeamSpec> {
+    engine.register_fn("theory", |ctx: NativeCallContext, b: &mut BeamSpec, name: ImmutableString| -> Fallible<BeamSpec> {
+        b.declared_at = Some(call_site(&ctx));
         b.theory = match name.as_str() {
             "auto" => Theory::Auto,
             "euler_bernoulli" => Theory::EulerBernoulli,
@@ -266,13 +303,15 @@ fn register_settings(engine: &mut Engine) {
     });
     engine.register_fn(
         "model_tolerance",
-        |b: &mut BeamSpec, t: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext, b: &mut BeamSpec, t: Dynamic| -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
             b.model_tolerance =
                 positive(&t, "model_tolerance", "a fraction of the peak deflection")?;
             Ok(b.clone())
         },
     );
-    engine.register_fn("mapping", |b: &mut BeamSpec, name: ImmutableString| -> Fallible<BeamSpec> {
+    engine.register_fn("mapping", |ctx: NativeCallContext, b: &mut BeamSpec, name: ImmutableString| -> Fallible<BeamSpec> {
+        b.declared_at = Some(call_site(&ctx));
         b.mapping = match name.as_str() {
             "rotate_sections" => Mapping::RotateSections,
             "add_deflection" | "3dgen" => Mapping::AddDeflection,
@@ -313,14 +352,16 @@ fn register_settings(engine: &mut Engine) {
     });
     engine.register_fn(
         "elastic_modulus",
-        |b: &mut BeamSpec, e: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext, b: &mut BeamSpec, e: Dynamic| -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
             b.elastic_modulus = positive(&e, "elastic_modulus", "pascals")?;
             Ok(b.clone())
         },
     );
     engine.register_fn(
         "poisson",
-        |b: &mut BeamSpec, nu: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext, b: &mut BeamSpec, nu: Dynamic| -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
             let nu = number(&nu, "poisson")?;
             if !(0.0..0.5).contains(&nu) {
                 return fail(format!("poisson = {nu} must lie in [0, 0.5)"));

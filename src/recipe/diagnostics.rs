@@ -3,7 +3,8 @@
 //! Warnings take the same form.
 
 use super::engine::{MAX_OPERATIONS, Sources};
-use rhai::{EvalAltResult, ParseError, Position};
+use crate::scene::SourceSite;
+use rhai::{EvalAltResult, NativeCallContext, ParseError, Position};
 use std::collections::BTreeSet;
 use std::fmt;
 use std::sync::{Arc, Mutex};
@@ -48,6 +49,31 @@ impl RecipeError {
         let mut chain = Vec::new();
         let (message, at) = innermost(err, main_label, &mut chain);
         RecipeError(render("error", &message, &at, &chain, context, sources))
+    }
+}
+
+impl RecipeError {
+    /// An error found after the recipe ran (while building what it described), pointing at
+    /// the call that declared it.
+    pub fn at(message: &str, site: &SourceSite, sources: &Sources, context: Option<&str>) -> Self {
+        let at = Located {
+            label: site.source.clone(),
+            pos: Position::new(
+                u16::try_from(site.line).unwrap_or(u16::MAX),
+                u16::try_from(site.column).unwrap_or(u16::MAX),
+            ),
+        };
+        RecipeError(render("error", message, &at, &[], context, sources))
+    }
+}
+
+/// Where a registered function was called from, to keep in what it builds.
+pub fn call_site(ctx: &NativeCallContext) -> SourceSite {
+    let pos = ctx.call_position();
+    SourceSite {
+        source: ctx.source().unwrap_or_default().to_string(),
+        line: pos.line().unwrap_or(0),
+        column: pos.position().unwrap_or(0),
     }
 }
 

@@ -22,7 +22,7 @@ mod shape_api;
 pub use diagnostics::RecipeError;
 pub use engine::stdlib_dir;
 
-use crate::scene::{AssemblySpec, BeamSpec, DatasetSpec, SceneSpec, Structure};
+use crate::scene::{AssemblySpec, BeamSpec, DatasetSpec, SceneSpec, SourceSite, Structure};
 use crate::seeds::{Scope as StreamScope, Stream};
 use api::{Dataset, Params, ScriptRng};
 use engine::{Resolver, Sources};
@@ -136,6 +136,23 @@ impl Recipe {
         let structures = structures(value)
             .map_err(|m| RecipeError::plain(format!("{}: {m} ({context})", self.label)))?;
         Ok(SceneSpec { structures })
+    }
+
+    /// An error found while building what the recipe described, pointing at the call that
+    /// declared it when that is known.
+    pub fn locate(&self, message: &str, site: Option<&SourceSite>, context: &str) -> RecipeError {
+        match site {
+            // Calls inside the scene closure carry no source name: they are in the recipe.
+            Some(site) if site.source.is_empty() => {
+                let site = SourceSite {
+                    source: self.label.clone(),
+                    ..site.clone()
+                };
+                RecipeError::at(message, &site, &self.sources, Some(context))
+            }
+            Some(site) => RecipeError::at(message, site, &self.sources, Some(context)),
+            None => RecipeError::plain(format!("{}: {message} ({context})", self.label)),
+        }
     }
 
     /// The files this recipe was built from so far, for a watcher: the recipe, the modules it

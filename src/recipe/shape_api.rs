@@ -2,6 +2,7 @@
 //! and `assembly(name, [...])`, which gathers shapes (and merges other assemblies) into one
 //! structure. Descriptions only: tessellation happens in Rust when the scene is built.
 
+use super::diagnostics::call_site;
 use super::files::RecipeFiles;
 use super::options::{Options, number, positive};
 use super::result::{Fallible, fail};
@@ -62,8 +63,9 @@ pub fn register(engine: &mut Engine, files: Arc<RecipeFiles>) {
     });
     engine.register_fn(
         "assembly",
-        |name: ImmutableString, items: Array| -> Fallible<AssemblySpec> {
+        |ctx: NativeCallContext, name: ImmutableString, items: Array| -> Fallible<AssemblySpec> {
             let mut assembly = AssemblySpec::new(&name);
+            assembly.declared_at = Some(call_site(&ctx));
             for item in items {
                 let item = match item.try_cast_result::<ShapeSpec>() {
                     Ok(shape) => {

@@ -1,7 +1,7 @@
 //! Assemblies: structures built in recipes from labelled, transformed primitives, as plain
 //! data. Meshing, bending and shell displacement are the build stage's work.
 
-use super::{BeamSpec, PIXEL_TOLERANCE, Tolerance};
+use super::{BeamSpec, PIXEL_TOLERANCE, SourceSite, Tolerance};
 use crate::geometry::primitives::Primitive;
 use crate::materials::Material;
 use crate::mechanics::{Shell, ShellPattern};
@@ -63,6 +63,9 @@ pub struct AssemblySpec {
     /// How closely curved surfaces are followed, after placement (a scaled shape is
     /// tessellated more finely).
     pub tessellation: Tolerance,
+    /// The recipe call that made the assembly, where errors found when building it point.
+    #[serde(skip)]
+    pub declared_at: Option<SourceSite>,
 }
 
 impl AssemblySpec {
@@ -73,6 +76,7 @@ impl AssemblySpec {
             shapes: Vec::new(),
             material: Material::default(),
             tessellation: Tolerance::Pixels(PIXEL_TOLERANCE),
+            declared_at: None,
         }
     }
 }

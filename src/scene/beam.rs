@@ -1,7 +1,7 @@
 //! A straight beam as a recipe declares it: section, supports, loads, theory, tessellation,
 //! material and placement. Solving and meshing it is the build stage's work.
 
-use super::Tolerance;
+use super::{SourceSite, Tolerance};
 use crate::materials::Material;
 use crate::mechanics::{
     Load, Mapping, STEEL_E, STEEL_FY, STEEL_NU, Section, Support, Target, Theory,
@@ -62,6 +62,10 @@ pub struct BeamSpec {
     pub centre: [f64; 3],
     /// Rotation about the world z axis (radians); 0 puts the beam axis along +x.
     pub yaw: f64,
+    /// The recipe call that last changed the beam's mechanics (its construction, supports,
+    /// loads, target or material constants), where errors found when solving it point.
+    #[serde(skip)]
+    pub declared_at: Option<SourceSite>,
 }
 
 impl BeamSpec {
@@ -83,6 +87,7 @@ impl BeamSpec {
             material: Material::default(),
             centre: [0.0; 3],
             yaw: 0.0,
+            declared_at: None,
         }
     }
 

@@ -24,6 +24,18 @@ use std::collections::BTreeMap;
 /// a pixel at the nearest camera the rig can place.
 pub const PIXEL_TOLERANCE: f64 = 0.1;
 
+/// Where in a recipe's sources something was declared: errors found when it is built later
+/// point back there.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SourceSite {
+    /// The source's label in diagnostics (the recipe's or a module's path).
+    pub source: String,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column.
+    pub column: usize,
+}
+
 /// How closely a tessellated surface follows the true one: the largest chord (sagitta) error.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", content = "value", rename_all = "snake_case")]
@@ -94,6 +106,14 @@ impl Structure {
         match self {
             Structure::Beam(b) => &b.material,
             Structure::Assembly(a) => &a.material,
+        }
+    }
+
+    /// Where the recipe declared what building this structure depends on, if known.
+    pub fn declared_at(&self) -> Option<&SourceSite> {
+        match self {
+            Structure::Beam(b) => b.declared_at.as_ref(),
+            Structure::Assembly(a) => a.declared_at.as_ref(),
         }
     }
 }
