@@ -183,7 +183,7 @@ fn field_reference(records: &[(&str, Value)]) -> String {
     let mut seen = BTreeSet::new();
     let mut queue = VecDeque::new();
     for (title, schema) in records {
-        let tag = schema["properties"]["schema"]["enum"][0]
+        let tag = resolve(schema, &schema["properties"]["schema"])["enum"][0]
             .as_str()
             .unwrap_or_default();
         out += &format!("#### {title} (`{tag}`)\n\n");
@@ -230,7 +230,7 @@ fn describe(root: &Value, node: &Value, queue: &mut VecDeque<String>) -> String 
                     );
                 }
                 (None, None) => {
-                    out += &format!("- {}\n", type_name(form, queue));
+                    out += &format!("- {}\n", type_name(root, form, queue));
                 }
             }
         }
@@ -239,9 +239,8 @@ fn describe(root: &Value, node: &Value, queue: &mut VecDeque<String>) -> String 
         }
     }
     if node.get("enum").is_some() || node.get("const").is_some() {
-        out += &format!("Values: {}\n\n", type_name(node, queue));
+        out += &format!("Values: {}\n\n", type_name(root, node, queue));
     }
-    let _ = root;
     out
 }
 
@@ -290,16 +289,28 @@ fn table(root: &Value, node: &Value, queue: &mut VecDeque<String>) -> String {
             .unwrap_or_default();
         out += &format!(
             "| `{name}`{optional} | {} | {meaning} |\n",
-            type_name(property, queue).replace('|', "\\|")
+            type_name(root, property, queue).replace('|', "\\|")
         );
     }
-    let _ = root;
     out + "\n"
 }
 
-/// A short name for a schema's type; referenced definitions are queued for their own table.
-fn type_name(node: &Value, queue: &mut VecDeque<String>) -> String {
+/// The definition a `$ref` names, or the node itself.
+fn resolve<'a>(root: &'a Value, node: &'a Value) -> &'a Value {
+    match node["$ref"].as_str() {
+        Some(reference) => &root["$defs"][reference.trim_start_matches("#/$defs/")],
+        None => node,
+    }
+}
+
+/// A short name for a schema's type; referenced definitions are queued for their own table,
+/// except plain lists of values, which are shown in place.
+fn type_name(root: &Value, node: &Value, queue: &mut VecDeque<String>) -> String {
     if let Some(reference) = node["$ref"].as_str() {
+        let target = resolve(root, node);
+        if target.get("enum").is_some() {
+            return type_name(root, target, queue);
+        }
         let name = reference.trim_start_matches("#/$defs/").to_string();
         queue.push_back(name.clone());
         return format!("[{name}](#{})", name.to_lowercase());
@@ -318,7 +329,7 @@ fn type_name(node: &Value, queue: &mut VecDeque<String>) -> String {
         if let Some(forms) = node[key].as_array() {
             return forms
                 .iter()
-                .map(|f| type_name(f, queue))
+                .map(|f| type_name(root, f, queue))
                 .collect::<Vec<_>>()
                 .join(" or ");
         }
@@ -328,7 +339,7 @@ fn type_name(node: &Value, queue: &mut VecDeque<String>) -> String {
         Value::Array(kinds) => {
             return kinds
                 .iter()
-                .map(|k| type_name(&json!({ "type": k, "items": node["items"], "prefixItems": node["prefixItems"], "additionalProperties": node["additionalProperties"], "minItems": node["minItems"], "maxItems": node["maxItems"] }), queue))
+                .map(|k| type_name(root, &json!({ "type": k, "items": node["items"], "prefixItems": node["prefixItems"], "additionalProperties": node["additionalProperties"], "minItems": node["minItems"], "maxItems": node["maxItems"] }), queue))
                 .collect::<Vec<_>>()
                 .join(" or ");
         }
@@ -337,17 +348,19 @@ fn type_name(node: &Value, queue: &mut VecDeque<String>) -> String {
     match kind.as_str() {
         "array" => {
             if let Some(items) = node["prefixItems"].as_array() {
-                let parts: Vec<String> = items.iter().map(|i| type_name(i, queue)).collect();
+                let parts: Vec<String> = items.iter().map(|i| type_name(root, i, queue)).collect();
                 return format!("({})", parts.join(", "));
             }
-            let item = type_name(&node["items"], queue);
+            let item = type_name(root, &node["items"], queue);
             match (node["minItems"].as_u64(), node["maxItems"].as_u64()) {
                 (Some(a), Some(b)) if a == b => format!("[{item}; {a}]"),
                 _ => format!("[{item}]"),
             }
         }
         "object" => match node.get("additionalProperties") {
-            Some(values) if values.is_object() => format!("map of {}", type_name(values, queue)),
+            Some(values) if values.is_object() => {
+                format!("map of {}", type_name(root, values, queue))
+            }
             _ => "object".into(),
         },
         other => other.to_string(),

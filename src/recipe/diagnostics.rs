@@ -71,7 +71,7 @@ impl RecipeError {
 pub fn call_site(ctx: &NativeCallContext) -> SourceSite {
     let pos = ctx.call_position();
     SourceSite {
-        source: ctx.source().unwrap_or_default().to_string(),
+        source: ctx.call_source().unwrap_or_default().to_string(),
         line: pos.line().unwrap_or(0),
         column: pos.position().unwrap_or(0),
     }
