@@ -77,7 +77,7 @@ fn time_views(recipe: &Recipe, sample: &BuiltSample, views: u32) -> (f64, f64) {
     let mut coverage = Vec::new();
     for view in 0..views {
         let t = Instant::now();
-        let rendered = renderer.view(view);
+        let rendered = renderer.view(view).expect("a finite camera");
         std::hint::black_box(rendered.rgb());
         times.push(t.elapsed().as_secs_f64() * 1e3);
         coverage.push(rendered.coverage());

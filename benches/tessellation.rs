@@ -119,7 +119,7 @@ fn main() {
             reference.tessellation = Tessellation::Segments(4096);
             let reference_mesh = mesh_beam(&reference, footprint).unwrap().mesh;
             let (centre, radius) = reference_mesh.bounding_sphere().unwrap();
-            let cameras: Vec<_> = (0..views).map(|v| rig.draw(&mut Stream::new(1, Scope::View(0, v), "camera"), centre, radius).0).collect();
+            let cameras: Vec<_> = (0..views).map(|v| rig.draw(&mut Stream::new(1, Scope::View(0, v), "camera"), centre, radius).unwrap().0).collect();
             let reference_trace = TraceMesh::build(&reference_mesh);
             let truth: Vec<_> = cameras.iter().map(|c| reference_trace.trace(c)).collect();
             println!("\n{name} (pixel at nearest camera {:.2} mm)", footprint * 1e3);

@@ -124,6 +124,26 @@ fn check_box_view(cam: &Camera, centre: DVec3, min_hits: usize) {
     assert!(near_edge < 10);
 }
 
+#[test]
+fn narrow_fields_of_view_are_exact() {
+    // A camera framing the box from far away: at 1e-8 rad it stands 1.6e8 m off. Rays start
+    // in f32 only where they reach the box's bounding sphere, and depths come from the
+    // triangles' planes in f64, so masks and depths stay exact.
+    let centre = DVec3::new(3.0, -2.0, 1.0);
+    for fov in [1e-4, 1e-6, 1e-7, 1e-8] {
+        let k = Intrinsics::from_fov_y(96, 96, fov);
+        let distance = 1.05 * HALF.length() / (0.5 * fov).sin();
+        let draw = ViewDraw {
+            yaw: 0.6,
+            pitch: 0.3,
+            roll: 0.2,
+            distance,
+        };
+        let cam = shmgen::cameras::orbit_camera(k, centre, &draw);
+        check_box_view(&cam, centre, 1500);
+    }
+}
+
 fn paper_intrinsics() -> Intrinsics {
     Intrinsics::from_fov_y(960, 960, std::f64::consts::FRAC_PI_3)
 }
@@ -306,6 +326,7 @@ fn closed_meshes_have_no_holes_from_200_cameras_including_the_poles() {
                         centre,
                         radius,
                     )
+                    .unwrap()
                     .0
                 }
             };
@@ -347,11 +368,13 @@ fn back_projected_depth_lies_on_the_mesh() {
         let centre = 0.5 * (lo + hi);
         let size = (hi - lo).length();
         for view in 0..6u32 {
-            let (cam, _) = rig.draw(
-                &mut Stream::new(5, Scope::View(b as u64, view), "camera"),
-                centre,
-                0.5 * size,
-            );
+            let (cam, _) = rig
+                .draw(
+                    &mut Stream::new(5, Scope::View(b as u64, view), "camera"),
+                    centre,
+                    0.5 * size,
+                )
+                .unwrap();
             let g = trace.trace(&cam);
             let k = cam.intrinsics;
             let c2w = cam.c2w_cv();
@@ -449,11 +472,13 @@ fn a_deformed_beam_one_kilometre_away_renders_like_one_at_the_origin() {
     let render = |b: &BeamSpec| {
         let mesh = built(b);
         let (centre, radius) = mesh.bounding_sphere().unwrap();
-        let (cam, _) = rig.draw(
-            &mut Stream::new(2, Scope::View(0, 0), "camera"),
-            centre,
-            radius,
-        );
+        let (cam, _) = rig
+            .draw(
+                &mut Stream::new(2, Scope::View(0, 0), "camera"),
+                centre,
+                radius,
+            )
+            .unwrap();
         TraceMesh::build(&mesh).trace(&cam)
     };
     let (a, b) = (render(&near), render(&far));

@@ -124,6 +124,14 @@ impl Camera {
         self.c2w_cv() * DMat4::from_diagonal(DVec4::new(1.0, -1.0, -1.0, 1.0))
     }
 
+    /// Whether every number of the pose and intrinsics is finite.
+    pub fn is_finite(&self) -> bool {
+        let k = &self.intrinsics;
+        self.rotation.is_finite()
+            && self.position.is_finite()
+            && [k.fx, k.fy, k.cx, k.cy].iter().all(|x| x.is_finite())
+    }
+
     pub fn world_to_camera(&self, p: DVec3) -> DVec3 {
         self.rotation.transpose() * (p - self.position)
     }

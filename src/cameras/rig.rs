@@ -53,14 +53,22 @@ pub struct ViewDraw {
     pub distance: f64,
 }
 
+/// The narrowest vertical field of view (radians). A camera that frames a structure at field
+/// of view φ stands about 2R/φ away; f64 places its rays to about that distance × 1.1e-16,
+/// which must stay below a thousandth of a pixel (2R/φ × φ/H) for H up to 16,384 pixels:
+/// φ ≥ 1.1e-16 × 16,384 × 1000 ≈ 1.8e-9.
+pub const MIN_FOV: f64 = 1e-8;
+
 impl CameraRig {
     /// Checks what the ranges alone cannot: a field of view inside (0, π), pitches on the
     /// sphere, a positive distance or framing margin. Messages name the recipe's option.
     pub fn validate(&self) -> Result<(), String> {
         let fov_y = self.fov_y;
-        if !(fov_y > 0.0 && fov_y < std::f64::consts::PI) {
+        if !(fov_y >= MIN_FOV && fov_y < std::f64::consts::PI) {
             return Err(format!(
-                "dataset.camera.fov_y = {fov_y} must lie strictly between 0 and π radians"
+                "dataset.camera.fov_y = {fov_y} must lie in [{MIN_FOV}, π) radians (below \
+                 {MIN_FOV} rad a camera framing the structure stands so far off that f64 \
+                 cannot aim its rays to a thousandth of a pixel)"
             ));
         }
         let half_pi = std::f64::consts::FRAC_PI_2;
@@ -96,8 +104,14 @@ impl CameraRig {
         (centre_distance - radius).max(1e-3 * radius) / k.fx.max(k.fy)
     }
 
-    /// Draws one view of a structure whose bounding sphere is (`centre`, `radius`).
-    pub fn draw(&self, stream: &mut Stream, centre: DVec3, radius: f64) -> (Camera, ViewDraw) {
+    /// Draws one view of a structure whose bounding sphere is (`centre`, `radius`); fails when
+    /// the values drawn make no finite camera (a distance that overflows, say).
+    pub fn draw(
+        &self,
+        stream: &mut Stream,
+        centre: DVec3,
+        radius: f64,
+    ) -> Result<(Camera, ViewDraw), String> {
         let yaw = stream.uniform(self.yaw[0], self.yaw[1]);
         let (s0, s1) = (self.pitch[0].sin(), self.pitch[1].sin());
         let pitch = stream.uniform(s0, s1).clamp(-1.0, 1.0).asin();
@@ -113,7 +127,13 @@ impl CameraRig {
             roll,
             distance,
         };
-        (orbit_camera(intrinsics, centre, &draw), draw)
+        let camera = orbit_camera(intrinsics, centre, &draw);
+        if !camera.is_finite() {
+            return Err(format!(
+                "dataset.camera: the camera drawn is not finite (yaw {yaw}, pitch {pitch}, roll {roll}, distance {distance} m from a structure of radius {radius} m); narrow the ranges or the margin"
+            ));
+        }
+        Ok((camera, draw))
     }
 }
 
@@ -194,7 +214,7 @@ mod tests {
             ..CameraRig::default()
         };
         let mut s = Stream::new(3, Scope::View(0, 0), "camera");
-        let (cam, d) = rig.draw(&mut s, DVec3::ZERO, 2.0);
+        let (cam, d) = rig.draw(&mut s, DVec3::ZERO, 2.0).unwrap();
         // The sphere's tangent cone half-angle equals the narrower half FOV / margin.
         let half = (2.0 / d.distance).asin();
         assert!(half < rig.intrinsics().min_half_fov());
@@ -212,7 +232,7 @@ mod tests {
         };
         for v in 0..500 {
             let mut s = Stream::new(1, Scope::View(7, v), "camera");
-            let (_, d) = rig.draw(&mut s, DVec3::ZERO, 1.0);
+            let (_, d) = rig.draw(&mut s, DVec3::ZERO, 1.0).unwrap();
             assert!(
                 (0.2..=0.6).contains(&d.pitch)
                     && (1.0..2.0).contains(&d.yaw)

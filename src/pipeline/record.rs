@@ -2,6 +2,7 @@
 //! structs: the one place their fields are defined. Their JSON Schemas (`docs/schema/`) are
 //! generated from these types.
 
+use super::finite::check_finite;
 use super::view::RenderedView;
 use crate::build::{BackdropDraw, BuiltSample, LightDraw};
 use crate::cameras::{ViewDraw, rows4};
@@ -231,8 +232,10 @@ pub struct SampleRecord<'a> {
     pub segmentation: Segmentation,
 }
 
-/// Pretty JSON with a final newline, as every record is written.
+/// Pretty JSON with a final newline, as every record is written; a record holding a
+/// non-finite number is refused (JSON would show it as `null`).
 pub fn json_bytes(record: &impl Serialize) -> Result<Vec<u8>> {
+    check_finite(record)?;
     let mut bytes = serde_json::to_vec_pretty(record)?;
     bytes.push(b'\n');
     Ok(bytes)

@@ -1,8 +1,9 @@
 //! One sample, end to end: draw its scene, build it, render each view, hand the view's layers
 //! to the dataset's writers, and stage their files with the view's record.
 
+use super::finite::check_finite;
 use super::record::{SampleRecord, json_bytes};
-use super::view::SampleRenderer;
+use super::view::{SampleRenderer, view_camera};
 use crate::build::{BuiltSample, build_sample};
 use crate::output::{SampleStage, WRITERS, view_file};
 use crate::recipe::Recipe;
@@ -10,13 +11,22 @@ use anyhow::Result;
 use std::collections::BTreeMap;
 
 /// Draws the scene of sample `index` and builds its deformed meshes; fails on anything that
-/// would make non-finite output.
+/// would make non-finite output: the meshes, the structures' labels and every view's camera
+/// are checked here, before any file is written.
 pub fn prepare(recipe: &Recipe, index: u64) -> Result<BuiltSample> {
     let scene = recipe.scene(index)?;
-    build_sample(&recipe.dataset, index, scene).map_err(|e| {
-        let context = format!("while building sample {index}");
-        recipe.locate(&e.message, e.site.as_ref(), &context).into()
-    })
+    let context = format!("while building sample {index}");
+    let sample = build_sample(&recipe.dataset, index, scene)
+        .map_err(|e| recipe.locate(&e.message, e.site.as_ref(), &context))?;
+    let record = SampleRecord::new(&sample);
+    for (structure, labels) in sample.scene.structures.iter().zip(&record.structures) {
+        check_finite(labels)
+            .map_err(|e| recipe.locate(&e.to_string(), structure.declared_at(), &context))?;
+    }
+    for view in 0..recipe.dataset.views {
+        view_camera(&recipe.dataset, &sample, view)?;
+    }
+    Ok(sample)
 }
 
 /// Renders every view of the sample and stages its files. Returns the number of views written.
@@ -25,7 +35,7 @@ pub fn write_sample(recipe: &Recipe, sample: &BuiltSample, stage: &mut SampleSta
     let renderer = SampleRenderer::new(dataset, sample);
     let record = SampleRecord::new(sample);
     for view in 0..dataset.views {
-        let rendered = renderer.view(view);
+        let rendered = renderer.view(view)?;
         let mut files = BTreeMap::new();
         for writer in WRITERS.iter().filter(|w| dataset.outputs.wants(w.output)) {
             for file in (writer.write)(&rendered)? {

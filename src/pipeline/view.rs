@@ -8,14 +8,20 @@ use crate::output::ViewLayers;
 use crate::render::{GBuffer, NO_HIT, SampleSurfaces, TraceMesh, shade};
 use crate::scene::DatasetSpec;
 use crate::seeds::{Scope, Stream};
+use anyhow::{Result, anyhow};
 use std::sync::OnceLock;
 
 /// The camera of view `view` of a built sample.
-pub fn view_camera(dataset: &DatasetSpec, sample: &BuiltSample, view: u32) -> (Camera, ViewDraw) {
+pub fn view_camera(
+    dataset: &DatasetSpec,
+    sample: &BuiltSample,
+    view: u32,
+) -> Result<(Camera, ViewDraw)> {
     let mut stream = Stream::new(dataset.seed, Scope::View(sample.index, view), "camera");
     dataset
         .camera
         .draw(&mut stream, sample.centre, sample.radius)
+        .map_err(|e| anyhow!("sample {}, view {view}: {e}", sample.index))
 }
 
 /// Everything a sample's views share: the BVH, the surface look of every structure and the
@@ -59,9 +65,9 @@ impl<'a> SampleRenderer<'a> {
     }
 
     /// Traces view `view` and draws its backdrop.
-    pub fn view(&self, view: u32) -> RenderedView<'_> {
+    pub fn view(&self, view: u32) -> Result<RenderedView<'_>> {
         let dataset = self.dataset;
-        let (camera, draw) = view_camera(dataset, self.sample, view);
+        let (camera, draw) = view_camera(dataset, self.sample, view)?;
         let gbuffer = self.trace_mesh.trace(&camera);
         let mut stream = Stream::new(
             dataset.seed,
@@ -70,7 +76,7 @@ impl<'a> SampleRenderer<'a> {
         );
         let frame = (dataset.camera.width, dataset.camera.height);
         let (backdrop, backdrop_drawn) = draw_backdrop(&dataset.background, &mut stream, frame);
-        RenderedView {
+        Ok(RenderedView {
             renderer: self,
             view,
             camera,
@@ -80,7 +86,7 @@ impl<'a> SampleRenderer<'a> {
             backdrop_drawn,
             rgb: OnceLock::new(),
             cracks: OnceLock::new(),
-        }
+        })
     }
 }
 

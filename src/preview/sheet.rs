@@ -75,10 +75,10 @@ pub fn render(recipe: &mut Recipe, options: &PreviewOptions) -> Result<Preview> 
         .map(|index| -> Result<Vec<Row>> {
             let sample = prepare(recipe, index)?;
             let renderer = SampleRenderer::new(&recipe.dataset, &sample);
-            Ok((0..views)
+            (0..views)
                 .into_par_iter()
-                .map(|view| row(&renderer.view(view), &columns))
-                .collect())
+                .map(|view| Ok(row(&renderer.view(view)?, &columns)))
+                .collect::<Result<Vec<Row>>>()
         })
         .collect::<Result<Vec<Vec<Row>>>>()?
         .into_iter()

@@ -316,7 +316,16 @@ pub(super) fn hit_geometry(
     depth: f64,
 ) -> (DVec3, DVec3, f64) {
     let k = camera.intrinsics;
-    let point = camera.position + camera.rotation * (view * depth);
+    // The plane gives the point to f64 precision, where the f32 depth label may not (a camera
+    // far away); the label is the fallback for a ray along the plane.
+    let dir = camera.rotation * view;
+    let on_plane = mesh.plane_hit(tri, camera.position, dir);
+    let depth = if on_plane.is_finite() && on_plane > 0.0 {
+        on_plane
+    } else {
+        depth
+    };
+    let point = camera.position + dir * depth;
     let normal = facing_normal(camera, mesh, tri, view);
     // A pixel stretches over a surface seen at a slant (up to ten times, at grazing rays).
     let slant = normal.dot(-(camera.rotation * view).normalize()).max(0.1);

@@ -15,7 +15,9 @@ use std::time::Duration;
 pub const NO_HIT: u32 = u32::MAX;
 
 /// A mesh ready for tracing. Vertices are stored in f32 relative to `anchor` (the centre of
-/// the mesh bounds), so geometry far from the world origin keeps its precision.
+/// the mesh bounds), so geometry far from the world origin keeps its precision; rays start in
+/// f32 only where they enter the mesh's bounding sphere, so a camera far away (a narrow field
+/// of view) loses nothing either. Depths come from each triangle's plane in f64.
 pub struct TraceMesh {
     bvh: Bvh2,
     /// Triangles in BVH leaf order.
@@ -24,8 +26,12 @@ pub struct TraceMesh {
     original: Vec<u32>,
     /// Outward unit normals, indexed by original triangle.
     normals: Vec<DVec3>,
+    /// n · a for each original triangle (first vertex a, relative to `anchor`): its plane.
+    offsets: Vec<f64>,
     anchor: DVec3,
     local_bounds: (DVec3, DVec3),
+    /// Radius about `anchor` of a sphere holding every vertex.
+    reach: f64,
 }
 
 /// obvhs' slab test replaces direction components below f32::EPSILON by ±1/EPSILON, i.e. it
@@ -69,20 +75,31 @@ impl TraceMesh {
             let t = &tris[i as usize];
             [t.v0, t.v1, t.v2]
         });
-        let normals = (0..mesh.triangles.len())
+        let (normals, offsets) = (0..mesh.triangles.len())
             .map(|t| {
                 let [a, b, c] = mesh.triangle(t);
-                (b - a).cross(c - a).normalize_or_zero()
+                let n = (b - a).cross(c - a).normalize_or_zero();
+                (n, n.dot(a - anchor))
             })
-            .collect();
+            .unzip();
         TraceMesh {
             triangles: triangles.collect(),
             original: bvh.primitive_indices.clone(),
             bvh,
             normals,
+            offsets,
             anchor,
             local_bounds: (lo - anchor, hi - anchor),
+            reach: 0.5 * (hi - lo).length(),
         }
+    }
+
+    /// Ray parameter where the ray from world point `origin` along `dir` meets the plane of
+    /// `original_triangle`, in f64: infinite when the ray runs along the plane.
+    pub fn plane_hit(&self, original_triangle: u32, origin: DVec3, dir: DVec3) -> f64 {
+        let t = original_triangle as usize;
+        let n = self.normals[t];
+        (self.offsets[t] - n.dot(origin - self.anchor)) / n.dot(dir)
     }
 
     pub fn normal(&self, original_triangle: u32) -> DVec3 {
@@ -97,7 +114,6 @@ impl TraceMesh {
         let mut triangle = vec![NO_HIT; w * h];
         let (rows, cols) = self.screen_bounds(camera);
         let origin = camera.position - self.anchor;
-        let origin32 = origin.as_vec3a();
         depth
             .par_chunks_mut(w)
             .zip(triangle.par_chunks_mut(w))
@@ -106,7 +122,7 @@ impl TraceMesh {
             .for_each(|(row, (depth_row, tri_row))| {
                 for col in cols.clone() {
                     let dir = camera.rotation * k.ray_through_pixel(row as u32, col as u32);
-                    if let Some((t, tri)) = self.closest_hit(origin, origin32, dir) {
+                    if let Some((t, tri)) = self.closest_hit(origin, dir) {
                         depth_row[col] = t;
                         tri_row[col] = tri;
                     }
@@ -122,8 +138,7 @@ impl TraceMesh {
 
     /// Planar depth and triangle first hit along `view` (camera axes, unit z), if any.
     pub fn first_hit(&self, camera: &Camera, view: DVec3) -> Option<(f32, u32)> {
-        let origin = camera.position - self.anchor;
-        self.closest_hit(origin, origin.as_vec3a(), camera.rotation * view)
+        self.closest_hit(camera.position - self.anchor, camera.rotation * view)
     }
 
     /// Whether anything blocks the way from surface point `p` (world) with outward `normal`
@@ -143,11 +158,16 @@ impl TraceMesh {
         })
     }
 
-    /// Planar depth and original triangle of the first surface along `dir` (unit camera z).
-    fn closest_hit(&self, origin: DVec3, origin32: Vec3A, dir: DVec3) -> Option<(f32, u32)> {
+    /// Planar depth and original triangle of the first surface along `dir` (unit camera z)
+    /// from `origin` (relative to the anchor). The f32 ray starts where the ray enters the
+    /// mesh's bounding sphere, so its origin is as precise as the vertices however far the
+    /// camera is; the depth is then taken from the hit triangle's plane in f64.
+    fn closest_hit(&self, origin: DVec3, dir: DVec3) -> Option<(f32, u32)> {
+        let skip = self.entry(origin, dir)?;
+        let start = (origin + skip * dir).as_vec3a();
         let dir32 = traversal_direction(dir.as_vec3a());
-        let sheared = ShearedRay::new(origin32, dir32);
-        let ray = Ray::new(origin32, dir32, 0.0, f32::INFINITY);
+        let sheared = ShearedRay::new(start, dir32);
+        let ray = Ray::new(start, dir32, 0.0, f32::INFINITY);
         let mut hit = RayHit::none();
         let found = self.bvh.ray_traverse(ray, &mut hit, |r, id| {
             let [a, b, c] = self.triangles[id];
@@ -157,18 +177,32 @@ impl TraceMesh {
             return None;
         }
         let tri = self.original[hit.primitive_id as usize];
-        // Refine the ray parameter against the triangle's plane in f64: the f32 sheared
-        // estimate decides coverage, the plane gives the depth label its precision.
-        let [a, ..] = self.triangles[hit.primitive_id as usize];
-        let n = self.normals[tri as usize];
-        let denom = n.dot(dir);
-        let refined = n.dot(a.as_dvec3() - origin) / denom;
+        let refined = self.plane_hit(tri, origin + self.anchor, dir);
         let t = if refined.is_finite() && refined > 0.0 {
-            refined as f32
+            refined
         } else {
-            hit.t
-        };
+            skip + f64::from(hit.t)
+        } as f32;
         (t > 0.0 && t.is_finite()).then_some((t, tri))
+    }
+
+    /// How far along `dir` (in its own units) the ray from `origin` (relative to the anchor)
+    /// can skip before it could meet the mesh: up to just short of the bounding sphere, or
+    /// nothing when it starts inside. None when it misses the sphere.
+    fn entry(&self, origin: DVec3, dir: DVec3) -> Option<f64> {
+        let length = dir.length();
+        let unit = dir / length;
+        let along = -origin.dot(unit);
+        // The closest approach by its offset vector: no difference of squared distances, so a
+        // camera far away keeps the precision of the offset.
+        let miss = (origin + along * unit).length_squared();
+        let reach = self.reach * (1.0 + 1e-6) + 1e-9;
+        if miss > reach * reach {
+            return None;
+        }
+        let half_chord = (reach * reach - miss).sqrt();
+        let near = along - half_chord - 1e-3 * reach;
+        Some(near.max(0.0) / length)
     }
 
     /// Pixel rows and columns that can see the mesh: the projection of the bounding box,
