@@ -70,7 +70,8 @@ fn mesh_shape<'a>(
         (Some(shell), _) => shell_mesh(&s.primitive, shell, &s.shell, local),
         (_, Some(mesh)) => mesh,
         _ => s.primitive.mesh(local),
-    };
+    }
+    .map_err(|e| format!("assembly \"{}\", part \"{}\": {e}", assembly.name, s.part))?;
     let rest: Vec<DVec3> = mesh
         .positions
         .iter()
@@ -106,7 +107,7 @@ fn shell_mesh(
     shell: &Shell,
     patterns: &[LabelledPattern],
     tolerance: f64,
-) -> Mesh {
+) -> Result<Mesh, String> {
     let (kz, ks) = patterns
         .iter()
         .map(|p| p.pattern.curvatures(shell))

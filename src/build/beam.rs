@@ -83,9 +83,9 @@ pub fn mesh_beam(beam: &BeamSpec, pixel_footprint: f64) -> Result<BuiltBeam, Str
             DVec3::from_array(beam.centre),
         )
     };
-    let mesh = place(&frames);
+    let mesh = place(&frames)?;
     Ok(BuiltBeam {
-        rest: place(&unloaded).positions,
+        rest: place(&unloaded)?.positions,
         mesh,
         deformation,
         segments,
@@ -135,7 +135,7 @@ fn sweep_beam(
     outline: &SectionOutline,
     rotation: DMat3,
     centre: DVec3,
-) -> Mesh {
+) -> Result<Mesh, String> {
     let frames: Vec<Frame3> = frames
         .iter()
         .map(|f| Frame3 {

@@ -15,6 +15,10 @@ pub use sweep::{Frame3, sweep};
 
 use glam::DVec3;
 
+/// The most triangles a mesh may have: one swept shape, one imported file or a whole scene.
+/// It bounds the memory a sample takes (about 100 bytes a triangle with its BVH).
+pub const MAX_TRIANGLES: usize = 10_000_000;
+
 /// Axis-aligned bounds (min, max) of some points; None for none.
 pub fn bounds(points: &[DVec3]) -> Option<(DVec3, DVec3)> {
     let first = *points.first()?;

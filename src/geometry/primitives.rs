@@ -171,8 +171,8 @@ impl Primitive {
     }
 
     /// The mesh, with chords within `tolerance` metres of curved surfaces. The primitive must
-    /// be valid (see `validate`).
-    pub fn mesh(&self, tolerance: f64) -> Mesh {
+    /// be valid (see `validate`); fails when the mesh would exceed the triangle budget.
+    pub fn mesh(&self, tolerance: f64) -> Result<Mesh, String> {
         match self {
             Primitive::Box { size: [w, d, h] } => sweep(
                 &rectangle(*w, *d, 1),
@@ -219,7 +219,7 @@ impl Primitive {
                     .collect::<Vec<_>>();
                 sweep(&polygon(profile).expect("validated"), &frames)
             }
-            Primitive::Imported { mesh, .. } => (**mesh).clone(),
+            Primitive::Imported { mesh, .. } => Ok((**mesh).clone()),
         }
     }
 }
@@ -227,7 +227,12 @@ impl Primitive {
 impl Primitive {
     /// A tube with at least `rings` intervals along its height and `segments` around it (for
     /// shell deformations that need them); None for other primitives.
-    pub fn tube_mesh(&self, tolerance: f64, rings: usize, segments: usize) -> Option<Mesh> {
+    pub fn tube_mesh(
+        &self,
+        tolerance: f64,
+        rings: usize,
+        segments: usize,
+    ) -> Option<Result<Mesh, String>> {
         let Primitive::Tube { radius, .. } = *self else {
             return None;
         };
@@ -236,7 +241,7 @@ impl Primitive {
 
     /// Round primitives with exactly `segments` around and (tubes) `rings` along the height,
     /// for parity with meshes made elsewhere; None for the others.
-    pub fn fixed_mesh(&self, segments: usize, rings: usize) -> Option<Mesh> {
+    pub fn fixed_mesh(&self, segments: usize, rings: usize) -> Option<Result<Mesh, String>> {
         let n = segments.max(3);
         match *self {
             Primitive::Tube {
@@ -319,7 +324,8 @@ mod tests {
         let b = Primitive::Box {
             size: [2.0, 3.0, 0.5],
         }
-        .mesh(tol);
+        .mesh(tol)
+        .unwrap();
         assert!(b.is_closed_and_oriented());
         assert!(
             (b.signed_volume() - 3.0).abs() < 1e-12
@@ -333,7 +339,8 @@ mod tests {
             top_radius: r1,
             height: h,
         }
-        .mesh(tol);
+        .mesh(tol)
+        .unwrap();
         assert!(f.is_closed_and_oriented());
         let n = circle_segments(r0, tol);
         let (b0, b1) = (ngon(n, r0), ngon(n, r1));
@@ -349,7 +356,8 @@ mod tests {
             top_radius: 0.0,
             height: 3.0,
         }
-        .mesh(tol);
+        .mesh(tol)
+        .unwrap();
         assert!(cone.is_closed_and_oriented());
         assert!((cone.signed_volume() - ngon(circle_segments(1.0, tol), 1.0)).abs() < 1e-9);
 
@@ -360,7 +368,8 @@ mod tests {
             height: h,
             wall: t,
         }
-        .mesh(tol);
+        .mesh(tol)
+        .unwrap();
         assert!(tube.is_closed_and_oriented());
         let n = circle_segments(r, tol);
         let side = |rr: f64| n as f64 * 2.0 * rr * (PI / n as f64).sin();
@@ -376,7 +385,8 @@ mod tests {
             radius: 2.0,
             height: 0.8,
         }
-        .mesh(1e-4);
+        .mesh(1e-4)
+        .unwrap();
         assert!(cap.is_closed_and_oriented());
         let exact = PI * 0.64 * (6.0 - 0.8) / 3.0;
         assert!(
@@ -398,7 +408,8 @@ mod tests {
             profile: l_shape.clone(),
             length: 4.0,
         }
-        .mesh(tol);
+        .mesh(tol)
+        .unwrap();
         assert!(e.is_closed_and_oriented());
         assert!((e.signed_volume() - 4.0 * 1.5).abs() < 1e-12);
         // Clockwise input is accepted and turned around.
@@ -409,6 +420,7 @@ mod tests {
                 length: 4.0
             }
             .mesh(tol)
+            .unwrap()
             .signed_volume()
                 - 6.0)
                 .abs()
@@ -422,7 +434,8 @@ mod tests {
             radius: 2.0,
             angle: PI / 2.0,
         }
-        .mesh(1e-5);
+        .mesh(1e-5)
+        .unwrap();
         assert!(bend.is_closed_and_oriented());
         assert!((bend.signed_volume() / (0.04 * 2.0 * PI / 2.0) - 1.0).abs() < 1e-4);
     }
@@ -473,7 +486,7 @@ mod tests {
             },
         ];
         for (i, p) in all.iter().enumerate() {
-            let mesh = p.mesh(1e-3);
+            let mesh = p.mesh(1e-3).unwrap();
             let file = dir.path().join(format!("{i}.ply"));
             std::fs::write(&file, export_ply(&mesh)).unwrap();
             let back = import_mesh(&file, ImportOptions::default()).unwrap();

@@ -3,8 +3,8 @@
 //! first and last frames are closed by the outline's cap triangulation, so the result is closed
 //! and consistently oriented whenever the frames advance along u × v.
 
-use super::Mesh;
 use super::outline::SectionOutline;
+use super::{MAX_TRIANGLES, Mesh};
 use glam::{DVec2, DVec3};
 
 /// Where the outline's (u, v) coordinates land: `origin + p.x·u + p.y·v`. The axes carry any
@@ -22,8 +22,19 @@ impl Frame3 {
     }
 }
 
-pub fn sweep(outline: &SectionOutline, frames: &[Frame3]) -> Mesh {
+/// Sweeps `outline` through `frames`. Fails, before allocating anything, when the mesh would
+/// exceed the triangle budget.
+pub fn sweep(outline: &SectionOutline, frames: &[Frame3]) -> Result<Mesh, String> {
     let ring: Vec<DVec2> = outline.loops.iter().flatten().copied().collect();
+    let sides = 2 * frames.len().saturating_sub(1) as u128 * ring.len() as u128;
+    let count = sides + 2 * outline.cap.len() as u128;
+    if count > MAX_TRIANGLES as u128 {
+        return Err(format!(
+            "{} sections of {} points make {count} triangles, over the budget of {MAX_TRIANGLES} a mesh; coarsen the tessellation (segments, detail, pixel_tolerance)",
+            frames.len(),
+            ring.len()
+        ));
+    }
     let per_frame = ring.len() as u32;
     let mut mesh = Mesh::default();
     for frame in frames {
@@ -67,5 +78,5 @@ pub fn sweep(outline: &SectionOutline, frames: &[Frame3]) -> Mesh {
             cap_vertex(t[1], false),
         ]);
     }
-    mesh
+    Ok(mesh)
 }
