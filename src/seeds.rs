@@ -11,7 +11,9 @@ use rand_core::{Rng, SeedableRng};
 /// Where a stream belongs: a whole sample, or one view of it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Scope {
+    /// A whole sample: its index.
     Sample(u64),
+    /// One view: sample index and view index.
     View(u64, u32),
 }
 
@@ -20,6 +22,8 @@ pub enum Scope {
 pub struct Stream(ChaCha8Rng);
 
 impl Stream {
+    /// The stream called `name` in `scope` of the run with seed `run_seed`: ChaCha8 seeded from a
+    /// blake3 hash of all three.
     pub fn new(run_seed: u64, scope: Scope, name: &str) -> Self {
         let (sample, view) = match scope {
             Scope::Sample(sample) => (sample, u64::MAX),
@@ -34,6 +38,7 @@ impl Stream {
         Stream(ChaCha8Rng::from_seed(*hasher.finalize().as_bytes()))
     }
 
+    /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
         self.0.next_u64()
     }

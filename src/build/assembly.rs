@@ -95,9 +95,11 @@ fn mesh_shape<'a>(
 /// One shape of an assembly, meshed, deformed and placed.
 #[derive(Debug)]
 pub struct BuiltShape<'a> {
+    /// The shape, deformed and placed, world coordinates in metres.
     pub mesh: Mesh,
     /// Where each vertex lies before the shape was deformed (textures are fixed there).
     pub rest: Vec<DVec3>,
+    /// The part the shape belongs to.
     pub part: &'a str,
 }
 

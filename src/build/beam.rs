@@ -11,11 +11,13 @@ use glam::{DMat3, DVec3};
 
 /// A beam's mesh and the mechanics behind it.
 pub struct BuiltBeam {
+    /// The deformed beam, world coordinates in metres.
     pub mesh: Mesh,
     /// Where each vertex of `mesh` lies on the undeformed beam (textures are fixed there).
     pub rest: Vec<DVec3>,
+    /// The solved deflection and its labels.
     pub deformation: Deformation,
-    /// Intervals along the length.
+    /// Equal intervals along the length (load positions and the peak add stations).
     pub segments: usize,
 }
 

@@ -12,9 +12,11 @@ use serde::Serialize;
 pub struct LightDraw {
     /// Whether the studio key and fill lights (fixed to the camera) are on.
     pub studio: bool,
-    /// Uniform light, linear.
+    /// Uniform light from every direction, linear (added to every face's irradiance).
     pub ambient: f64,
+    /// The sun drawn, if the dataset has one.
     pub sun: Option<SunDraw>,
+    /// The sky drawn, if the dataset has one.
     pub sky: Option<SkyDraw>,
     /// Whether the sun casts shadows.
     pub shadows: bool,
@@ -23,10 +25,11 @@ pub struct LightDraw {
 /// The sun drawn for a sample.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SunDraw {
-    /// Radians above the horizon.
+    /// Angle of the sun above the horizon, radians.
     pub elevation: f64,
-    /// Radians from +x towards +y.
+    /// Compass angle of the sun from +x towards +y, radians.
     pub azimuth: f64,
+    /// Intensity drawn: a factor on the sun's linear colour.
     pub intensity: f64,
     /// Unit vector towards the sun, world axes.
     pub direction: [f64; 3],
@@ -35,6 +38,7 @@ pub struct SunDraw {
 /// The sky drawn for a sample.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SkyDraw {
+    /// Intensity drawn: a factor on the sky's and the ground's linear colours.
     pub intensity: f64,
 }
 
@@ -43,15 +47,26 @@ pub struct SkyDraw {
 #[serde(untagged)]
 pub enum BackdropDraw {
     /// A plain colour, sRGB 0–1.
-    Colour { colour: [f64; 3] },
+    Colour {
+        /// sRGB colour, components 0–1.
+        colour: [f64; 3],
+    },
     /// A sky gradient fixed in the world.
-    Sky { sky: SkyGradient },
+    Sky {
+        /// The gradient's colours.
+        sky: SkyGradient,
+    },
     /// A window of a background image: its name and blake3 hash, and the window's top-left
     /// corner and size as fractions of the image.
     Image {
+        /// Path of the image relative to the recipe's folder.
         image: String,
+        /// blake3 hash (hex) of the file's bytes.
         hash: String,
+        /// Top-left corner of the window, (x, y) as fractions of the image's width and height, y
+        /// down.
         window_origin: [f64; 2],
+        /// Width and height of the window, as fractions of the image's width and height.
         window_size: [f64; 2],
     },
 }

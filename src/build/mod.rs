@@ -27,10 +27,13 @@ use glam::{DMat3, DVec3};
 
 /// The deformed scene of one sample, ready to be viewed.
 pub struct BuiltSample {
+    /// Sample index, from 0.
     pub index: u64,
+    /// The scene the recipe drew for the sample.
     pub scene: SceneSpec,
     /// What building each structure found out (beams only; None for assemblies).
     pub beams: Vec<Option<BeamOutcome>>,
+    /// The deformed mesh of every structure, merged, world coordinates in metres.
     pub mesh: Mesh,
     /// Undeformed position of every vertex (where textures are evaluated).
     pub rest: Vec<DVec3>,
@@ -52,12 +55,15 @@ pub struct BuiltSample {
     pub parts: Vec<String>,
     /// Centre and radius of the deformed scene's bounding sphere; cameras aim at the centre.
     pub centre: DVec3,
+    /// Radius of that sphere, metres.
     pub radius: f64,
 }
 
 /// What building a beam found out: its mechanics labels and its intervals along the length.
 pub struct BeamOutcome {
+    /// What the mechanics found.
     pub labels: Labels,
+    /// Equal intervals along the length (load positions and the peak add stations).
     pub segments: usize,
 }
 

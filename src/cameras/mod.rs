@@ -14,11 +14,17 @@ use glam::{DMat3, DMat4, DVec3, DVec4};
 /// Pinhole intrinsics in pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Intrinsics {
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// Focal length along x, pixels.
     pub fx: f64,
+    /// Focal length along y, pixels.
     pub fy: f64,
+    /// Principal point x, pixels from the left edge of the image.
     pub cx: f64,
+    /// Principal point y, pixels from the top edge of the image.
     pub cy: f64,
 }
 
@@ -36,6 +42,7 @@ impl Intrinsics {
         }
     }
 
+    /// K = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]], row-major.
     pub fn matrix(&self) -> [[f64; 3]; 3] {
         [
             [self.fx, 0.0, self.cx],
@@ -72,8 +79,11 @@ impl Intrinsics {
 /// coordinates; `position` is the centre of projection.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
+    /// Image size and K.
     pub intrinsics: Intrinsics,
+    /// Camera axes (OpenCV: x right, y down, z forward) as columns, in world coordinates.
     pub rotation: DMat3,
+    /// Centre of projection, world coordinates, metres.
     pub position: DVec3,
 }
 
@@ -132,10 +142,12 @@ impl Camera {
             && [k.fx, k.fy, k.cx, k.cy].iter().all(|x| x.is_finite())
     }
 
+    /// World point `p` in camera axes (OpenCV), metres.
     pub fn world_to_camera(&self, p: DVec3) -> DVec3 {
         self.rotation.transpose() * (p - self.position)
     }
 
+    /// Unit viewing direction (the optical axis), world axes.
     pub fn forward(&self) -> DVec3 {
         self.rotation.z_axis
     }

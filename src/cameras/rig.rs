@@ -9,11 +9,19 @@ use serde::Serialize;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Distance {
-    /// Fixed distance in metres (drawn uniformly from the range).
-    Range { min: f64, max: f64 },
+    /// A distance in metres drawn uniformly from [min, max] (fixed when min = max).
+    Range {
+        /// Nearest distance, metres (positive).
+        min: f64,
+        /// Farthest distance, metres.
+        max: f64,
+    },
     /// The distance at which the structure's bounding sphere just fits the narrower field of
     /// view, times `margin` (≥ 1 keeps the whole structure in frame from every direction).
-    Frame { margin: f64 },
+    Frame {
+        /// Factor on the distance at which the bounding sphere just fits (default 1.05).
+        margin: f64,
+    },
 }
 
 /// Where views are drawn from: yaw (azimuth from +x towards +y), pitch (elevation above the
@@ -21,12 +29,22 @@ pub enum Distance {
 /// axis, each uniform in its range; pitch is drawn uniform in area on the sphere.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct CameraRig {
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// Vertical field of view, radians, in (0, π); pixels are square and the principal point is the
+    /// image centre.
     pub fov_y: f64,
+    /// Range [min, max] of the yaw: azimuth of the camera about the target from +x towards +y,
+    /// radians.
     pub yaw: [f64; 2],
+    /// Range [min, max] of the pitch: elevation of the camera above the target's horizontal plane,
+    /// radians within [−π/2, π/2]; sin(pitch) is drawn uniformly.
     pub pitch: [f64; 2],
+    /// Range [min, max] of the roll about the view axis, radians (0 keeps the horizon level).
     pub roll: [f64; 2],
+    /// How far the camera is from the target.
     pub distance: Distance,
 }
 
@@ -47,9 +65,15 @@ impl Default for CameraRig {
 /// The values actually drawn for one view, recorded in its JSON.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ViewDraw {
+    /// Azimuth of the camera about the target, from +x towards +y, radians.
     pub yaw: f64,
+    /// Elevation of the camera above the target's horizontal plane, radians (+π/2: straight above,
+    /// looking down).
     pub pitch: f64,
+    /// Roll about the view axis, radians; positive turns the camera's x axis towards its y axis.
     pub roll: f64,
+    /// Distance from the target (the centre of the sample's bounding sphere) to the camera centre,
+    /// metres.
     pub distance: f64,
 }
 
@@ -89,6 +113,7 @@ impl CameraRig {
         }
     }
 
+    /// The intrinsics every view of the rig shares.
     pub fn intrinsics(&self) -> Intrinsics {
         Intrinsics::from_fov_y(self.width, self.height, self.fov_y)
     }

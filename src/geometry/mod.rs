@@ -32,7 +32,9 @@ pub fn bounds(points: &[DVec3]) -> Option<(DVec3, DVec3)> {
 /// An indexed triangle mesh. Triangles wind counter-clockwise seen from outside.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// Vertex positions, metres.
     pub positions: Vec<DVec3>,
+    /// Vertex indices of each triangle.
     pub triangles: Vec<[u32; 3]>,
 }
 
@@ -63,6 +65,7 @@ impl Mesh {
         Some((centre, radius))
     }
 
+    /// The corners of triangle `t`.
     pub fn triangle(&self, t: usize) -> [DVec3; 3] {
         self.triangles[t].map(|i| self.positions[i as usize])
     }

@@ -15,32 +15,62 @@ use std::sync::Arc;
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Primitive {
     /// Centred on the origin.
-    Box { size: [f64; 3] },
+    Box {
+        /// Edge lengths along x, y and z (width, depth, height), metres.
+        size: [f64; 3],
+    },
     /// Base circle at z = 0, top circle at z = height; a cylinder when the radii are equal, a
     /// cone when the top radius is 0.
     Frustum {
+        /// Radius of the base circle at z = 0, metres.
         bottom_radius: f64,
+        /// Radius of the top circle, metres (0 for a cone).
         top_radius: f64,
+        /// Height along z, metres.
         height: f64,
     },
     /// Hollow cylinder (a ring when short): outer radius and wall, base at z = 0.
-    Tube { radius: f64, height: f64, wall: f64 },
+    Tube {
+        /// Outer radius, metres.
+        radius: f64,
+        /// Height along z, metres.
+        height: f64,
+        /// Wall thickness, metres (less than the radius).
+        wall: f64,
+    },
     /// The cap of a sphere of `radius`, `height` tall, its base circle at z = 0.
-    SphericalCap { radius: f64, height: f64 },
+    SphericalCap {
+        /// Radius of the sphere, metres.
+        radius: f64,
+        /// Height of the cap above its base circle, metres (at most the sphere's diameter).
+        height: f64,
+    },
     /// A simple polygon in the (x, y) plane extruded along +z.
-    Extrusion { profile: Vec<[f64; 2]>, length: f64 },
+    Extrusion {
+        /// Vertices (x, y) of the polygon, metres, in order around it.
+        profile: Vec<[f64; 2]>,
+        /// Length of the extrusion along +z, metres.
+        length: f64,
+    },
     /// A simple polygon swept along a circular arc that starts at the origin heading +z and
     /// bends towards +x with the given radius, through `angle` radians.
     Bend {
+        /// Vertices (x, y) of the polygon, metres, in order around it; every x below `radius`.
         profile: Vec<[f64; 2]>,
+        /// Radius of the arc the profile's origin follows, metres; its centre is at (radius, 0, 0).
         radius: f64,
+        /// Angle swept, radians.
         angle: f64,
     },
     /// A mesh read from a file (path relative to the recipe), optionally normalised as in the
     /// 3DGEN paper (bounding box centred, diagonal 1).
     Imported {
+        /// Path of the mesh file (OBJ, PLY, STL or glTF) relative to the recipe's folder.
         file: String,
+        /// Whether the mesh was normalised: bounding box centred on the origin, its diagonal scaled
+        /// to 1.
         normalize: bool,
+        /// The mesh as read (not recorded).
         #[serde(skip)]
         mesh: Arc<Mesh>,
     },

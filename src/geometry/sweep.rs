@@ -11,18 +11,23 @@ use glam::{DVec2, DVec3};
 /// scale (a frustum's frames shrink); a zero scale collapses a ring to a point (a cone's apex).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame3 {
+    /// Where the outline's origin lands.
     pub origin: DVec3,
+    /// Where the outline's unit x lands, relative to `origin`.
     pub u: DVec3,
+    /// Where the outline's unit y lands, relative to `origin`.
     pub v: DVec3,
 }
 
 impl Frame3 {
+    /// The 3D position of outline point `p`.
     pub fn place(&self, p: DVec2) -> DVec3 {
         self.origin + p.x * self.u + p.y * self.v
     }
 }
 
-/// Sweeps `outline` through `frames`. Fails, before allocating anything, when the mesh would
+/// The closed mesh of `outline` swept through `frames` (at least two): quads between consecutive
+/// frames, caps on the first and last. Fails, before allocating anything, when the mesh would
 /// exceed the triangle budget.
 pub fn sweep(outline: &SectionOutline, frames: &[Frame3]) -> Result<Mesh, String> {
     let ring: Vec<DVec2> = outline.loops.iter().flatten().copied().collect();

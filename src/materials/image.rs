@@ -12,6 +12,7 @@ pub struct ImageFile {
     pub name: String,
     /// blake3 of the file's bytes.
     pub hash: String,
+    /// The decoded image.
     pub image: Arc<TextureImage>,
 }
 
@@ -56,10 +57,12 @@ impl TextureImage {
         Ok(TextureImage { levels })
     }
 
+    /// Width of the full-size image, pixels.
     pub fn width(&self) -> usize {
         self.levels[0].width
     }
 
+    /// Height of the full-size image, pixels.
     pub fn height(&self) -> usize {
         self.levels[0].height
     }

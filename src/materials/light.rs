@@ -22,16 +22,21 @@ pub struct Lighting {
     pub shadows: bool,
 }
 
+/// A directional light fixed in the world.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sun {
+    /// Unit vector towards the sun, world axes.
     pub direction: DVec3,
     /// Linear radiance per channel.
     pub colour: [f64; 3],
 }
 
+/// Hemispherical light: a face gets `sky` weighted by (1 + n_z)/2 and `ground` by (1 − n_z)/2.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sky {
+    /// Linear radiance of the sky, per channel.
     pub sky: [f64; 3],
+    /// Linear radiance of the ground, per channel.
     pub ground: [f64; 3],
 }
 
@@ -58,15 +63,21 @@ pub enum Backdrop {
     Colour([u8; 3]),
     /// Linear colours: a gradient from the horizon up to the zenith, flat ground below.
     Sky {
+        /// Linear colour straight up.
         zenith: [f64; 3],
+        /// Linear colour at the horizon (eye level).
         horizon: [f64; 3],
+        /// Linear colour of everything below the horizon.
         ground: [f64; 3],
     },
     /// A window of an image filling the frame: top-left `origin` and `size` (width, height), in
     /// image units (1 = the whole image), with square pixels.
     Image {
+        /// The image, decoded.
         image: Arc<TextureImage>,
+        /// Top-left corner of the window, (x, y) in image units, y down.
         origin: (f64, f64),
+        /// Width and height of the window, in image units.
         size: (f64, f64),
     },
 }

@@ -32,6 +32,7 @@ pub struct Material {
     /// The text the material was compiled from, if any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub prompt: Option<String>,
+    /// The substance, which picks the procedural pattern.
     pub base: Base,
     /// Base colour, sRGB components in [0, 1]: the paint, the plastic, the wood or the metal.
     pub colour: [f64; 3],
@@ -43,6 +44,7 @@ pub struct Material {
     pub conditions: Vec<Condition>,
     /// Multiplies the size of every texture feature (1 = the material's natural size).
     pub scale: f64,
+    /// Where the albedo comes from: the procedural generators or an image.
     pub texture: Texture,
 }
 
@@ -52,42 +54,68 @@ pub struct Material {
 pub enum Base {
     /// A flat colour, no texture (the default, and `.colour([r, g, b])`).
     Plain,
+    /// Bare structural steel, mottled by mill scale.
     Steel,
+    /// Hot-dip galvanised steel: zinc spangle crystals about a centimetre across.
     GalvanisedSteel,
+    /// Weathering (Corten) steel under a dark rust patina.
     WeatheringSteel,
+    /// Aluminium, brushed along the piece's grain.
     Aluminium,
+    /// Concrete, mottled, with small pores.
     Concrete,
-    Timber(Species),
+    /// Timber: growth rings around a pith, figure, and fibres along the piece's grain.
+    Timber(
+        /// The wood species.
+        Species,
+    ),
+    /// Plastic board, almost uniform.
     Plastic,
+    /// Running-bond brickwork: 215 × 65 mm bricks, 10 mm mortar joints.
     Brick,
+    /// Rubble stone masonry: irregular blocks about 0.3 m across in mortar.
     Stone,
     /// Paint over steel; the colour is the paint's.
     Painted,
 }
 
-/// Wood species, for colour and ring spacing.
+/// Wood species, for colour and ring spacing. Spacings are at `scale` 1; every length of a
+/// texture is multiplied by the material's `scale`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Species {
+    /// Pine: growth rings about 4 mm apart, strong contrast.
     Pine,
+    /// Spruce (and fir): rings about 3 mm apart, moderate contrast.
     Spruce,
+    /// Oak: rings about 2.5 mm apart, moderate contrast.
     Oak,
+    /// Ash: rings about 2.5 mm apart, moderate contrast.
     Ash,
+    /// Birch: fine rings about 2 mm apart, faint contrast.
     Birch,
+    /// Cedar: rings about 2.5 mm apart, moderate contrast.
     Cedar,
+    /// Teak: rings about 3 mm apart, moderate contrast.
     Teak,
+    /// Walnut: rings about 3 mm apart, moderate contrast.
     Walnut,
+    /// Mahogany: rings about 4 mm apart, low contrast.
     Mahogany,
+    /// Rosewood: fine rings about 1.5 mm apart, strong contrast.
     Rosewood,
 }
 
 /// A condition of the surface with its intensity in (0, 1].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Condition {
+    /// Which condition.
     pub kind: ConditionKind,
+    /// How strong, in (0, 1]: "slightly" 0.3, "moderately" 0.6 (the default), "heavily" 1.0.
     pub intensity: f64,
 }
 
+/// A condition laid over a material's base.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ConditionKind {
@@ -115,16 +143,20 @@ pub enum ConditionKind {
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "source", rename_all = "snake_case")]
 pub enum Texture {
+    /// The procedural generators of the base and its conditions.
     Procedural,
     /// An image file tiled over the undeformed surface, `size` metres per tile.
     Image {
+        /// Path of the image relative to the recipe's folder.
         file: String,
         /// blake3 of the file's bytes.
         hash: String,
+        /// Edge length of one tile on the undeformed surface, metres (independent of `scale`).
         size: f64,
         /// How the file was chosen: "explicit" (named in the recipe) or "prompt" (found in the
         /// recipe's textures folder under the prompt's name).
         chosen: String,
+        /// The decoded image (not recorded).
         #[serde(skip)]
         pixels: Arc<image::TextureImage>,
     },

@@ -23,12 +23,14 @@ pub struct Cells {
     pub f1: f64,
     /// Distance to the border between the nearest and the second-nearest cell.
     pub border: f64,
-    /// Hash of the nearest cell, and of the second-nearest.
+    /// Hash of the nearest cell.
     pub id: u64,
+    /// Hash of the second-nearest cell.
     pub neighbour: u64,
 }
 
 impl Noise {
+    /// The generators for `seed`.
     pub fn new(seed: u64) -> Self {
         Noise {
             perlin: Perlin::new(seed as u32 ^ (seed >> 32) as u32),

@@ -17,6 +17,8 @@ use serde::Serialize;
 pub struct MaterialDraw {
     /// Offset of the sample's cut of the procedural textures (metres).
     pub texture_offset: [f64; 3],
+    /// Distance of the timber's pith from the piece's grain axis, metres (0.15–0.6 times the
+    /// material's `scale`); drawn for every base, used by timber only.
     pub pith_distance: f64,
     /// Factor on the albedo (1 for plain colours).
     pub brightness: f64,
@@ -36,7 +38,9 @@ pub struct SurfacePoint {
 /// Direction along which wood grain, brushing and fibres run, and a point on the piece's axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Grain {
+    /// Unit direction of the grain, world axes.
     pub axis: DVec3,
+    /// A point on the piece's axis, world coordinates before deformation, metres.
     pub centre: DVec3,
 }
 
@@ -45,7 +49,9 @@ pub struct Grain {
 pub struct Surface {
     /// Linear-light albedo.
     pub albedo: [f64; 3],
+    /// Microfacet roughness in (0, 1]: 1 is fully matte.
     pub roughness: f64,
+    /// Specular reflectance at normal incidence.
     pub specular: f64,
     /// Whether the point lies on a crack (the crack mask label).
     pub crack: bool,
@@ -107,6 +113,7 @@ impl Shader {
         }
     }
 
+    /// The material this shader draws.
     pub fn material(&self) -> &Material {
         &self.material
     }

@@ -15,18 +15,27 @@ use serde::Serialize;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Load {
+    /// A point force.
     Point {
+        /// Where it acts: distance along the axis from x = 0, metres (0 to L).
         at: f64,
+        /// Force, N, positive downward.
         force: f64,
     },
+    /// A uniformly distributed load over part or all of the span.
     Distributed {
+        /// Where it starts: distance along the axis from x = 0, metres.
         from: f64,
+        /// Where it ends, metres (greater than `from`, at most L).
         to: f64,
+        /// Load per unit length, N/m, positive downward.
         intensity: f64,
     },
     /// End moments, sagging positive (M(0) = start, M(L) = end where the end can rotate).
     EndMoments {
+        /// Moment applied at x = 0, N·m, sagging positive (no effect where that end is clamped).
         start: f64,
+        /// Moment applied at x = L, N·m, sagging positive (no effect where that end is clamped).
         end: f64,
     },
 }
@@ -48,15 +57,20 @@ pub fn kinks(loads: &[Load]) -> Vec<f64> {
 /// One station of a linear solution, for unit EI (divide by EI for physical values).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Station {
+    /// Deflection for unit EI (divide by EI for metres), positive downward.
     pub v: f64,
     /// dv/dx, the slope of the axis.
     pub slope: f64,
     /// ψ, the bending rotation of the section (equals the slope without shear).
     pub rotation: f64,
+    /// Bending moment M, N·m, sagging positive (independent of EI).
     pub moment: f64,
+    /// Shear force V = dM/dx, N (independent of EI).
     pub shear: f64,
 }
 
+/// A solved linear beam (Euler–Bernoulli, or Timoshenko with shear flexibility), for unit EI:
+/// evaluate it anywhere on the span with [`LinearBeam::at`].
 #[derive(Clone, Debug)]
 pub struct LinearBeam {
     length: f64,

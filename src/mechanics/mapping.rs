@@ -8,9 +8,14 @@ use serde::Serialize;
 /// integrates the shortening ½∫v′².
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AxisPoint {
+    /// Deflection v, metres, positive downward.
     pub v: f64,
+    /// Slope dv/dx of the axis.
     pub slope: f64,
+    /// tan ψ, ψ the rotation of the section (equals the slope without shear deformation).
     pub rotation: f64,
+    /// Exact deformed axial position, metres, where the theory knows it (the elastica); None
+    /// otherwise.
     pub axial: Option<f64>,
 }
 
@@ -21,16 +26,21 @@ pub enum Mapping {
     /// Plane sections stay plane and turn with the bending rotation; the axis shortens by ½∫v′².
     #[default]
     RotateSections,
-    /// 3DGEN's mapping, kept for parity with the paper: add v(x) to the vertical coordinate.
+    /// 3DGEN's mapping, kept for parity with the paper: every point moves vertically by the
+    /// deflection v(x) (down for positive v); sections neither turn nor shorten the axis.
     AddDeflection,
 }
 
 /// Where a section lands: its axis point (x, −v) and its rotation (cos, sin).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SectionFrame {
+    /// Deformed axial position of the section's axis point, metres.
     pub x: f64,
+    /// Its deflection, metres, positive downward.
     pub v: f64,
+    /// Cosine of the section's rotation.
     pub cos: f64,
+    /// Sine of the section's rotation (positive turns the section's top towards +x).
     pub sin: f64,
 }
 

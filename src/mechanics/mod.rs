@@ -29,12 +29,15 @@ pub use shell::{Shell, ShellPattern};
 
 use serde::Serialize;
 
-/// Young's modulus, Poisson's ratio and yield strength of structural steel S355
-/// (EN 1993-1-1), the defaults for labels and shear flexibility.
+/// Young's modulus E of structural steel, Pa. With [`STEEL_NU`] and [`STEEL_FY`] (S355,
+/// EN 1993-1-1), the defaults for labels and shear flexibility.
 pub const STEEL_E: f64 = 210e9;
+/// Poisson's ratio ν of structural steel.
 pub const STEEL_NU: f64 = 0.3;
+/// Yield strength f_y of S355 steel, Pa.
 pub const STEEL_FY: f64 = 355e6;
 
+/// How a beam's ends are held. Positions along the span are measured from x = 0, the pin or clamp.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Support {

@@ -11,14 +11,23 @@ use super::linear::{LinearBeam, Load};
 use super::{ModeShape, SectionProperties, Support};
 use serde::Serialize;
 
+/// Which beam theory computes the deflected axis.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Theory {
+    /// Chosen by estimated error: Euler–Bernoulli, or Timoshenko where shear deformation changes
+    /// the deflection by more than `model_tolerance`; the elastica where geometric nonlinearity
+    /// exceeds it and the elastica applies.
     #[default]
     Auto,
+    /// Linear Euler–Bernoulli theory: sections stay normal to the axis, no shear deformation; small
+    /// deflections.
     EulerBernoulli,
+    /// Linear Timoshenko theory: adds shear deformation through κGA (G = E / (2 (1 + ν))), which
+    /// matters for short, deep beams.
     Timoshenko,
-    /// Large-deflection cantilever under one point load (inextensible Euler–Bernoulli rod).
+    /// Large-deflection (geometrically exact) inextensible Euler–Bernoulli rod: a cantilever
+    /// under one point load, or a simply supported beam under one point load at mid-span.
     Elastica,
 }
 
@@ -29,21 +38,40 @@ pub enum Target {
     /// Loads are physical (N, N/m, N·m).
     Physical,
     /// Loads give the shape only; they are scaled so the largest deflection is `deflection`.
-    Peak { deflection: f64 },
+    Peak {
+        /// The largest deflection wanted, metres, signed (positive downward).
+        deflection: f64,
+    },
     /// Loads are scaled so the deflection at `at` is `deflection`.
-    At { at: f64, deflection: f64 },
+    At {
+        /// Where the deflection is prescribed: distance along the axis from x = 0, metres.
+        at: f64,
+        /// The deflection wanted there, metres, signed (positive downward).
+        deflection: f64,
+    },
 }
 
+/// A beam as the mechanics sees it: supports, span, loads and material, in the beam's own frame
+/// (axis along x from 0 to L, deflection positive downward).
 #[derive(Clone, Debug)]
 pub struct BeamProblem {
+    /// How the ends are supported.
     pub support: Support,
+    /// Span L, metres.
     pub length: f64,
+    /// Loads on the span (N, N/m, N·m, or relative when `target` scales them).
     pub loads: Vec<Load>,
+    /// What the load magnitudes mean.
     pub target: Target,
+    /// Properties of the cross-section.
     pub section: SectionProperties,
+    /// Young's modulus E, Pa.
     pub elastic_modulus: f64,
+    /// Poisson's ratio ν.
     pub poisson: f64,
+    /// Yield strength f_y, Pa.
     pub yield_strength: f64,
+    /// The theory asked for.
     pub theory: Theory,
     /// Largest acceptable model error, as a fraction of the peak deflection.
     pub tolerance: f64,
@@ -54,34 +82,53 @@ pub struct BeamProblem {
 /// Labels written next to each sample.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Labels {
+    /// The theory that produced the shape (never "auto"; a vibration snapshot reports
+    /// "euler_bernoulli").
     pub theory: Theory,
     /// Estimated model error as a fraction of the peak deflection: the larger of the shear
-    /// error (if Euler–Bernoulli ran) and the geometric-nonlinearity error of linear theory.
+    /// error (if Euler–Bernoulli or the elastica ran) and the geometric-nonlinearity error of
+    /// linear theory (if linear theory ran).
     pub estimated_error: f64,
+    /// Estimated relative error of Euler–Bernoulli from neglecting shear deformation, as a fraction
+    /// of the peak deflection; 0 when Timoshenko ran.
     pub shear_error: f64,
+    /// Estimated relative error of linear theory from geometric nonlinearity, k (δ/L)² with
+    /// k = 1.03 for a cantilever and 4.1 otherwise; 0 when the elastica ran.
     pub nonlinearity_error: f64,
+    /// The deflection of largest magnitude, metres, signed (positive downward).
     pub max_deflection: f64,
+    /// Where it occurs: distance along the axis from x = 0, metres.
     pub max_deflection_at: f64,
     /// The physical loads that produce this shape.
     pub loads: Vec<Load>,
+    /// The bending moment of largest magnitude, N·m, signed (sagging positive).
     pub max_moment: f64,
+    /// Where it occurs: distance along the axis from x = 0, metres.
     pub max_moment_at: f64,
+    /// Largest bending stress σ = |M| c / I at the extreme fibre, Pa.
     pub max_bending_stress: f64,
+    /// The beam's yield strength f_y, Pa, against which `physically_plausible` is judged.
     pub yield_strength: f64,
     /// Whether an elastic beam of this material could carry the loads (σ ≤ f_y); otherwise the
     /// deflection is a visual exaggeration.
     pub physically_plausible: bool,
-    /// For a vibration snapshot: each mode's number, β_nL and amplitude (metres).
+    /// For a vibration snapshot: each mode's number, β_nL and amplitude (metres); empty
+    /// otherwise.
     pub modes: Vec<ModeLabel>,
     /// When the elastica ran: the relative error linear theory would have made in the peak
     /// deflection under the same load (why it was not used).
     pub linear_theory_error: Option<f64>,
 }
 
+/// One mode of a vibration snapshot.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ModeLabel {
+    /// Mode number n, from 1 (the fundamental).
     pub mode: u32,
+    /// Its eigenvalue β_nL for these supports (ω_n = (β_nL)² √(EI / (ρA L⁴))).
     pub beta_l: f64,
+    /// Its amplitude, metres: the peak of its contribution, the mode shape being normalised to a
+    /// peak of 1 and positive near x = 0.
     pub amplitude: f64,
 }
 
@@ -140,6 +187,7 @@ enum Axis {
 #[derive(Clone, Debug)]
 pub struct Deformation {
     axis: Axis,
+    /// What the solution found, for the dataset's records.
     pub labels: Labels,
 }
 
@@ -147,6 +195,9 @@ pub struct Deformation {
 const SEARCH_POINTS: usize = 512;
 
 impl Deformation {
+    /// Solves `p` with the theory it asks for (or the one `auto` picks) and derives the labels.
+    /// Fails when a target deflection cannot be reached, when static loads and a vibration snapshot
+    /// are mixed, or when the elastica is asked for a case it does not cover.
     pub fn solve(p: &BeamProblem) -> Result<Deformation, String> {
         if !p.vibration.is_empty() {
             if !p.loads.is_empty() {

@@ -4,44 +4,62 @@
 
 use serde::Serialize;
 
+/// A beam's cross-section, tagged by `shape`; dimensions in metres, width across the beam (y) and
+/// height in the bending plane (z, up).
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "shape", rename_all = "snake_case")]
 pub enum Section {
+    /// Solid rectangle.
     Rectangle {
+        /// Width across the beam, metres.
         width: f64,
+        /// Height (depth in the bending plane), metres.
         height: f64,
     },
     /// Doubly symmetric I/H: flange width, overall height, flange and web thicknesses.
     ISection {
+        /// Flange width, metres.
         width: f64,
+        /// Overall height, outside of flange to outside of flange, metres.
         height: f64,
+        /// Flange thickness t_f, metres (less than half the height).
         flange: f64,
+        /// Web thickness t_w, metres (less than the flange width).
         web: f64,
     },
     /// Rectangular hollow section with uniform wall.
     HollowBox {
+        /// Outer width across the beam, metres.
         width: f64,
+        /// Outer height, metres.
         height: f64,
+        /// Wall thickness, metres (less than half the smaller outer dimension).
         wall: f64,
     },
     /// Circular hollow section (tube).
     CircularHollow {
+        /// Outer diameter, metres.
         diameter: f64,
+        /// Wall thickness, metres (less than the outer radius).
         wall: f64,
     },
 }
 
+/// Properties of a cross-section for bending about its horizontal centroidal axis.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SectionProperties {
+    /// Cross-sectional area A, m².
     pub area: f64,
+    /// Second moment of area I about the horizontal centroidal axis, m⁴.
     pub second_moment: f64,
     /// Timoshenko shear coefficient κ (shear area = κA).
     pub shear_coefficient: f64,
-    /// Distance from the centroid to the extreme fibre.
+    /// Distance c from the centroid to the extreme fibre, metres (half the section height).
     pub extreme_fibre: f64,
 }
 
 impl Section {
+    /// Overall width across the beam (the outer diameter for a tube), metres.
     pub fn width(&self) -> f64 {
         match *self {
             Section::Rectangle { width, .. }
@@ -51,6 +69,7 @@ impl Section {
         }
     }
 
+    /// Overall height (the outer diameter for a tube), metres.
     pub fn height(&self) -> f64 {
         match *self {
             Section::Rectangle { height, .. }
@@ -118,6 +137,8 @@ impl Section {
         }
     }
 
+    /// Area, second moment, shear coefficient κ and extreme-fibre distance; Poisson's ratio
+    /// `poisson` enters κ of the rectangle and the tube.
     pub fn properties(&self, poisson: f64) -> SectionProperties {
         let nu = poisson;
         let (area, second_moment, shear_coefficient) = match *self {

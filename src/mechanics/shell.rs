@@ -9,46 +9,77 @@
 use serde::Serialize;
 use std::f64::consts::PI;
 
+/// A radial deformation pattern of a tube, tagged by `pattern`: w(θ, z) in metres, outward
+/// positive, with θ the angle about the tube's axis from its own +x towards +y (radians) and z the
+/// height above its base (metres).
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "pattern", rename_all = "snake_case")]
 pub enum ShellPattern {
     /// Uniform hoop expansion under internal pressure.
-    HoopExpansion { amplitude: f64 },
+    HoopExpansion {
+        /// Uniform outward radial displacement, metres.
+        amplitude: f64,
+    },
     /// Wind-type ovalisation (lobing): A sin(πz/H) cos(n(θ − θ₀)), ends kept circular by the
     /// base and the roof.
     Ovalisation {
+        /// Peak radial displacement A at mid-height, metres; outward at θ = `towards`.
         amplitude: f64,
+        /// Circumferential wave number n, 1–64: 2 ovalises the section, 1 shifts it sideways,
+        /// higher n give more lobes.
         n: u32,
+        /// Angle θ₀ of an outward lobe, radians.
         towards: f64,
     },
     /// A local inward dimple (positive amplitude = inward): −A cos²(πd/(2R)) within surface
     /// distance d < R of the point (θ₀, z₀).
     Dimple {
+        /// Inward depth A at the centre, metres (negative bulges outward).
         amplitude: f64,
+        /// Angle θ₀ of the centre about the tube's axis, radians.
         angle: f64,
+        /// Height z₀ of the centre above the base, metres.
         height: f64,
+        /// Radius R of the dimple, measured along the surface, metres (less than half the
+        /// circumference).
         radius: f64,
     },
     /// Elephant's-foot bulge just above the base: A (z/z₀) e^{1 − z/z₀}, peak A at z₀, zero at
     /// the base.
-    ElephantFoot { amplitude: f64, height: f64 },
+    ElephantFoot {
+        /// Peak outward bulge A, metres.
+        amplitude: f64,
+        /// Height z₀ of the peak above the base, metres (inside the shell).
+        height: f64,
+    },
     /// A buckle patch: a checkerboard of inward and outward half-waves of length `wavelength / 2`
     /// in both directions, centred inward at (θ₀, z₀), under a cos² window of radius R
     /// (the Koiter-circle eigenshapes of axial buckling, confined to a patch).
     Buckle {
+        /// Displacement A at the centre, metres, inward for positive A; neighbouring half-waves
+        /// alternate in sign and fade under the window.
         amplitude: f64,
+        /// Angle θ₀ of the centre about the tube's axis, radians.
         angle: f64,
+        /// Height z₀ of the centre above the base, metres.
         height: f64,
+        /// Radius R of the patch, measured along the surface, metres (less than half the
+        /// circumference).
         radius: f64,
+        /// Full wavelength of the checkerboard in both directions, metres (at most 2R).
         wavelength: f64,
     },
 }
 
-/// The shell the patterns act on: radius, wall thickness, height; steel.
+/// The shell the patterns act on: radius, wall thickness, height; steel (for the plausible
+/// amplitudes).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Shell {
+    /// Outer radius, metres.
     pub radius: f64,
+    /// Wall thickness, metres.
     pub wall: f64,
+    /// Height from base to top, metres.
     pub height: f64,
 }
 
@@ -56,6 +87,8 @@ const E: f64 = super::STEEL_E;
 const NU: f64 = super::STEEL_NU;
 
 impl ShellPattern {
+    /// Checks the parameters against `shell`; the message names the pattern, the parameter and its
+    /// value.
     pub fn validate(&self, shell: &Shell) -> Result<(), String> {
         let finite = |name: &str, x: f64| {
             if x.is_finite() {

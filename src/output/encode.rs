@@ -4,6 +4,7 @@
 use exr::prelude::*;
 use std::io::Cursor;
 
+/// Name of the EXR channel holding planar depth (metres, float32).
 pub const DEPTH_CHANNEL: &str = "Z";
 
 fn png(

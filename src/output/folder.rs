@@ -11,6 +11,8 @@ const MANIFEST: &str = "manifest.jsonl";
 const STAGING: &str = ".partial";
 const SAMPLES: &str = "samples";
 
+/// A dataset's output folder: `run.json`, `manifest.jsonl` and the committed samples, with a
+/// staging area for samples being written.
 pub struct DatasetFolder {
     root: PathBuf,
 }
@@ -20,6 +22,7 @@ pub struct SampleStage {
     sample: u64,
     dir: PathBuf,
     files: Vec<String>,
+    /// Bytes staged so far.
     pub bytes: u64,
 }
 

@@ -26,14 +26,19 @@ pub trait ViewLayers {
 /// One file of a view, named `{view stem}.{key}.{extension}` and listed in the view's record
 /// under `key`.
 pub struct ViewFile {
+    /// Key of the file in the view's record, and the middle of its name ("rgb", "depth", …).
     pub key: &'static str,
+    /// File name extension, without the dot.
     pub extension: &'static str,
+    /// The encoded file.
     pub bytes: Vec<u8>,
 }
 
 /// An output kind: its name in `dataset.outputs` and how it turns a view into files.
 pub struct Writer {
+    /// The output's name in `dataset.outputs`.
     pub output: &'static str,
+    /// Encodes a view's layers into the output's files.
     pub write: fn(&dyn ViewLayers) -> Result<Vec<ViewFile>>,
 }
 

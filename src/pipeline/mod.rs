@@ -29,13 +29,17 @@ use std::time::Instant;
 /// This process renders the samples whose index ≡ `index` (mod `count`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Shard {
+    /// This shard's index K, 0 ≤ K < N.
     pub index: u64,
+    /// Number of shards N.
     pub count: u64,
 }
 
 impl Shard {
+    /// The whole dataset in one shard.
     pub const WHOLE: Shard = Shard { index: 0, count: 1 };
 
+    /// Whether this shard renders sample `sample`.
     pub fn owns(&self, sample: u64) -> bool {
         sample % self.count == self.index
     }
@@ -58,22 +62,35 @@ impl FromStr for Shard {
     }
 }
 
+/// How to run a recipe: where to, on how many threads, which shard.
 pub struct RunOptions {
+    /// The dataset folder.
     pub out: PathBuf,
     /// Worker threads; None uses every core.
     pub threads: Option<usize>,
+    /// The samples this process renders.
     pub shard: Shard,
+    /// Clear a folder holding another dataset (only what shmgen wrote there) instead of
+    /// refusing it.
     pub force: bool,
+    /// No progress bar.
     pub quiet: bool,
 }
 
+/// What a run did.
 #[derive(Debug, Default)]
 pub struct RunSummary {
+    /// Samples rendered by this run.
     pub rendered: u64,
+    /// Samples of this shard already in the folder, skipped.
     pub skipped: u64,
+    /// Views rendered (image/depth pairs).
     pub pairs: u64,
+    /// Bytes of sample files written by this run.
     pub bytes: u64,
+    /// Wall-clock time, seconds.
     pub seconds: f64,
+    /// Whether every sample of the dataset, from every shard, is now in the folder.
     pub complete: bool,
 }
 

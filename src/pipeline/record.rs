@@ -20,6 +20,7 @@ use std::collections::BTreeMap;
 /// Tags `run.json`; bump when a field changes meaning.
 #[derive(Clone, Copy, Debug, Serialize, schemars::JsonSchema)]
 pub enum RunSchema {
+    /// `shmgen.run/1`: the first version of `run.json`.
     #[serde(rename = "shmgen.run/1")]
     V1,
 }
@@ -27,6 +28,7 @@ pub enum RunSchema {
 /// Tags each view's JSON; bump when a field changes meaning.
 #[derive(Clone, Copy, Debug, Serialize, schemars::JsonSchema)]
 pub enum ViewSchema {
+    /// `shmgen.view/1`: the first version of the view JSON.
     #[serde(rename = "shmgen.view/1")]
     V1,
 }
@@ -35,78 +37,113 @@ pub enum ViewSchema {
 /// (threads, shard, output path), so every shard and every resumed run agrees on it.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct RunRecord<'a> {
+    /// Version tag of this record: "shmgen.run/1".
     pub schema: RunSchema,
+    /// The program that wrote the dataset.
     pub tool: Tool,
+    /// The recipe file and the hash of everything it read.
     pub recipe: RecipeRecord<'a>,
     /// The resolved value of every parameter the recipe declared.
     pub params: &'a BTreeMap<String, Value>,
+    /// The dataset's settings as the recipe resolved them: name, seed, counts, camera distribution,
+    /// outputs, light and background.
     pub dataset: &'a DatasetSpec,
+    /// Version tag of every view's JSON in this dataset.
     pub view_schema: ViewSchema,
     /// Where a view's files are, by sample and view index.
     pub layout: &'static str,
+    /// What `manifest.jsonl` holds.
     pub manifest: &'static str,
 }
 
 /// The program that wrote a dataset.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct Tool {
+    /// Program name: "shmgen".
     pub name: &'static str,
+    /// Program version (semantic versioning).
     pub version: &'static str,
 }
 
-/// The recipe a dataset was built from: its file name and the blake3 hash of its sources
-/// (the recipe and every module it imports).
+/// The recipe a dataset was built from: its file name and the blake3 hash of its sources (the
+/// recipe, every module it imports and every file it reads: meshes, textures, images).
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct RecipeRecord<'a> {
+    /// File name of the recipe, without its folder.
     pub file: String,
+    /// blake3 hash (hex) over the recipe, the modules it imports and the files it reads
+    /// (each by its own blake3); the same recipe and files give the same hash.
     pub hash: &'a str,
 }
 
 /// The JSON of one view: everything needed to re-create and interpret its files.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct ViewRecord<'a> {
+    /// Version tag of this record: "shmgen.view/1".
     pub schema: ViewSchema,
     /// The dataset's name.
     pub dataset: &'a str,
+    /// Sample index, from 0.
     pub sample: u64,
+    /// View index within the sample, from 0.
     pub view: u32,
     /// The view's files by output, relative to the dataset root.
     pub files: BTreeMap<&'static str, String>,
+    /// The random streams the sample's scene and this view's camera were drawn from.
     pub seeds: Seeds,
     /// The resolved value of every parameter the recipe declared.
     pub params: &'a BTreeMap<String, Value>,
+    /// The camera of this view: intrinsics, poses and the values drawn.
     pub camera: CameraRecord,
+    /// How to read the depth file.
     pub depth: DepthConvention,
+    /// How to read the mask file.
     pub mask: MaskConvention,
+    /// How to read the crack file.
     pub cracks: CrackConvention,
+    /// The id tables of the part and instance images.
     pub segmentation: &'a Segmentation,
     /// What the RGB image shows where no structure is.
     pub background: &'a BackdropDraw,
     /// The light of the sample, as drawn.
     pub light: &'a LightDraw,
+    /// The sample's structures as described, with what the sample drew for their materials and, for
+    /// beams, what the mechanics found.
     pub scene: SceneRecord<'a>,
+    /// Size of the sample's deformed mesh.
     pub mesh: MeshRecord,
-    /// Share of the pixels that see a structure.
+    /// Share of the pixels that see a structure, 0–1.
     pub coverage: f64,
 }
 
 /// Where the random values of a view came from: streams derived from the run seed, a scope
-/// (sample, or sample and view) and a name.
+/// (sample, or sample and view) and a name. Materials and light are drawn the same way from the
+/// streams "material" and "light" (scope: the sample), backgrounds from "background" (scope: the
+/// sample and view).
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct Seeds {
+    /// The dataset's seed.
     pub run_seed: u64,
+    /// The stream the recipe's `scene` function drew this sample from.
     pub scene_stream: StreamRecord,
+    /// The stream this view's camera was drawn from.
     pub camera_stream: StreamRecord,
 }
 
+/// One random stream: ChaCha8 seeded from the blake3 hash of the run seed, its scope and its name.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct StreamRecord {
+    /// The indices the stream is derived from besides the run seed: [sample] or [sample, view].
     pub scope: Vec<u64>,
+    /// The stream's name.
     pub name: &'static str,
 }
 
+/// The projection model of a camera.
 #[derive(Serialize, schemars::JsonSchema)]
 pub enum CameraModel {
+    /// An ideal pinhole camera: no lens distortion; a world point projects through `K` and
+    /// `w2c_opencv` alone.
     #[serde(rename = "pinhole")]
     Pinhole,
 }
@@ -115,26 +152,38 @@ pub enum CameraModel {
 /// and `c2w_opengl = c2w_opencv · diag(1, −1, −1, 1)`.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct CameraRecord {
+    /// The projection model.
     pub model: CameraModel,
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
     /// Vertical field of view, radians.
     pub fov_y: f64,
     /// Pixel (i, j) has its centre at (j + pixel_center, i + pixel_center) in K's coordinates.
     pub pixel_center: f64,
-    /// Intrinsics in pixels.
+    /// Intrinsic matrix [[fx, 0, cx], [0, fy, cy], [0, 0, 1]], pixels; row-major.
     #[serde(rename = "K")]
     pub k: [[f64; 3]; 3],
+    /// World-to-camera transform in OpenCV axes, row-major 4 × 4, metres:
+    /// [x_cam, 1] = w2c_opencv · [x_world, 1]; the inverse of `c2w_opencv`.
     pub w2c_opencv: [[f64; 4]; 4],
+    /// Camera-to-world transform in OpenCV axes (x right, y down, z forward), row-major 4 × 4,
+    /// metres; its last column is the camera centre.
     pub c2w_opencv: [[f64; 4]; 4],
+    /// Camera-to-world transform in OpenGL/nerfstudio axes (x right, y up, z backward), row-major
+    /// 4 × 4, metres: nerfstudio's `transform_matrix`.
     pub c2w_opengl: [[f64; 4]; 4],
-    /// Centre of projection, world axes.
+    /// Centre of projection, world axes, metres.
     pub position: [f64; 3],
-    /// The point the camera was aimed at.
+    /// The point the camera was aimed at, world axes, metres: the centre of the sample's
+    /// bounding sphere.
     pub target: [f64; 3],
+    /// The yaw, pitch, roll and distance drawn for this view.
     pub drawn: ViewDraw,
 }
 
+/// What a depth value measures.
 #[derive(Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum DepthKind {
@@ -142,8 +191,10 @@ pub enum DepthKind {
     PlanarZ,
 }
 
+/// The unit of depth values.
 #[derive(Serialize, schemars::JsonSchema)]
 pub enum Unit {
+    /// Metres.
     #[serde(rename = "m")]
     Metre,
 }
@@ -151,9 +202,12 @@ pub enum Unit {
 /// How to read the depth file.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct DepthConvention {
+    /// What a depth value measures: "planar_z", the camera-frame z of the surface point (not the
+    /// distance along the ray).
     pub kind: DepthKind,
+    /// Unit of depth values: "m".
     pub unit: Unit,
-    /// The value of pixels that see no surface.
+    /// The value of pixels that see no surface (0).
     pub no_surface: f64,
     /// The EXR channel holding depth.
     pub channel: &'static str,
@@ -162,16 +216,23 @@ pub struct DepthConvention {
 /// How to read the mask file.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct MaskConvention {
+    /// Value of pixels that see a structure (255).
     pub structure: u8,
+    /// Value of pixels that see no structure (0).
     pub background: u8,
 }
 
 /// How to read the crack file.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct CrackConvention {
+    /// Value of pixels labelled a crack (255).
     pub crack: u8,
+    /// Value of every other pixel, structure or background (0).
     pub elsewhere: u8,
+    /// When a pixel is labelled a crack, in words.
     pub rule: &'static str,
+    /// Share of the pixel's footprint, 0–1, a crack must cover for the pixel to be labelled a
+    /// crack.
     pub min_cover: f64,
 }
 
@@ -182,6 +243,7 @@ pub struct Segmentation {
     pub part_ids: Vec<String>,
     /// The structure each instance id is; id 0 (background) is null.
     pub instance_ids: Vec<Option<Instance>>,
+    /// How the part and instance images store ids.
     pub encoding: &'static str,
 }
 
@@ -189,12 +251,25 @@ pub struct Segmentation {
 #[derive(Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Instance {
-    Beam { structure: usize },
-    Assembly { structure: usize, name: String },
+    /// A beam.
+    Beam {
+        /// Index of the structure in `scene.structures`, from 0 (its instance id minus 1).
+        structure: usize,
+    },
+    /// An assembly of primitives.
+    Assembly {
+        /// Index of the structure in `scene.structures`, from 0 (its instance id minus 1).
+        structure: usize,
+        /// The assembly's name, as the recipe gave it.
+        name: String,
+    },
 }
 
+/// The structures of a sample.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct SceneRecord<'a> {
+    /// Every structure of the sample, in the order the recipe returned them; instance
+    /// id = index + 1.
     pub structures: &'a [StructureRecord<'a>],
 }
 
@@ -202,9 +277,13 @@ pub struct SceneRecord<'a> {
 /// found.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct StructureRecord<'a> {
+    /// The structure as the recipe described it; its fields appear at this level.
     #[serde(flatten)]
     pub structure: &'a Structure,
+    /// What this sample drew for the structure's material.
     pub material_drawn: MaterialDraw,
+    /// For a beam, what the mechanics found (its fields appear at this level); absent for
+    /// assemblies.
     #[serde(flatten)]
     pub beam: Option<BeamRecord<'a>>,
 }
@@ -212,23 +291,32 @@ pub struct StructureRecord<'a> {
 /// What the mechanics of a beam found.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct BeamRecord<'a> {
+    /// Properties of the beam's cross-section the mechanics used.
     pub section_properties: SectionProperties,
-    /// Intervals along the length of the mesh.
+    /// Equal intervals the beam was meshed with along its length; stations at load positions
+    /// and at the peak deflection come on top.
     pub segments: usize,
+    /// What the mechanics found: the theory used and its estimated error, the physical loads, the
+    /// peak deflection, moment and stress, and whether the beam could carry the loads.
     pub labels: &'a Labels,
 }
 
 /// Size of the sample's deformed mesh.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct MeshRecord {
+    /// Vertices of the sample's deformed mesh, all structures together.
     pub vertices: usize,
+    /// Triangles of the sample's deformed mesh, all structures together.
     pub triangles: usize,
+    /// Radius of the deformed scene's bounding sphere about `camera.target`, metres.
     pub bounding_radius: f64,
 }
 
 /// What every view of a sample shares in its record.
 pub struct SampleRecord<'a> {
+    /// The record of every structure of the sample.
     pub structures: Vec<StructureRecord<'a>>,
+    /// The id tables of the part and instance images.
     pub segmentation: Segmentation,
 }
 

@@ -37,9 +37,13 @@ pub struct SampleRenderer<'a> {
 /// first request.
 pub struct RenderedView<'a> {
     renderer: &'a SampleRenderer<'a>,
+    /// View index within the sample.
     pub view: u32,
+    /// The camera of the view.
     pub camera: Camera,
+    /// The yaw, pitch, roll and distance drawn for the camera.
     pub draw: ViewDraw,
+    /// Depth and triangle id of every pixel, from its centre ray.
     pub gbuffer: GBuffer,
     backdrop: Backdrop,
     /// The background drawn for this view.
@@ -49,6 +53,7 @@ pub struct RenderedView<'a> {
 }
 
 impl<'a> SampleRenderer<'a> {
+    /// Builds the BVH and surfaces of `sample`, a sample of `dataset`.
     pub fn new(dataset: &'a DatasetSpec, sample: &'a BuiltSample) -> Self {
         SampleRenderer {
             dataset,

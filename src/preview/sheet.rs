@@ -24,12 +24,14 @@ pub enum Size {
     MaxSide(u32),
 }
 
+/// Which samples and views a preview sheet shows, and how small.
 #[derive(Clone, Copy, Debug)]
 pub struct PreviewOptions {
     /// Samples from the start of the dataset (fewer if the dataset has fewer).
     pub samples: u64,
     /// Views of each sample; None takes up to four.
     pub views: Option<u32>,
+    /// The size of each image.
     pub size: Size,
 }
 

@@ -36,9 +36,13 @@ const SOURCE_EXTENSIONS: &[&str] = &[
 /// Every preview sheet ends so; two watchers in one folder must not trigger each other.
 const PREVIEW_SUFFIX: &str = ".preview.png";
 
+/// What `shmgen watch` watches and where its sheet goes.
 pub struct WatchOptions {
+    /// The recipe file.
     pub recipe: PathBuf,
+    /// Recipe parameters set on the command line (`--set name=value`).
     pub sets: Vec<(String, String)>,
+    /// Which samples and views the sheet shows, and how small.
     pub preview: PreviewOptions,
     /// Where the sheet goes; None puts `<recipe stem>.preview.png` next to the recipe.
     pub out: Option<PathBuf>,

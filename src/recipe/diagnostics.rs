@@ -27,10 +27,12 @@ struct Located {
 }
 
 impl RecipeError {
+    /// An error with no place in the recipe's sources.
     pub fn plain(message: impl Into<String>) -> Self {
         RecipeError(format!("error: {}", message.into()))
     }
 
+    /// A syntax error, shown at its place in the file labelled `label`.
     pub fn parse(err: &ParseError, label: &str, sources: &Sources) -> Self {
         let at = Located {
             label: label.to_string(),

@@ -33,11 +33,14 @@ use std::sync::Arc;
 
 /// A loaded recipe, ready to draw samples from.
 pub struct Recipe {
+    /// The recipe file.
     pub path: PathBuf,
+    /// The dataset the recipe declared, with every value resolved and validated.
     pub dataset: DatasetSpec,
     /// Resolved value of every declared parameter.
     pub params: BTreeMap<String, serde_json::Value>,
-    /// Content hash of the recipe and of every module it imports.
+    /// Content hash (blake3, hex) of the recipe, every module it imports and every file it
+    /// reads (meshes, textures, images).
     pub hash: String,
     label: String,
     engine: Engine,

@@ -21,6 +21,7 @@ pub struct SampleSurfaces<'a> {
     pub piece: &'a [u32],
     /// Shader index and grain of every piece.
     pub pieces: &'a [(u32, Grain)],
+    /// The material of every structure, with the sample's random choices.
     pub shaders: &'a [Shader],
 }
 

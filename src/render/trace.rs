@@ -45,9 +45,13 @@ fn traversal_direction(d: Vec3A) -> Vec3A {
 /// Per-pixel geometric labels of one view: planar depth (0 = no surface) and the original
 /// index of the triangle hit (`NO_HIT` = none). Row-major, `width` × `height`.
 pub struct GBuffer {
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// Planar depth of every pixel, metres (0 = no surface).
     pub depth: Vec<f32>,
+    /// Index of the triangle each pixel sees, in the scene mesh (`NO_HIT` = none).
     pub triangle: Vec<u32>,
 }
 
@@ -102,6 +106,8 @@ impl TraceMesh {
         (self.offsets[t] - n.dot(origin - self.anchor)) / n.dot(dir)
     }
 
+    /// Unit normal of a triangle of the scene mesh (by its original index), following its
+    /// winding; zero for a degenerate triangle.
     pub fn normal(&self, original_triangle: u32) -> DVec3 {
         self.normals[original_triangle as usize]
     }

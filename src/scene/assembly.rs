@@ -11,9 +11,12 @@ use serde::Serialize;
 /// A primitive placed in its assembly, with the part it belongs to (for segmentation).
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ShapeSpec {
+    /// The solid, in its own frame.
     pub primitive: Primitive,
-    /// Affine map from the primitive's frame to the assembly's: rows of a 3 × 4 matrix.
+    /// Affine map from the primitive's own frame to world coordinates (every placement of the
+    /// shape and of its assembly applied): rows of a 3 × 4 matrix [R | t], t in metres.
     pub transform: [[f64; 4]; 3],
+    /// Name of the part the shape belongs to, for the part-id image (default "body").
     pub part: String,
     /// A beam deformation applied in the primitive's own frame, before placement.
     pub bending: Option<Bending>,
@@ -27,13 +30,18 @@ pub struct ShapeSpec {
 /// A shell pattern with what a physical load would plausibly give (written into the JSON).
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct LabelledPattern {
+    /// The pattern and its parameters; its fields appear at this level.
     #[serde(flatten)]
     pub pattern: ShellPattern,
+    /// The amplitude a real load or a construction tolerance would plausibly give this shell,
+    /// metres; compare with the pattern's `amplitude` to see how far it is exaggerated.
     pub plausible_amplitude: f64,
+    /// What `plausible_amplitude` rests on: the load case or code clause, in words.
     pub plausible_basis: &'static str,
 }
 
 impl LabelledPattern {
+    /// `pattern` on `shell`, with the amplitude a physical load would plausibly give it.
     pub fn new(pattern: ShellPattern, shell: &Shell) -> Self {
         let (plausible_amplitude, plausible_basis) = pattern.plausible(shell);
         LabelledPattern {
@@ -50,15 +58,26 @@ impl LabelledPattern {
 /// stiffness for the labels and Timoshenko, and the shape's bounds give the neutral axis.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Bending {
+    /// Unit vector along the beam axis, in the primitive's frame (a coordinate axis such as
+    /// [1, 0, 0]).
     pub axis: [f64; 3],
+    /// Unit vector perpendicular to `axis`, in the primitive's frame: the direction positive
+    /// deflection moves material (the beam's "down").
     pub towards: [f64; 3],
+    /// The beam whose deflected shape is applied: supports, loads, theory and section as for any
+    /// beam; its placement, tessellation and material are not used.
     pub beam: BeamSpec,
 }
 
+/// A structure made of placed primitives in one material, each shape labelled with a part: a silo,
+/// a frame, an imported mesh.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct AssemblySpec {
+    /// The assembly's name (in the instance table and in messages).
     pub name: String,
+    /// Its shapes, each a primitive with its placement, part and deformations.
     pub shapes: Vec<ShapeSpec>,
+    /// The material of every shape.
     pub material: Material,
     /// How closely curved surfaces are followed, after placement (a scaled shape is
     /// tessellated more finely).
@@ -82,6 +101,7 @@ impl AssemblySpec {
 }
 
 impl ShapeSpec {
+    /// `primitive` with the identity placement, undeformed, in part "body".
     pub fn new(primitive: Primitive) -> Self {
         ShapeSpec {
             primitive,
@@ -109,6 +129,7 @@ impl ShapeSpec {
         }
     }
 
+    /// The placement (`transform`) as an affine map.
     pub fn affine(&self) -> DAffine3 {
         let r = &self.transform;
         DAffine3 {

@@ -13,12 +13,21 @@ use serde::Serialize;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", content = "value", rename_all = "snake_case")]
 pub enum Tessellation {
-    /// Equal intervals along the length.
-    Segments(u32),
+    /// Equal intervals along the length (plus stations at the load positions and the peak).
+    Segments(
+        /// Number of equal intervals, 1–100000.
+        u32,
+    ),
     /// Chord (sagitta) error of the deformed surface at most this many metres.
-    Chord(f64),
+    Chord(
+        /// Largest chord error, metres.
+        f64,
+    ),
     /// Chord error at most this fraction of a pixel at the nearest camera the rig can place.
-    Pixels(f64),
+    Pixels(
+        /// Largest chord error, as a fraction of the pixel footprint (e.g. 0.1).
+        f64,
+    ),
     /// The 3DGEN mesh: every face of the cuboid split into a 32 × 32 grid (12,288 triangles).
     Paper,
 }
@@ -40,25 +49,43 @@ impl Tessellation {
     }
 }
 
+/// A straight prismatic beam as declared: section, supports, loads, theory, material and placement.
+/// In its own frame the axis runs along x from 0 to L, y across and z up; deflection v is positive
+/// downward (world −z).
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct BeamSpec {
+    /// Span L, metres: the axis runs from x = 0 (the pin or clamp) to x = L.
     pub length: f64,
+    /// Cross-section shape and dimensions.
     pub section: Section,
+    /// How the ends are supported.
     pub support: Support,
+    /// Loads on the span as declared; when `target` scales them, only their ratios matter
+    /// (`labels.loads` holds the physical loads).
     pub loads: Vec<Load>,
+    /// Whether the load magnitudes are physical or scaled to reach a target deflection.
     pub target: Target,
+    /// The beam theory asked for; `auto` chooses by estimated error (`labels.theory` says which
+    /// ran).
     pub theory: Theory,
     /// A vibration snapshot (mode number, amplitude in metres) instead of static loads.
     pub vibration: Vec<(u32, f64)>,
     /// Largest acceptable model error, as a fraction of the peak deflection.
     pub model_tolerance: f64,
+    /// How points of the cross-section follow the deflected axis.
     pub mapping: Mapping,
+    /// How finely the beam is meshed along its length.
     pub tessellation: Tessellation,
+    /// Young's modulus E, Pa (default 210 GPa, structural steel).
     pub elastic_modulus: f64,
+    /// Poisson's ratio ν (default 0.3); the shear modulus is G = E / (2 (1 + ν)).
     pub poisson: f64,
+    /// Yield strength f_y, Pa (default 355 MPa, S355), against which `physically_plausible` is
+    /// judged.
     pub yield_strength: f64,
+    /// How the beam's surface looks.
     pub material: Material,
-    /// World position of the centre of the undeformed beam.
+    /// World position of the centre of the undeformed beam, metres.
     pub centre: [f64; 3],
     /// Rotation about the world z axis (radians); 0 puts the beam axis along +x.
     pub yaw: f64,
@@ -69,6 +96,8 @@ pub struct BeamSpec {
 }
 
 impl BeamSpec {
+    /// A simply supported steel beam of `length` metres with `section`, no loads yet, in the
+    /// default material at the origin along +x.
     pub fn new(length: f64, section: Section) -> Self {
         BeamSpec {
             length,
@@ -91,6 +120,7 @@ impl BeamSpec {
         }
     }
 
+    /// [`BeamSpec::new`] with a solid rectangular section `width` × `height` metres.
     pub fn rectangular(length: f64, width: f64, height: f64) -> Self {
         Self::new(length, Section::Rectangle { width, height })
     }

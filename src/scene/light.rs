@@ -10,30 +10,43 @@ use serde::Serialize;
 /// drawn per sample, so all views of a sample share one sun.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct LightSpec {
+    /// Whether the studio key and fill lights, fixed to the camera, are on (default: on unless a
+    /// sun or sky is given).
     pub studio: bool,
+    /// A directional sun fixed in the world, if any.
     pub sun: Option<SunSpec>,
+    /// Hemispherical light from the sky above and the ground below, if any.
     pub sky: Option<SkySpec>,
-    /// Uniform light, as a range to draw from.
+    /// Uniform light from every direction, linear, as a range [min, max] to draw from (default
+    /// 0.12, or 0.02 with a sun or sky).
     pub ambient: [f64; 2],
+    /// Whether the sun casts shadows (default: on with a sun or sky).
     pub shadows: bool,
 }
 
+/// A directional sun as declared: each number a range [min, max] drawn once per sample.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SunSpec {
     /// Angle above the horizon (radians), range.
     pub elevation: [f64; 2],
     /// Compass angle from +x towards +y (radians), range.
     pub azimuth: [f64; 2],
+    /// Range of the sun's intensity, a factor on its linear colour: 1 makes a white matte face
+    /// turned to a white sun fully white.
     pub intensity: [f64; 2],
-    /// sRGB colour of the light.
+    /// sRGB colour of the light, components 0–1.
     pub colour: [f64; 3],
 }
 
+/// Hemispherical sky and ground light as declared: a face gets the sky colour weighted by
+/// (1 + n_z)/2 and the ground colour by (1 − n_z)/2, n_z the vertical component of its normal.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SkySpec {
+    /// Range of the sky's intensity, a factor on its linear sky and ground colours.
     pub intensity: [f64; 2],
-    /// sRGB colours of the sky's light from above and the ground's from below.
+    /// sRGB colour (0–1) of the sky's light from above.
     pub colour: [f64; 3],
+    /// sRGB colour (0–1) of the light the ground bounces up from below.
     pub ground: [f64; 3],
 }
 
@@ -108,24 +121,35 @@ impl Default for SkySpec {
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum Background {
-    /// sRGB colour; black by default, as in the paper.
+    /// sRGB colour, components 0–1; black by default, as in the paper.
     Colour([f64; 3]),
     /// A sky gradient (sRGB colours), fixed in the world: zenith above, horizon at eye level,
     /// ground below.
-    Sky { sky: SkyGradient },
+    Sky {
+        /// The gradient's colours.
+        sky: SkyGradient,
+    },
     /// A random image from a folder for each view, a random window of it filling the frame.
     Images {
+        /// The folder the images come from, relative to the recipe's folder.
         images: String,
+        /// Every PNG or JPEG image in the folder, in name order, with its hash.
         files: Vec<ImageRecord>,
+        /// The images, decoded (not recorded).
         #[serde(skip)]
         decoded: Vec<ImageFile>,
     },
 }
 
+/// A sky backdrop fixed in the world, sRGB colours (0–1): from the horizon at eye level up to the
+/// zenith, flat ground below.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SkyGradient {
+    /// sRGB colour straight up.
     pub zenith: [f64; 3],
+    /// sRGB colour at the horizon (eye level).
     pub horizon: [f64; 3],
+    /// sRGB colour of everything below the horizon.
     pub ground: [f64; 3],
 }
 
@@ -142,6 +166,8 @@ impl Default for SkyGradient {
 /// A background image as recorded in run.json.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ImageRecord {
+    /// Path of the image relative to the recipe's folder, with `/` separators.
     pub file: String,
+    /// blake3 hash (hex) of the file's bytes.
     pub hash: String,
 }

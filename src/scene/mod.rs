@@ -40,23 +40,36 @@ pub struct SourceSite {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", content = "value", rename_all = "snake_case")]
 pub enum Tolerance {
-    /// In metres.
-    Chord(f64),
+    /// An absolute chord error, in metres.
+    Chord(
+        /// Largest chord error, metres.
+        f64,
+    ),
     /// As a fraction of a pixel at the nearest camera the rig can place.
-    Pixels(f64),
+    Pixels(
+        /// Largest chord error, as a fraction of the pixel footprint (e.g. 0.1).
+        f64,
+    ),
 }
 
 /// Dataset-wide settings declared by a recipe.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct DatasetSpec {
+    /// The dataset's name, as the recipe gives it.
     pub name: String,
+    /// The run seed (≥ 0): every random value of the dataset comes from a stream derived from it.
     pub seed: u64,
+    /// Number of samples (scenes drawn from the recipe's `scene`), indexed from 0.
     pub samples: u64,
+    /// Camera views rendered of each sample.
     pub views: u32,
+    /// The distribution the cameras of the views are drawn from.
     pub camera: CameraRig,
+    /// Which per-view files are written, by output name.
     pub outputs: Outputs,
     /// What RGB shows behind the structures; black as in the paper.
     pub background: Background,
+    /// The light as declared; ranges are drawn once per sample.
     pub light: LightSpec,
     /// Anti-alias RGB where the image changes (silhouettes, creases); labels never are.
     pub antialias: bool,
@@ -97,11 +110,15 @@ impl Outputs {
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Structure {
+    /// A straight beam, deformed by beam theory.
     Beam(BeamSpec),
+    /// An assembly of placed primitives (silos, frames, imported meshes), optionally bent or
+    /// shell-deformed shape by shape.
     Assembly(AssemblySpec),
 }
 
 impl Structure {
+    /// The material the structure is drawn in.
     pub fn material(&self) -> &crate::materials::Material {
         match self {
             Structure::Beam(b) => &b.material,
@@ -121,5 +138,6 @@ impl Structure {
 /// One sample: the structures in the scene, with their loads (not yet applied).
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SceneSpec {
+    /// The structures of the sample, in the order the recipe returned them.
     pub structures: Vec<Structure>,
 }
