@@ -8,6 +8,17 @@
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
+/// The stream a sample's scene is drawn from (scope: the sample).
+pub const SCENE: &str = "scene";
+/// The stream a view's camera is drawn from (scope: the view).
+pub const CAMERA: &str = "camera";
+/// The stream of a sample's material variations (scope: the sample).
+pub const MATERIAL: &str = "material";
+/// The stream of a sample's light (scope: the sample).
+pub const LIGHT: &str = "light";
+/// The stream of a view's background (scope: the view).
+pub const BACKGROUND: &str = "background";
+
 /// Where a stream belongs: a whole sample, or one view of it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Scope {

@@ -205,38 +205,16 @@ fn describe(root: &Value, node: &Value, queue: &mut VecDeque<String>) -> String 
         out += &format!("{}\n\n", one_line(text));
     }
     if node.get("properties").is_some() {
-        out += &table(root, node, queue);
+        out += &table(root, node, None, queue);
     }
     for key in ["oneOf", "anyOf"] {
-        for form in node[key].as_array().into_iter().flatten() {
-            let name = form_name(form);
-            let text = form["description"].as_str().map(one_line);
-            match (name, form.get("properties")) {
-                (Some(name), Some(_)) => {
-                    out += &format!(
-                        "- {name}{}\n\n",
-                        text.map(|t| format!(": {t}")).unwrap_or_default()
-                    );
-                    out += &table(root, form, queue);
-                }
-                (None, Some(_)) => {
-                    out += &format!("- {}\n\n", text.unwrap_or_default());
-                    out += &table(root, form, queue);
-                }
-                (Some(name), None) => {
-                    out += &format!(
-                        "- {name}{}\n",
-                        text.map(|t| format!(": {t}")).unwrap_or_default()
-                    );
-                }
-                (None, None) => {
-                    out += &format!("- {}\n", type_name(root, form, queue));
-                }
-            }
+        let Some(forms) = node[key].as_array() else {
+            continue;
+        };
+        for form in forms {
+            out += &describe_form(root, form, queue);
         }
-        if node.get(key).is_some() {
-            out += "\n";
-        }
+        out += "\n";
     }
     if node.get("enum").is_some() || node.get("const").is_some() {
         out += &format!("Values: {}\n\n", type_name(root, node, queue));
@@ -244,32 +222,48 @@ fn describe(root: &Value, node: &Value, queue: &mut VecDeque<String>) -> String 
     out
 }
 
-/// How a form of a choice is told apart: its tag's value, or its single key.
-fn form_name(form: &Value) -> Option<String> {
+/// One form of a choice: a tagged variant (its tag shown once, its other fields in a
+/// table), a variant wrapped in a single key, a plain value, or another type.
+fn describe_form(root: &Value, form: &Value, queue: &mut VecDeque<String>) -> String {
+    let text = form["description"]
+        .as_str()
+        .map(|t| format!(": {}", one_line(t)))
+        .unwrap_or_default();
     if let Some(value) = form.get("const") {
-        return Some(format!("`{value}`"));
+        return format!("- `{value}`{text}\n");
     }
-    if let Some(values) = form["enum"].as_array() {
-        return Some(
-            values
-                .iter()
-                .map(|v| format!("`{v}`"))
-                .collect::<Vec<_>>()
-                .join(", "),
-        );
+    let Some(properties) = form["properties"].as_object() else {
+        return format!("- {}{text}\n", type_name(root, form, queue));
+    };
+    if let Some((tag, value)) = properties
+        .iter()
+        .find_map(|(k, p)| Some((k, tag_value(p)?)))
+    {
+        let rows = table(root, form, Some(tag.as_str()), queue);
+        return format!("- `{tag}: {value}`{text}\n\n{rows}");
     }
-    let properties = form["properties"].as_object()?;
-    properties.iter().find_map(|(key, p)| {
-        let value = p.get("const").or_else(|| {
-            p["enum"]
-                .get(0)
-                .filter(|_| p["enum"].as_array().is_some_and(|e| e.len() == 1))
-        })?;
-        Some(format!("`{key}: {value}`"))
-    })
+    if let [(key, inner)] = properties.iter().collect::<Vec<_>>()[..] {
+        if inner.get("properties").is_some() {
+            let rows = table(root, inner, None, queue);
+            return format!("- `{key}`{text}\n\n{rows}");
+        }
+    }
+    let rows = table(root, form, None, queue);
+    format!("- {}\n\n{rows}", text.trim_start_matches(": "))
 }
 
-fn table(root: &Value, node: &Value, queue: &mut VecDeque<String>) -> String {
+/// The one value a tag property can take.
+fn tag_value(property: &Value) -> Option<&Value> {
+    property
+        .get("const")
+        .or_else(|| match property["enum"].as_array()?.as_slice() {
+            [only] => Some(only),
+            _ => None,
+        })
+}
+
+/// The fields of an object, but for its tag (shown with the form).
+fn table(root: &Value, node: &Value, tag: Option<&str>, queue: &mut VecDeque<String>) -> String {
     let mut out = String::from("| field | type | meaning |\n|---|---|---|\n");
     let required: BTreeSet<&str> = node["required"]
         .as_array()
@@ -278,6 +272,9 @@ fn table(root: &Value, node: &Value, queue: &mut VecDeque<String>) -> String {
         .filter_map(Value::as_str)
         .collect();
     for (name, property) in node["properties"].as_object().unwrap() {
+        if Some(name.as_str()) == tag {
+            continue;
+        }
         let optional = if required.contains(name.as_str()) {
             ""
         } else {

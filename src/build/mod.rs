@@ -22,7 +22,7 @@ use crate::geometry::{self, Mesh};
 use crate::materials::{Grain, Lighting, Shader};
 use crate::mechanics::Labels;
 use crate::scene::{DatasetSpec, SceneSpec, SourceSite, Structure};
-use crate::seeds::{Scope, Stream};
+use crate::seeds::{self, Scope, Stream};
 use glam::{DMat3, DVec3};
 
 /// The deformed scene of one sample, ready to be viewed.
@@ -146,7 +146,7 @@ pub fn build_sample(
             "the scene has no extent (radius {radius})"
         )));
     }
-    let mut materials = Stream::new(dataset.seed, Scope::Sample(index), "material");
+    let mut materials = Stream::new(dataset.seed, Scope::Sample(index), seeds::MATERIAL);
     let shaders = scene
         .structures
         .iter()
@@ -154,7 +154,7 @@ pub fn build_sample(
         .collect();
     let (lighting, light_drawn) = draw_light(
         &dataset.light,
-        &mut Stream::new(dataset.seed, Scope::Sample(index), "light"),
+        &mut Stream::new(dataset.seed, Scope::Sample(index), seeds::LIGHT),
     );
     Ok(BuiltSample {
         index,

@@ -13,7 +13,7 @@ mod writers;
 
 pub use encode::{DEPTH_CHANNEL, depth_exr, id_png, mask_png, rgb_png};
 pub use folder::{DatasetFolder, SampleStage, write_atomic};
-pub use writers::{DEFAULT_OUTPUTS, ViewFile, ViewLayers, WRITERS, Writer, output_names};
+pub use writers::{DEFAULT_OUTPUTS, ViewLayers, WRITERS, Writer, output_names};
 
 /// Relative path of one view's file of the given kind (`rgb.png`, `depth.exr`, ...):
 /// samples are grouped a thousand to a folder so no folder grows unboundedly.

@@ -23,75 +23,75 @@ pub trait ViewLayers {
     fn cracks(&self) -> &[u8];
 }
 
-/// One file of a view, named `{view stem}.{key}.{extension}` and listed in the view's record
-/// under `key`.
-pub struct ViewFile {
-    /// Key of the file in the view's record, and the middle of its name ("rgb", "depth", …).
-    pub key: &'static str,
-    /// File name extension, without the dot.
-    pub extension: &'static str,
-    /// The encoded file.
-    pub bytes: Vec<u8>,
-}
-
-/// An output kind: its name in `dataset.outputs` and how it turns a view into files.
+/// An output kind: its name in `dataset.outputs`, the files it writes for each view and how
+/// it turns a view's layers into them.
 pub struct Writer {
     /// The output's name in `dataset.outputs`.
     pub output: &'static str,
-    /// Encodes a view's layers into the output's files.
-    pub write: fn(&dyn ViewLayers) -> Result<Vec<ViewFile>>,
+    /// The files of each view, as `{key}.{extension}`: a view's file is named
+    /// `{view stem}.{key}.{extension}` and listed in its record under `key`.
+    pub files: &'static [&'static str],
+    /// Encodes a view's layers into the output's files, in the order of `files`.
+    pub write: fn(&dyn ViewLayers) -> Result<Vec<Vec<u8>>>,
 }
 
-fn file(key: &'static str, extension: &'static str, bytes: Vec<u8>) -> Result<Vec<ViewFile>> {
-    Ok(vec![ViewFile {
-        key,
-        extension,
-        bytes,
-    }])
+impl Writer {
+    /// The record key of each file: its name without the extension.
+    pub fn keys(&self) -> impl Iterator<Item = &'static str> {
+        self.files
+            .iter()
+            .map(|f| f.split_once('.').map_or(*f, |(key, _)| key))
+    }
 }
 
 /// Every output shmgen can write, in the order a view's files are written.
 pub const WRITERS: [Writer; 6] = [
     Writer {
         output: "rgb",
+        files: &["rgb.png"],
         write: |v| {
             let (w, h) = v.size();
-            file("rgb", "png", rgb_png(w, h, v.rgb()))
+            Ok(vec![rgb_png(w, h, v.rgb())])
         },
     },
     Writer {
         output: "depth",
+        files: &["depth.exr"],
         write: |v| {
             let (w, h) = v.size();
-            file("depth", "exr", depth_exr(w, h, v.depth()))
+            Ok(vec![depth_exr(w, h, v.depth())])
         },
     },
     Writer {
         output: "mask",
+        files: &["mask.png"],
         write: |v| {
             let (w, h) = v.size();
-            file("mask", "png", mask_png(w, h, &v.mask()))
+            Ok(vec![mask_png(w, h, &v.mask())])
         },
     },
     Writer {
         output: "cracks",
+        files: &["cracks.png"],
         write: |v| {
             let (w, h) = v.size();
-            file("cracks", "png", mask_png(w, h, v.cracks()))
+            Ok(vec![mask_png(w, h, v.cracks())])
         },
     },
     Writer {
         output: "parts",
+        files: &["parts.png"],
         write: |v| {
             let (w, h) = v.size();
-            file("parts", "png", id_png(w, h, &v.part_ids())?)
+            Ok(vec![id_png(w, h, &v.part_ids())?])
         },
     },
     Writer {
         output: "instances",
+        files: &["instances.png"],
         write: |v| {
             let (w, h) = v.size();
-            file("instances", "png", id_png(w, h, &v.instance_ids())?)
+            Ok(vec![id_png(w, h, &v.instance_ids())?])
         },
     },
 ];
@@ -136,14 +136,18 @@ mod tests {
     }
 
     #[test]
-    fn every_writer_names_its_file_after_its_output_and_names_are_unique() {
+    fn every_writer_writes_the_files_it_declares_and_names_are_unique() {
         let names = output_names();
+        let mut keys = Vec::new();
         for (i, writer) in WRITERS.iter().enumerate() {
             assert!(!names[..i].contains(&writer.output), "{}", writer.output);
             let files = (writer.write)(&Tiny).unwrap();
-            assert_eq!(files.len(), 1);
-            assert_eq!(files[0].key, writer.output);
-            assert!(!files[0].bytes.is_empty());
+            assert_eq!(files.len(), writer.files.len(), "{}", writer.output);
+            assert!(files.iter().all(|bytes| !bytes.is_empty()));
+            for key in writer.keys() {
+                assert!(!keys.contains(&key) && key != "json", "{key}");
+                keys.push(key);
+            }
         }
         assert!(DEFAULT_OUTPUTS.iter().all(|d| names.contains(d)));
     }

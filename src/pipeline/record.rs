@@ -9,9 +9,10 @@ use crate::cameras::{ViewDraw, rows4};
 use crate::materials::MaterialDraw;
 use crate::materials::procedural::CRACK_LABEL_COVER;
 use crate::mechanics::{Labels, SectionProperties};
-use crate::output::DEPTH_CHANNEL;
+use crate::output::{DEPTH_CHANNEL, WRITERS};
 use crate::recipe::Recipe;
 use crate::scene::{DatasetSpec, Structure};
+use crate::seeds;
 use anyhow::Result;
 use serde::Serialize;
 use serde_json::Value;
@@ -50,8 +51,9 @@ pub struct RunRecord<'a> {
     pub dataset: &'a DatasetSpec,
     /// Version tag of every view's JSON in this dataset.
     pub view_schema: ViewSchema,
-    /// Where a view's files are, by sample and view index.
-    pub layout: &'static str,
+    /// Where a view's files are, by sample and view index: the dataset's outputs and the
+    /// view's JSON.
+    pub layout: String,
     /// What `manifest.jsonl` holds.
     pub manifest: &'static str,
 }
@@ -89,7 +91,7 @@ pub struct ViewRecord<'a> {
     pub view: u32,
     /// The view's files by output, relative to the dataset root.
     pub files: BTreeMap<&'static str, String>,
-    /// The random streams the sample's scene and this view's camera were drawn from.
+    /// The random streams every value of this view was drawn from.
     pub seeds: Seeds,
     /// The resolved value of every parameter the recipe declared.
     pub params: &'a BTreeMap<String, Value>,
@@ -117,9 +119,7 @@ pub struct ViewRecord<'a> {
 }
 
 /// Where the random values of a view came from: streams derived from the run seed, a scope
-/// (sample, or sample and view) and a name. Materials and light are drawn the same way from the
-/// streams "material" and "light" (scope: the sample), backgrounds from "background" (scope: the
-/// sample and view).
+/// (sample, or sample and view) and a name.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct Seeds {
     /// The dataset's seed.
@@ -128,6 +128,33 @@ pub struct Seeds {
     pub scene_stream: StreamRecord,
     /// The stream this view's camera was drawn from.
     pub camera_stream: StreamRecord,
+    /// The stream the sample's material variations were drawn from.
+    pub material_stream: StreamRecord,
+    /// The stream the sample's light was drawn from.
+    pub light_stream: StreamRecord,
+    /// The stream this view's background was drawn from.
+    pub background_stream: StreamRecord,
+}
+
+impl Seeds {
+    fn of_view(run_seed: u64, sample: u64, view: u32) -> Self {
+        let of_sample = |name| StreamRecord {
+            scope: vec![sample],
+            name,
+        };
+        let of_view = |name| StreamRecord {
+            scope: vec![sample, u64::from(view)],
+            name,
+        };
+        Seeds {
+            run_seed,
+            scene_stream: of_sample(seeds::SCENE),
+            camera_stream: of_view(seeds::CAMERA),
+            material_stream: of_sample(seeds::MATERIAL),
+            light_stream: of_sample(seeds::LIGHT),
+            background_stream: of_view(seeds::BACKGROUND),
+        }
+    }
 }
 
 /// One random stream: ChaCha8 seeded from the blake3 hash of the run seed, its scope and its name.
@@ -349,9 +376,23 @@ pub fn run_json(recipe: &Recipe) -> Result<Vec<u8>> {
         params: &recipe.params,
         dataset: &recipe.dataset,
         view_schema: ViewSchema::V1,
-        layout: "samples/{sample/1000:04}/{sample:06}_{view:02}.{rgb.png,depth.exr,mask.png,json}",
+        layout: layout(&recipe.dataset),
         manifest: "manifest.jsonl: one line per finished sample, in sample order once the dataset is complete",
     })
+}
+
+/// The path pattern of a view's files, listing the files of every output the dataset writes.
+fn layout(dataset: &DatasetSpec) -> String {
+    let files: Vec<&str> = WRITERS
+        .iter()
+        .filter(|w| dataset.outputs.wants(w.output))
+        .flat_map(|w| w.files.iter().copied())
+        .chain(["json"])
+        .collect();
+    format!(
+        "samples/{{sample/1000:04}}/{{sample:06}}_{{view:02}}.{{{}}}",
+        files.join(",")
+    )
 }
 
 impl<'a> SampleRecord<'a> {
@@ -414,17 +455,7 @@ impl<'a> SampleRecord<'a> {
             sample: sample.index,
             view,
             files,
-            seeds: Seeds {
-                run_seed: recipe.dataset.seed,
-                scene_stream: StreamRecord {
-                    scope: vec![sample.index],
-                    name: "scene",
-                },
-                camera_stream: StreamRecord {
-                    scope: vec![sample.index, u64::from(view)],
-                    name: "camera",
-                },
-            },
+            seeds: Seeds::of_view(recipe.dataset.seed, sample.index, view),
             params: &recipe.params,
             camera: CameraRecord {
                 model: CameraModel::Pinhole,

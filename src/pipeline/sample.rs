@@ -38,11 +38,11 @@ pub fn write_sample(recipe: &Recipe, sample: &BuiltSample, stage: &mut SampleSta
         let rendered = renderer.view(view)?;
         let mut files = BTreeMap::new();
         for writer in WRITERS.iter().filter(|w| dataset.outputs.wants(w.output)) {
-            for file in (writer.write)(&rendered)? {
-                let name = format!("{}.{}", file.key, file.extension);
-                let path = view_file(sample.index, view, &name);
-                stage.write(path.clone(), &file.bytes)?;
-                files.insert(file.key, path);
+            let encoded = (writer.write)(&rendered)?;
+            for ((name, key), bytes) in writer.files.iter().zip(writer.keys()).zip(encoded) {
+                let path = view_file(sample.index, view, name);
+                stage.write(path.clone(), &bytes)?;
+                files.insert(key, path);
             }
         }
         let json = json_bytes(&record.view(recipe, sample, &rendered, files))?;

@@ -7,7 +7,7 @@ use crate::materials::Backdrop;
 use crate::output::ViewLayers;
 use crate::render::{GBuffer, NO_HIT, SampleSurfaces, TraceMesh, shade};
 use crate::scene::DatasetSpec;
-use crate::seeds::{Scope, Stream};
+use crate::seeds::{self, Scope, Stream};
 use anyhow::{Result, anyhow};
 use std::sync::OnceLock;
 
@@ -17,7 +17,7 @@ pub fn view_camera(
     sample: &BuiltSample,
     view: u32,
 ) -> Result<(Camera, ViewDraw)> {
-    let mut stream = Stream::new(dataset.seed, Scope::View(sample.index, view), "camera");
+    let mut stream = Stream::new(dataset.seed, Scope::View(sample.index, view), seeds::CAMERA);
     dataset
         .camera
         .draw(&mut stream, sample.centre, sample.radius)
@@ -77,7 +77,7 @@ impl<'a> SampleRenderer<'a> {
         let mut stream = Stream::new(
             dataset.seed,
             Scope::View(self.sample.index, view),
-            "background",
+            seeds::BACKGROUND,
         );
         let frame = (dataset.camera.width, dataset.camera.height);
         let (backdrop, backdrop_drawn) = draw_backdrop(&dataset.background, &mut stream, frame);

@@ -23,7 +23,7 @@ pub use diagnostics::RecipeError;
 pub use engine::stdlib_dir;
 
 use crate::scene::{AssemblySpec, BeamSpec, DatasetSpec, SceneSpec, SourceSite, Structure};
-use crate::seeds::{Scope as StreamScope, Stream};
+use crate::seeds::{self, Scope as StreamScope, Stream};
 use api::{Dataset, Params, ScriptRng};
 use engine::{Resolver, Sources};
 use rhai::{AST, ASTNode, Array, Dynamic, Engine, FnPtr, Position, Scope, Stmt};
@@ -125,7 +125,7 @@ impl Recipe {
     pub fn scene(&self, sample: u64) -> Result<SceneSpec, RecipeError> {
         let context = format!("while drawing the scene of sample {sample}");
         let rng = ScriptRng::new(
-            Stream::new(self.dataset.seed, StreamScope::Sample(sample), "scene"),
+            Stream::new(self.dataset.seed, StreamScope::Sample(sample), seeds::SCENE),
             sample,
         );
         // Captured variables are shared cells; give each call private copies so that a scene
