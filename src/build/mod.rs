@@ -18,7 +18,7 @@ pub use beam::{BuiltBeam, beam_radius, mesh_beam, problem, section_outline, stat
 pub use light::{BackdropDraw, LightDraw, SkyDraw, SunDraw, draw_backdrop, draw_light};
 pub use tessellation::{chord_tolerance, segments_for_chord};
 
-use crate::geometry::{self, Mesh};
+use crate::geometry::{self, MAX_TRIANGLES, Mesh};
 use crate::materials::{Grain, Lighting, Shader};
 use crate::mechanics::Labels;
 use crate::scene::{DatasetSpec, SceneSpec, SourceSite, Structure};
@@ -121,6 +121,12 @@ pub fn build_sample(
                 }
                 beams.push(None);
             }
+        }
+        if assembled.mesh.triangles.len() > MAX_TRIANGLES {
+            return Err(failed(format!(
+                "the scene reaches {} triangles with this structure, over the budget of {MAX_TRIANGLES} a sample; coarsen the tessellation or split the scene",
+                assembled.mesh.triangles.len()
+            )));
         }
     }
     let Assembled {

@@ -47,6 +47,9 @@ pub fn mask_png(width: u32, height: u32, mask: &[u8]) -> Vec<u8> {
     )
 }
 
+/// The largest id a segmentation image holds (a 16-bit PNG).
+pub const MAX_SEGMENTATION_ID: u32 = u16::MAX as u32;
+
 /// Id image (0 = background): 8-bit grey when every id fits, else 16-bit (big-endian, as PNG
 /// stores it). An id beyond 16 bits is an error, never wrapped.
 pub fn id_png(width: u32, height: u32, ids: &[u32]) -> anyhow::Result<Vec<u8>> {
@@ -61,9 +64,11 @@ pub fn id_png(width: u32, height: u32, ids: &[u32]) -> anyhow::Result<Vec<u8>> {
             &bytes,
         ));
     }
-    let Ok(_) = u16::try_from(largest) else {
-        anyhow::bail!("segmentation id {largest} does not fit a 16-bit PNG (at most 65535)");
-    };
+    if largest > MAX_SEGMENTATION_ID {
+        anyhow::bail!(
+            "segmentation id {largest} does not fit a 16-bit PNG (at most {MAX_SEGMENTATION_ID})"
+        );
+    }
     let bytes: Vec<u8> = ids.iter().flat_map(|&i| (i as u16).to_be_bytes()).collect();
     Ok(png(
         width,

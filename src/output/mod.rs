@@ -11,7 +11,7 @@ mod encode;
 mod folder;
 mod writers;
 
-pub use encode::{DEPTH_CHANNEL, depth_exr, id_png, mask_png, rgb_png};
+pub use encode::{DEPTH_CHANNEL, MAX_SEGMENTATION_ID, depth_exr, id_png, mask_png, rgb_png};
 pub use folder::{DatasetFolder, SampleStage, write_atomic};
 pub use writers::{DEFAULT_OUTPUTS, ViewLayers, WRITERS, Writer, output_names};
 

@@ -5,9 +5,9 @@ use super::finite::check_finite;
 use super::record::{SampleRecord, json_bytes};
 use super::view::{SampleRenderer, view_camera};
 use crate::build::{BuiltSample, build_sample};
-use crate::output::{SampleStage, WRITERS, view_file};
+use crate::output::{MAX_SEGMENTATION_ID, SampleStage, WRITERS, view_file};
 use crate::recipe::Recipe;
-use anyhow::Result;
+use anyhow::{Result, bail};
 use std::collections::BTreeMap;
 
 /// Draws the scene of sample `index` and builds its deformed meshes; fails on anything that
@@ -26,7 +26,26 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<BuiltSample> {
     for view in 0..recipe.dataset.views {
         view_camera(&recipe.dataset, &sample, view)?;
     }
+    check_segmentation(recipe, &sample)?;
     Ok(sample)
+}
+
+/// Segmentation images hold ids up to 16 bits: a scene with more parts or structures than
+/// that is refused before anything is written, rather than wrapping ids.
+fn check_segmentation(recipe: &Recipe, sample: &BuiltSample) -> Result<()> {
+    let outputs = &recipe.dataset.outputs;
+    for (output, count, what) in [
+        ("parts", sample.parts.len(), "distinct part names"),
+        ("instances", sample.scene.structures.len(), "structures"),
+    ] {
+        if outputs.wants(output) && count as u64 > u64::from(MAX_SEGMENTATION_ID) {
+            bail!(
+                "sample {}: {count} {what}, but the \"{output}\" images hold ids up to {MAX_SEGMENTATION_ID}; write fewer, or leave \"{output}\" out of dataset.outputs",
+                sample.index
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Renders every view of the sample and stages its files. Returns the number of views written.
