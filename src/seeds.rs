@@ -70,7 +70,7 @@ mod tests {
     use super::*;
 
     /// The generator itself against the ChaCha8 value measured identical across rand_chacha
-    /// 0.3, 0.9, 0.10 and the chacha20 crate (shared/research/crates.md §5.2).
+    /// 0.3, 0.9, 0.10 and the chacha20 crate (docs/implementation-notes.md §1.2).
     #[test]
     fn chacha8_matches_the_reference_stream() {
         let mut r = ChaCha8Rng::seed_from_u64(42);
