@@ -93,7 +93,7 @@ mod tests {
     use super::*;
 
     /// The generator itself against the ChaCha8 value measured identical across rand_chacha
-    /// 0.3, 0.9, 0.10 and the chacha20 crate (shared/research/crates.md §5.2).
+    /// 0.3, 0.9, 0.10 and the chacha20 crate (docs/implementation-notes.md §1.2).
     #[test]
     fn uniform_draws_stay_finite_over_the_widest_ranges() {
         let mut s = Stream::new(0, Scope::Sample(0), "wide");

@@ -274,7 +274,7 @@ fn beam_api_reaches_the_labels() {
         read_json(&out.join(format!("samples/0000/{s:06}_00.json")))
     };
     // Fixed–fixed UDL on an I-beam: Timoshenko, δ = qL⁴/(384 EI)·(1 + 4Φ), Φ = 12EI/(κGAL²)
-    // (mechanics.md §2.1), with E = 210 GPa, ν = 0.3 and the section's A, I, κ from the JSON.
+    // (docs/mechanics.md §4.3), with E = 210 GPa, ν = 0.3 and the section's A, I, κ from the JSON.
     let s0 = &meta(0)["scene"]["structures"][0];
     let p = |k: &str| s0["section_properties"][k].as_f64().unwrap();
     let (e, g) = (210e9, 210e9 / 2.6);

@@ -2,7 +2,7 @@
 //!
 //! Owns: the exact shape of an inextensible Euler–Bernoulli rod of length L, clamped
 //! horizontally at arc length s = 0, under a vertical point load at arc length a ∈ (0, L]
-//! (`shared/research/mechanics.md` §4). Between 0 and a it is the tip-loaded elastica of
+//! (`docs/mechanics.md` §6). Between 0 and a it is the tip-loaded elastica of
 //! length a with load parameter α = P a²/EI; beyond a the rod is straight at the angle θ₀
 //! reached at a. Must not touch: meshes, cameras or files; it works on plain numbers in the
 //! beam's own frame (x along the undeformed axis, v and θ positive downward).
@@ -10,10 +10,11 @@
 //! How, and why this way:
 //! * The tip angle comes from a closed form in Carlson's symmetric integrals, parametrised by
 //!   m = sin θ₀ and q = 1 − m. The classical Bisshopp–Drucker form subtracts O(1) elliptic
-//!   integrals to get O(α) results and fails for small α (§4.4); writing K − F(φ₁) as the
-//!   single integral F(ψ₁) over the complementary amplitude, and the tip drop as an R_D
-//!   integral of a positive integrand, leaves no difference of large numbers: every α from
-//!   1e-300 up is solved to full relative precision, so the shape needs no series branch.
+//!   integrals to get O(α) results and fails for small α (docs/mechanics.md §6.2); writing
+//!   K − F(φ₁) as the single integral F(ψ₁) over the complementary amplitude, and the tip drop
+//!   as an R_D integral of a positive integrand, leaves no difference of large numbers: every
+//!   α from 1e-300 up is solved to full relative precision, so the shape needs no series
+//!   branch.
 //!   Only `linear_error` (an O(α²) difference of the two theories) uses a series, below
 //!   [`LINEAR_ERROR_SERIES_BELOW`].
 //! * The shape is integrated once, backwards from the free end where (θ₀, θ′ = 0) are known,
@@ -199,7 +200,8 @@ const SEPARATRIX_ALPHA: f64 = 800.0;
 const LINEAR_ERROR_SERIES_BELOW: f64 = 0.05;
 
 /// α/3 − δ_v/a of the tip-loaded elastica: coefficients of α³, α⁵, α⁷, α⁹ of the exact
-/// perturbation series (rational arithmetic; the first two are §4.2's 4/105 and 0.0081385).
+/// perturbation series (rational arithmetic; the first two are the 4/105 and 0.0081385 of
+/// docs/mechanics.md §6.4).
 const DROP_DEFICIT: [f64; 4] = [
     4.0 / 105.0,
     -47.0 / 5775.0,
@@ -528,8 +530,8 @@ impl Step {
 }
 
 /// False position with the Illinois modification on a bracket [lo, hi] where f changes sign
-/// (f increasing). Converges superlinearly and can never leave the bracket, unlike the
-/// secant that diverged in the §4.4 experiments.
+/// (f increasing). Converges superlinearly and can never leave the bracket, unlike an
+/// unbracketed secant, which can diverge for large α (docs/mechanics.md §10).
 fn illinois(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
     let (mut f_lo, mut f_hi) = (f(lo), f(hi));
     if f_lo >= 0.0 {
@@ -634,7 +636,8 @@ const DUPLICATION_TOLERANCE: f64 = 1e-16;
 mod tests {
     use super::*;
 
-    /// §4.2 of `shared/research/mechanics.md`: α, δ_v/L, u/L, θ₀ in degrees, as printed.
+    /// Tip values of the Bisshopp–Drucker closed form, `docs/mechanics.md` §6.4: α, δ_v/L, u/L,
+    /// θ₀ in degrees, as printed there.
     const BISSHOPP_DRUCKER: [(f64, f64, f64, f64); 14] = [
         (0.10, 0.03330, 0.00067, 2.86),
         (0.25, 0.08275, 0.00412, 7.12),
@@ -905,9 +908,9 @@ mod tests {
 
     #[test]
     fn small_loads_follow_the_series_to_full_precision() {
-        // δ_v/L = α/3 − (4/105)α³ + 0.0081385 α⁵ and θ₀ = α/2 − (11/240)α³ (§4.2), the latter
-        // with its α⁵ term 3601/403200 (exact perturbation series, rational arithmetic): the
-        // dropped terms are < 1e-17 relative for α ≤ 1e-4 and < 1e-14 at 0.01.
+        // δ_v/L = α/3 − (4/105)α³ + 0.0081385 α⁵ and θ₀ = α/2 − (11/240)α³ (docs/mechanics.md
+        // §6.4), the latter with its α⁵ term 3601/403200 (exact perturbation series, rational
+        // arithmetic): the dropped terms are < 1e-17 relative for α ≤ 1e-4 and < 1e-14 at 0.01.
         for (alpha, tolerance) in [(1e-8, 1e-15), (1e-4, 1e-15), (0.01, 1e-13)] {
             let (d, _, t) = tip_values(3.0, alpha);
             let series = alpha / 3.0 - 4.0 / 105.0 * alpha.powi(3) + 0.0081385 * alpha.powi(5);
@@ -956,7 +959,7 @@ mod tests {
 
     #[test]
     fn linear_error_matches_the_table_and_is_continuous_at_its_switch() {
-        // §4.2's last column: (α/3)/δ_v − 1, printed to 0.01 % or 1 %.
+        // The last column of docs/mechanics.md §6.4: (α/3)/δ_v − 1, printed to 0.01 % or 1 %.
         for (alpha, percent, printed) in [
             (0.1, 0.11, 0.01),
             (0.5, 2.79, 0.01),
@@ -973,7 +976,7 @@ mod tests {
                 printed / 2.0,
             );
         }
-        // §4.3: ≈ (4/35)α² for small α, to relative α².
+        // docs/mechanics.md §6.5: ≈ (4/35)α² for small α, to relative α².
         for alpha in [1e-6, 1e-3] {
             let e = Elastica::from_load_parameter(1.0, 1.0, alpha);
             assert_close(

@@ -265,7 +265,7 @@ mod tests {
 
     #[test]
     fn point_load_closed_forms() {
-        // mechanics.md §1.2, §1.3, §1.6; unit EI.
+        // Classical closed forms, docs/mechanics.md §2.2 (e.g. Gere & Goodno); unit EI.
         let (p, a) = (3.0, 1.1);
         let b = L - a;
         let loads = [Load::Point { at: a, force: p }];
@@ -353,7 +353,8 @@ mod tests {
 
     #[test]
     fn end_moments_and_partial_loads() {
-        // SS with end moments: v = [M_A x(L−x)(2L−x) + M_B x(L−x)(L+x)]/(6L) (§1.5).
+        // SS with end moments: v = [M_A x(L−x)(2L−x) + M_B x(L−x)(L+x)]/(6L)
+        // (docs/mechanics.md §2.2).
         let (ma, mb) = (1.3, -0.4);
         let loads = [Load::EndMoments { start: ma, end: mb }];
         for i in 0..=10 {
@@ -502,7 +503,7 @@ mod tests {
 
     #[test]
     fn timoshenko_matches_the_published_shear_factors() {
-        // δ_T/δ_EB = 1 + c(h/L)² with Φ = 12 EI/(κGA L²) (mechanics.md §2.1): SS centre 1 + Φ,
+        // δ_T/δ_EB = 1 + c(h/L)² with Φ = 12 EI/(κGA L²) (docs/mechanics.md §4.3): SS centre 1 + Φ,
         // cantilever tip 1 + Φ/4, SS UDL 1 + 0.8Φ, fixed–fixed centre 1 + 4Φ.
         let flex = 0.02 * L * L; // EI/(κGA) = Φ L²/12 with Φ = 0.24
         let phi = 12.0 * 0.02;

@@ -118,7 +118,7 @@ mod tests {
 
     #[test]
     fn shortening_matches_closed_form() {
-        // ½∫v′² = 2.4 δ²/L for the SS centre load (mechanics.md §3).
+        // ½∫v′² = 2.4 δ²/L for the SS centre load (docs/mechanics.md §5.2).
         let stations: Vec<f64> = (0..=6).map(|i| f64::from(i) / 6.0).collect();
         let frames = section_frames(&stations, Mapping::RotateSections, ss_centre(0.1));
         assert!((1.0 - frames[6].x - 2.4 * 0.01).abs() < 1e-14);

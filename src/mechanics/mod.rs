@@ -8,7 +8,8 @@
 //! their plausible amplitudes. Must not touch: meshes, cameras or files; it works on plain
 //! numbers in the beam's own frame (axis along x from 0 to L, deflection v positive downward).
 //!
-//! Formulas, reference values and traps: `shared/research/mechanics.md`.
+//! Formulas, reference values, floating-point traps and the primary literature:
+//! `docs/mechanics.md`.
 
 mod elastica;
 mod linear;

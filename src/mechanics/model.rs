@@ -3,7 +3,7 @@
 //! Both linear theories are cheap, so both are solved: their difference is the estimated
 //! error of Euler–Bernoulli, and Timoshenko is used where that error exceeds the tolerance
 //! (unless the recipe pins a theory). Geometric nonlinearity is estimated from the rotation
-//! (mechanics.md §4.3) and reported; loads given as a target deflection only fix the shape,
+//! (docs/mechanics.md §6.5) and reported; loads given as a target deflection only fix the shape,
 //! and the physical load is derived from it.
 
 use super::elastica::Elastica;
@@ -494,7 +494,7 @@ fn modal(p: &BeamProblem) -> Deformation {
 }
 
 /// Linear theory's relative tip error ≈ k (δ/L)²: 1.03 for a cantilever, 4.1 for beams held at
-/// both ends (half-span analogue, mechanics.md §4.3).
+/// both ends (half-span analogue, docs/mechanics.md §6.5).
 fn nonlinearity(support: Support) -> f64 {
     if support == Support::Cantilever {
         1.03
@@ -604,7 +604,7 @@ mod tests {
 
     #[test]
     fn euler_bernoulli_error_by_slenderness_matches_the_published_table() {
-        // mechanics.md §2.2 (Cowper κ, ν = 0.3): (δ_EB − δ_T)/δ_T for SS centre load is
+        // docs/mechanics.md §4.4 (Cowper κ, ν = 0.3): (δ_EB − δ_T)/δ_T for SS centre load is
         // −25.4 % at L/h = 3, −2.97 % at 10, −0.03 % at 100; cantilever tip −7.83 %, −0.76 %, −0.01 %.
         for (support, at, table) in [
             (
@@ -656,7 +656,7 @@ mod tests {
         let d = Deformation::solve(&slender).unwrap();
         assert_eq!(d.labels.theory, Theory::EulerBernoulli);
         assert!(d.labels.estimated_error < 0.01);
-        // Shape difference at L/h = 3 for a target peak: 4.88 % of δ (mechanics.md §2.3).
+        // Shape difference at L/h = 3 for a target peak: 4.88 % of δ (docs/mechanics.md §4.5).
         assert!(
             (Deformation::solve(&{
                 let mut p = stocky.clone();
@@ -709,7 +709,8 @@ mod tests {
 
     #[test]
     fn auto_switches_to_the_elastica_for_large_cantilever_deflections() {
-        // Bisshopp–Drucker, α = PL²/EI = 1: δ/L = 0.30172, shortening u/L = 0.05643 (mechanics.md §4.2).
+        // Bisshopp–Drucker, α = PL²/EI = 1: δ/L = 0.30172, shortening u/L = 0.05643
+        // (docs/mechanics.md §6.4).
         let mut p = problem(Support::Cantilever, 40.0, vec![], Target::Physical);
         let ei = 210e9 * p.section.second_moment;
         p.loads = vec![Load::Point {
@@ -727,7 +728,7 @@ mod tests {
                 .abs()
                 < 1e-4
         );
-        // Linear theory would have said α/3 = 0.3333: +10.5 % (mechanics.md §4.2).
+        // Linear theory would have said α/3 = 0.3333: +10.5 % (docs/mechanics.md §6.4).
         assert!((d.labels.linear_theory_error.unwrap() - 0.105).abs() < 0.001);
         // Small deflections stay linear; an upward target mirrors.
         p.loads = vec![Load::Point {

@@ -5,7 +5,7 @@
 //! meshes, cameras or files; it works on the dimensionless coordinate alone and knows nothing of
 //! the beam's length, section or material (ω_n = λ_n² √(EI/(ρA L⁴)) is the caller's business).
 //!
-//! Formulas: `shared/research/mechanics.md` §5. The textbook clamped-end mode
+//! Formulas: `docs/mechanics.md` §7 (after Tang 2003). The textbook clamped-end mode
 //! cosh λξ − cos λξ − σ(sinh λξ − sin λξ) subtracts numbers of size e^λ to leave a result of
 //! size 1, so in f64 it is useless from mode 13 on and NaN from mode 227. Every case clamped at
 //! ξ = 0 is written instead as the exact rewrite
@@ -472,7 +472,8 @@ mod tests {
 
     #[test]
     fn cantilever_roots_match_high_precision_values() {
-        // mechanics.md §5.2, mpmath with 80–250 digits.
+        // Roots of cos λ cosh λ = −1 computed with 80–250-digit arithmetic
+        // (docs/mechanics.md §7.2).
         let roots = [
             1.8751040687119612,
             4.6940911329741746,

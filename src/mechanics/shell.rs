@@ -1,5 +1,5 @@
 //! Radial deformation patterns of cylindrical shells (silos, tanks), with explicit amplitudes
-//! and the amplitude a physical load would plausibly give (mechanics.md §6).
+//! and the amplitude a physical load would plausibly give (docs/mechanics.md §8).
 //!
 //! Patterns are functions w(θ, z) of the angle about the shell axis and the height above its
 //! base, outward positive, in metres. They are labelled damage or load states, not solutions:
@@ -315,9 +315,9 @@ mod tests {
 
     #[test]
     fn plausible_amplitudes_match_the_worked_examples() {
-        // mechanics.md §6.2 (r = 3 m, t = 6 mm, H = 15 m, q = 1 kPa): W₂ = 0.42 mm, W₃ = 0.96 mm,
-        // W₄ = −0.96 mm, W₅ = −0.74 mm, global sway 0.21 mm; §6.3: dimple tolerance 5.4 mm and
-        // Δw_k = 5.4 mm for class B.
+        // docs/mechanics.md §8.3 (r = 3 m, t = 6 mm, H = 15 m, q = 1 kPa, AS/NZS 1170.2 wind
+        // harmonics): W₂ = 0.42 mm, W₃ = 0.96 mm, W₄ = −0.96 mm, W₅ = −0.74 mm, global sway
+        // 0.21 mm; EN 1993-1-6 class B: dimple tolerance 5.4 mm and Δw_k = 5.4 mm.
         let oval = |n| {
             ShellPattern::Ovalisation {
                 amplitude: 0.0,

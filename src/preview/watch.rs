@@ -7,9 +7,9 @@
 //! ends the watcher: the error is shown and the last good sheet stays in place.
 //!
 //! Folders, not files, are watched (non-recursively): an editor's atomic save replaces the
-//! file, and a watch on the file itself would be lost with the old inode
-//! (shared/research/crates.md §6.2). Not recursively, because a recipe's folder may also hold
-//! datasets, whose thousands of files must neither cost watches nor trigger reloads.
+//! file, and a watch on the file itself would be lost with the old inode (inotify(7);
+//! docs/implementation-notes.md §2.1). Not recursively, because a recipe's folder may also
+//! hold datasets, whose thousands of files must neither cost watches nor trigger reloads.
 
 use super::serve::Server;
 use super::sheet::{self, Preview, PreviewOptions};
