@@ -31,7 +31,7 @@ mod tests {
     #[test]
     fn chord_rule_gives_the_error_it_promises() {
         // Simply supported, centre load: κ_max = 12δ/L², so N equal intervals leave a chord
-        // error of L²κ/(8N²) = 1.5 δ/N² (docs/mechanics.md, tessellation).
+        // error of L²κ/(8N²) = 1.5 δ/N² (docs/mechanics.md §9.2).
         let (l, delta, tol) = (4.0, 0.2, 1e-3);
         let n = segments_for_chord(l, 12.0 * delta / (l * l), tol);
         assert!(

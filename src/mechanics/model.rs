@@ -697,7 +697,7 @@ mod tests {
         assert!((d.labels.max_deflection_at - 10.0).abs() < 1e-6);
         assert!(
             !d.labels.physically_plausible,
-            "0.05 L at L/h = 40 exceeds yield (mechanics.md §4.5)"
+            "0.05 L at L/h = 40 exceeds yield (docs/mechanics.md §3.3)"
         );
         // Target at a point.
         p.target = Target::At {
