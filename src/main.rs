@@ -37,7 +37,9 @@ enum Command {
         /// Render only samples with index ≡ K (mod N), e.g. 0/4. Shards share one --out.
         #[arg(long, default_value = "0/1")]
         shard: Shard,
-        /// Replace a different dataset already in --out.
+        /// Replace a different dataset already in --out: says first what differs and how many
+        /// finished samples it deletes; refused while another process writes that dataset.
+        /// Never needed to resume the same dataset.
         #[arg(long)]
         force: bool,
         /// No progress output.

@@ -1,144 +1,374 @@
-//! The dataset folder: run.json, manifest.jsonl, staging and commit of samples.
+//! The dataset folder: run.json, manifest.jsonl, staging and commit of samples, the locks
+//! that let shards share a folder, and the clean-up of what interrupted runs leave.
+//!
+//! Everything transient lives in `.partial/`: `folder.lock` (held while a run opens the
+//! folder, replaces a dataset, or finishes), `shard-K-of-N.lock` (held by the process writing
+//! shard K/N, which records its pid there) and `shard-K-of-N/` (that shard's staging).
+//! Temporary files of `run.json` and `manifest.jsonl` are written only under `folder.lock`,
+//! so any found while holding it are stale and removed.
 
+use super::fault::{self, Fault};
+use super::lock::{Lock, recorded_holder};
 use anyhow::{Context, Result, bail};
-use std::collections::BTreeSet;
-use std::fs::{self, OpenOptions};
-use std::io::Write;
+use serde_json::Value;
+use std::collections::{BTreeSet, HashSet};
+use std::fmt::Display;
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 const RUN_JSON: &str = "run.json";
 const MANIFEST: &str = "manifest.jsonl";
 const STAGING: &str = ".partial";
 const SAMPLES: &str = "samples";
+const FOLDER_LOCK: &str = "folder.lock";
+/// Differences between two datasets listed in an error, at most.
+const DIFFERENCES_SHOWN: usize = 6;
 
-/// A dataset's output folder: `run.json`, `manifest.jsonl` and the committed samples, with a
-/// staging area for samples being written.
+/// The `run.json` of the dataset being written, given the one already in the folder (if it
+/// parses): fields that do not identify a dataset may be carried over from it.
+pub type Identity<'a> = &'a dyn Fn(Option<&Value>) -> Result<Vec<u8>>;
+
+/// A dataset's output folder, opened for one shard: `run.json`, `manifest.jsonl` and the
+/// committed samples, with a staging area for the samples this process is writing.
 pub struct DatasetFolder {
     root: PathBuf,
+    shard: Option<ShardLease>,
+}
+
+/// The lock on a shard and its staging folder.
+struct ShardLease {
+    lock: Lock,
+    staging: PathBuf,
 }
 
 /// A sample being written: its files go into a private staging folder first.
 pub struct SampleStage {
     sample: u64,
     dir: PathBuf,
+    root: PathBuf,
     files: Vec<String>,
     /// Bytes staged so far.
     pub bytes: u64,
+}
+
+/// Sample indices of one shard (those ≡ K mod N), one bit each from 0 to the highest: memory
+/// grows with the samples finished, never with the dataset's size.
+pub struct SampleSet {
+    count: u64,
+    bits: Vec<u64>,
+    len: u64,
+}
+
+/// What a folder holds, in the eyes of the dataset about to be written.
+enum Holds {
+    /// No dataset: a missing or empty folder, or only leftovers of an interrupted start.
+    Nothing,
+    /// This dataset; `rewrite` when its run.json's bytes differ (another serialisation).
+    Same { rewrite: bool },
+    /// Another dataset (or one that cannot be identified): what differs, and how many
+    /// finished samples it has.
+    Other { why: String, finished: u64 },
+    /// Files shmgen did not write, and no dataset.
+    Foreign { names: Vec<String> },
 }
 
 impl SampleStage {
     /// Writes one file of the sample (path relative to the dataset root) into staging.
     pub fn write(&mut self, relative: String, bytes: &[u8]) -> Result<()> {
         let staged = self.dir.join(self.files.len().to_string());
-        fs::write(&staged, bytes).with_context(|| format!("writing {}", staged.display()))?;
+        fault::write_through("stage", bytes, |b| fs::write(&staged, b))
+            .map_err(|e| io_error(e, format_args!("writing {relative}"), &self.root))?;
         self.bytes += bytes.len() as u64;
         self.files.push(relative);
         Ok(())
     }
 }
 
+impl SampleSet {
+    /// An empty set of the samples of a shard of `count` shards.
+    pub fn new(count: u64) -> SampleSet {
+        SampleSet {
+            count: count.max(1),
+            bits: Vec::new(),
+            len: 0,
+        }
+    }
+
+    fn insert(&mut self, sample: u64) {
+        let position = sample / self.count;
+        let word = usize::try_from(position / 64).expect("a sample index fits in memory");
+        if word >= self.bits.len() {
+            self.bits.resize(word + 1, 0);
+        }
+        let bit = 1u64 << (position % 64);
+        if self.bits[word] & bit == 0 {
+            self.bits[word] |= bit;
+            self.len += 1;
+        }
+    }
+
+    /// Whether `sample` (a sample of the shard) is in the set.
+    pub fn contains(&self, sample: u64) -> bool {
+        let position = sample / self.count;
+        usize::try_from(position / 64)
+            .ok()
+            .and_then(|word| self.bits.get(word))
+            .is_some_and(|w| w & (1 << (position % 64)) != 0)
+    }
+
+    /// Number of samples in the set.
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    /// Whether the set is empty.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
 impl DatasetFolder {
-    /// Opens `root` for the dataset described by `run_json`. A folder holding another
-    /// dataset (different run.json) is refused unless `force`, which clears what shmgen wrote
-    /// there before; files shmgen did not write are never touched.
-    pub fn open(root: &Path, run_json: &[u8], force: bool) -> Result<DatasetFolder> {
-        let folder = DatasetFolder {
+    /// What opening `root` for shard `shard` = (K, N) of the dataset `identity` of `total`
+    /// samples would find, without writing anything: the shard's samples already finished,
+    /// or the error opening would give (a folder holding another dataset or foreign files,
+    /// unless `force`).
+    pub fn check(
+        root: &Path,
+        identity: Identity,
+        force: bool,
+        shard: (u64, u64),
+        total: u64,
+    ) -> Result<SampleSet> {
+        let (holds, _) = survey(root, identity)?;
+        refuse(root, &holds, force)?;
+        match holds {
+            Holds::Same { .. } => completed_in(root, shard, total),
+            _ => Ok(SampleSet::new(shard.1)),
+        }
+    }
+
+    /// Opens `root` for writing shard `shard` = (K, N) of the dataset whose run.json
+    /// `identity` gives. A folder holding another dataset is refused, saying what differs
+    /// and how many finished samples `force` would delete; with `force` it is replaced (said
+    /// first, on stderr), unless another process is writing it. Files shmgen did not write
+    /// are never touched. A shard being written by another process is refused.
+    pub fn open(
+        root: &Path,
+        identity: Identity,
+        force: bool,
+        shard: (u64, u64),
+    ) -> Result<DatasetFolder> {
+        let existed = root.exists();
+        fs::create_dir_all(root).map_err(|e| io_error(e, "creating the output folder", root))?;
+        let mut folder = DatasetFolder {
             root: root.to_path_buf(),
+            shard: None,
         };
-        fs::create_dir_all(root)
-            .with_context(|| format!("creating output folder {}", root.display()))?;
-        match fs::read(folder.path(RUN_JSON)) {
-            Ok(existing) if existing == run_json => {
-                folder.terminate_torn_line()?;
-                return Ok(folder);
+        let opened = folder.lock_folder().and_then(|setup| {
+            let opened = folder.open_locked(identity, force, shard);
+            if opened.is_err() {
+                let _ = folder.release_shard();
             }
-            Ok(_) if !force => bail!(
-                "{} holds a different dataset (its run.json differs: another recipe, seed, parameters or shmgen version); \
-                 choose another --out or pass --force to replace it",
-                root.display()
-            ),
-            Ok(_) => folder.clear()?,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                let foreign = fs::read_dir(root)?
-                    .filter_map(|e| e.ok())
-                    .any(|e| e.file_name() != STAGING);
-                if foreign && !force {
-                    bail!(
-                        "{} is not empty and holds no shmgen dataset; choose another --out or pass --force to write into it",
-                        root.display()
-                    );
-                }
-            }
-            Err(e) => {
-                return Err(e)
-                    .with_context(|| format!("reading {}", folder.path(RUN_JSON).display()));
+            setup.remove()?;
+            opened
+        });
+        if opened.is_err() {
+            // Leave a refused folder as it was.
+            let _ = fs::remove_dir(folder.path(STAGING));
+            if !existed {
+                let _ = fs::remove_dir(root);
             }
         }
-        write_atomic(&folder.path(RUN_JSON), run_json)?;
-        Ok(folder)
+        opened.map(|()| folder)
+    }
+
+    fn open_locked(&mut self, identity: Identity, force: bool, shard: (u64, u64)) -> Result<()> {
+        let root = self.root.clone();
+        let (holds, run_json) = survey(&root, identity)?;
+        refuse(&root, &holds, force)?;
+        match &holds {
+            Holds::Same { rewrite: false } => {}
+            Holds::Same { rewrite: true } | Holds::Nothing => self.write_run_json(&run_json)?,
+            Holds::Other { why, finished } => {
+                self.refuse_if_being_written()?;
+                eprintln!(
+                    "--force: {} holds a different dataset ({why}); deleting its {finished} finished samples (manifest.jsonl, samples/, run.json)",
+                    root.display()
+                );
+                self.clear()?;
+                self.write_run_json(&run_json)?;
+            }
+            Holds::Foreign { names } => {
+                eprintln!(
+                    "--force: writing the dataset into {} beside files shmgen did not write, which are kept: {}",
+                    root.display(),
+                    names.join(", ")
+                );
+                self.write_run_json(&run_json)?;
+            }
+        }
+        self.remove_stale_temporaries()?;
+
+        let (k, n) = shard;
+        let name = format!("shard-{k}-of-{n}");
+        let lock_path = self.path(STAGING).join(format!("{name}.lock"));
+        let Some(mut lock) = Lock::acquire(&lock_path, false)
+            .map_err(|e| io_error(e, "locking the shard", &root))?
+        else {
+            bail!(
+                "shard {k}/{n} of {} is being written by another process ({}); wait for it to finish (or stop it and run again to resume)",
+                root.display(),
+                recorded_holder(&lock_path)
+            );
+        };
+        lock.record_holder()
+            .map_err(|e| io_error(e, "locking the shard", &root))?;
+        let staging = self.path(STAGING).join(name);
+        remove_all(&staging)?;
+        self.shard = Some(ShardLease { lock, staging });
+        self.terminate_torn_line()
+    }
+
+    fn write_run_json(&self, bytes: &[u8]) -> Result<()> {
+        write_atomic_with(&self.path(RUN_JSON), |out| out.write_all(bytes))
+            .map_err(|e| io_error(e, "writing run.json", &self.root))
+    }
+
+    /// Takes the folder lock, saying so when another process holds it.
+    fn lock_folder(&self) -> Result<Lock> {
+        let path = self.path(STAGING).join(FOLDER_LOCK);
+        let locking = |wait| {
+            Lock::acquire(&path, wait).map_err(|e| io_error(e, "locking the folder", &self.root))
+        };
+        let mut lock = match locking(false)? {
+            Some(lock) => lock,
+            None => {
+                eprintln!(
+                    "waiting for another shmgen process ({}) to finish opening or finishing {}",
+                    recorded_holder(&path),
+                    self.root.display()
+                );
+                locking(true)?.expect("a blocking lock is taken")
+            }
+        };
+        lock.record_holder()
+            .map_err(|e| io_error(e, "locking the folder", &self.root))?;
+        Ok(lock)
+    }
+
+    /// Before replacing a dataset: no other process may be writing any shard of it.
+    fn refuse_if_being_written(&self) -> Result<()> {
+        for (lock_path, shard) in self.shard_locks()? {
+            if Lock::acquire(&lock_path, false)?.is_none() {
+                bail!(
+                    "{} is being written by another process (shard {shard}, {}); --force does not delete a dataset while it is written: stop that process first",
+                    self.root.display(),
+                    recorded_holder(&lock_path)
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The shard lock files in staging, with the shard each names ("K/N").
+    fn shard_locks(&self) -> Result<Vec<(PathBuf, String)>> {
+        let mut locks = Vec::new();
+        for name in entries(&self.path(STAGING))? {
+            if let Some(shard) = name
+                .strip_prefix("shard-")
+                .and_then(|s| s.strip_suffix(".lock"))
+            {
+                let shard = shard.replacen("-of-", "/", 1);
+                locks.push((self.path(STAGING).join(&name), shard));
+            }
+        }
+        Ok(locks)
     }
 
     /// A crash can leave a manifest line without its newline; end it so that the next
     /// appended line stays parseable (the fragment itself is ignored).
     fn terminate_torn_line(&self) -> Result<()> {
         let path = self.path(MANIFEST);
-        match fs::read(&path) {
-            Ok(bytes) if bytes.last().is_some_and(|&b| b != b'\n') => {
-                OpenOptions::new()
-                    .append(true)
-                    .open(&path)?
-                    .write_all(b"\n")?;
-            }
-            _ => {}
+        if !path.exists() {
+            return Ok(());
+        }
+        let lock = self.lock_manifest()?;
+        let mut file = lock.file();
+        let len = file.metadata()?.len();
+        let mut last = [b'\n'];
+        if len > 0 {
+            let mut reader = File::open(&path)?;
+            reader.seek(SeekFrom::Start(len - 1))?;
+            reader.read_exact(&mut last)?;
+        }
+        if last[0] != b'\n' {
+            file.write_all(b"\n")
+                .map_err(|e| io_error(e, "ending a torn line of manifest.jsonl", &self.root))?;
         }
         Ok(())
+    }
+
+    /// The manifest, created if missing, opened for appending and locked.
+    fn lock_manifest(&self) -> Result<Lock> {
+        let mut options = OpenOptions::new();
+        options.create(true).append(true);
+        let lock = Lock::acquire_with(&self.path(MANIFEST), &options, true)
+            .map_err(|e| io_error(e, "opening manifest.jsonl", &self.root))?;
+        Ok(lock.expect("a blocking lock is taken"))
     }
 
     fn path(&self, relative: &str) -> PathBuf {
         self.root.join(relative)
     }
 
+    /// Deletes the dataset in the folder, manifest first: an interruption leaves samples
+    /// that no manifest lists (redone or deleted later), never a manifest listing deleted
+    /// samples. run.json goes last, so the folder stays recognisably shmgen's.
     fn clear(&self) -> Result<()> {
-        for dir in [SAMPLES, STAGING] {
-            match fs::remove_dir_all(self.path(dir)) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e.into()),
-                _ => {}
+        remove_all(&self.path(MANIFEST))?;
+        remove_all(&self.path(SAMPLES))?;
+        for name in entries(&self.path(STAGING))? {
+            if name != FOLDER_LOCK {
+                remove_all(&self.path(STAGING).join(name))?;
             }
         }
-        for file in [MANIFEST, RUN_JSON] {
-            match fs::remove_file(self.path(file)) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e.into()),
-                _ => {}
+        remove_all(&self.path(RUN_JSON))
+    }
+
+    /// Removes temporary files of run.json and the manifest: they are written only under
+    /// the folder lock, which the caller holds, so any there are stale.
+    fn remove_stale_temporaries(&self) -> Result<()> {
+        for name in entries(&self.root)? {
+            if is_temporary(&name) {
+                remove_all(&self.path(&name))?;
             }
         }
         Ok(())
     }
 
-    /// Samples listed in the manifest. Lines that do not parse (a torn write after a crash)
-    /// are ignored: their sample is simply redone.
-    pub fn completed(&self) -> Result<BTreeSet<u64>> {
-        let text = match fs::read_to_string(self.path(MANIFEST)) {
-            Ok(t) => t,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(BTreeSet::new()),
-            Err(e) => return Err(e.into()),
-        };
-        Ok(text
-            .split_inclusive('\n')
-            .filter(|l| l.ends_with('\n'))
-            .filter_map(manifest_sample)
-            .collect())
+    /// The samples of shard `shard` = (K, N) below `total` listed in the manifest. Lines that
+    /// do not parse (a torn write after a crash) are ignored: their sample is simply redone.
+    pub fn completed(&self, shard: (u64, u64), total: u64) -> Result<SampleSet> {
+        completed_in(&self.root, shard, total)
     }
 
     /// A fresh staging area for `sample`, discarding leftovers of an interrupted attempt.
     pub fn stage(&self, sample: u64) -> Result<SampleStage> {
-        let dir = self.path(STAGING).join(format!("{sample:06}"));
-        if dir.exists() {
-            fs::remove_dir_all(&dir)?;
-        }
-        fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        let staging = &self
+            .shard
+            .as_ref()
+            .expect("an open folder holds its shard")
+            .staging;
+        let dir = staging.join(format!("{sample:06}"));
+        remove_all(&dir)?;
+        fs::create_dir_all(&dir)
+            .map_err(|e| io_error(e, format_args!("staging sample {sample}"), &self.root))?;
         Ok(SampleStage {
             sample,
             dir,
+            root: self.root.clone(),
             files: Vec::new(),
             bytes: 0,
         })
@@ -149,96 +379,440 @@ impl DatasetFolder {
         for (i, relative) in stage.files.iter().enumerate() {
             let target = self.path(relative);
             if let Some(parent) = target.parent() {
-                fs::create_dir_all(parent)?;
+                fs::create_dir_all(parent).map_err(|e| {
+                    io_error(
+                        e,
+                        format_args!("creating the folder of {relative}"),
+                        &self.root,
+                    )
+                })?;
             }
-            fs::rename(stage.dir.join(i.to_string()), &target)
-                .with_context(|| format!("moving {} into place", target.display()))?;
+            fs::rename(stage.dir.join(i.to_string()), &target).map_err(|e| {
+                io_error(e, format_args!("moving {relative} into place"), &self.root)
+            })?;
         }
+        fault::check("commit")?;
         let line =
             serde_json::json!({ "sample": stage.sample, "views": views, "files": stage.files });
         let mut line = serde_json::to_vec(&line)?;
         line.push(b'\n');
-        // One write of a whole line in append mode: concurrent shards never interleave lines.
-        let mut manifest = OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(self.path(MANIFEST))?;
-        manifest.write_all(&line)?;
+        // One write of a whole line in append mode, under the manifest's lock: concurrent
+        // shards never interleave lines, even on a shared filesystem.
+        let lock = self.lock_manifest()?;
+        fault::write_through("append", &line, |b| lock.file().write_all(b))
+            .map_err(|e| io_error(e, "appending to manifest.jsonl", &self.root))?;
+        drop(lock);
+        fault::check("committed")?;
         fs::remove_dir(&stage.dir)?;
         Ok(())
     }
 
-    /// Once every sample of the dataset is in the manifest, rewrites it in sample order so
-    /// that the finished dataset has the same bytes however it was run. Returns whether the
+    /// Ends this process's work on the folder: releases its shard, then — once every sample
+    /// of the dataset is in the manifest — rewrites the manifest in sample order so that the
+    /// finished dataset has the same bytes however it was run, and removes what interrupted
+    /// runs left (temporary files, staging of shards no process holds). Returns whether the
     /// dataset is complete.
-    pub fn finalize(&self, total: u64) -> Result<bool> {
-        let done = self.completed()?;
-        if done.len() as u64 != total
-            || done
-                .iter()
-                .next_back()
-                .is_some_and(|&last| last + 1 != total)
-        {
+    pub fn finish(mut self, total: u64) -> Result<bool> {
+        self.release_shard()?;
+        let setup = self.lock_folder()?;
+        let complete = self.finalize_manifest(total)?;
+        self.remove_stale_temporaries()?;
+        // Shards no process holds: their lock files and staging go.
+        let mut held = Vec::new();
+        for (path, _) in self.shard_locks()? {
+            match Lock::acquire(&path, false) {
+                Ok(Some(lock)) => lock.remove()?,
+                _ => held.extend(path.file_stem().map(|s| s.to_string_lossy().to_string())),
+            }
+        }
+        for name in entries(&self.path(STAGING))? {
+            let stem = name.strip_suffix(".lock").unwrap_or(&name);
+            if name != FOLDER_LOCK && !held.iter().any(|h| h == stem) {
+                remove_all(&self.path(STAGING).join(&name))?;
+            }
+        }
+        setup.remove()?;
+        let _ = fs::remove_dir(self.path(STAGING));
+        Ok(complete)
+    }
+
+    fn release_shard(&mut self) -> Result<()> {
+        if let Some(ShardLease { lock, staging }) = self.shard.take() {
+            remove_all(&staging)?;
+            lock.remove()?;
+        }
+        Ok(())
+    }
+
+    /// Puts the manifest in sample order, without duplicates or torn lines, once it lists
+    /// every sample below `total`. Memory: a bit per sample and, only when the manifest is
+    /// out of order, 24 bytes per line.
+    fn finalize_manifest(&self, total: u64) -> Result<bool> {
+        let path = self.path(MANIFEST);
+        let lock = self.lock_manifest()?;
+        let (mut lines, mut ordered, mut last) = (0u64, true, None);
+        scan_manifest(&path, |line| match line {
+            Some((sample, _, _)) if sample < total => {
+                lines += 1;
+                ordered &= last.is_none_or(|l| l < sample);
+                last = Some(sample);
+            }
+            _ => ordered = false,
+        })?;
+        if lines < total {
             return Ok(false);
         }
-        let text = fs::read_to_string(self.path(MANIFEST))?;
-        let mut lines: Vec<(u64, &str)> = text
-            .split_inclusive('\n')
-            .filter(|l| l.ends_with('\n'))
-            .filter_map(|l| manifest_sample(l).map(|s| (s, l)))
-            .collect();
-        lines.sort_by_key(|&(s, _)| s);
-        lines.dedup_by_key(|&mut (s, _)| s);
-        let sorted: String = lines.into_iter().map(|(_, l)| l).collect();
-        if sorted != text {
-            write_atomic(&self.path(MANIFEST), sorted.as_bytes())?;
+        if ordered && lines == total {
+            return Ok(true);
         }
-        let _ = fs::remove_dir(self.path(STAGING));
+        let mut seen = SampleSet::new(1);
+        let mut index = Vec::new();
+        scan_manifest(&path, |line| {
+            if let Some((sample, offset, len)) = line
+                && sample < total
+                && !seen.contains(sample)
+            {
+                seen.insert(sample);
+                index.push((sample, offset, len));
+            }
+        })?;
+        if seen.len() < total {
+            return Ok(false);
+        }
+        index.sort_unstable();
+        let mut source = File::open(&path)?;
+        write_atomic_with(&path, |out| {
+            let mut buffer = Vec::new();
+            for &(_, offset, len) in &index {
+                buffer.resize(len, 0);
+                source.seek(SeekFrom::Start(offset))?;
+                source.read_exact(&mut buffer)?;
+                out.write_all(&buffer)?;
+            }
+            Ok(())
+        })
+        .map_err(|e| io_error(e, "sorting manifest.jsonl", &self.root))?;
+        drop(lock);
         Ok(true)
     }
 }
 
-fn manifest_sample(line: &str) -> Option<u64> {
-    serde_json::from_str::<serde_json::Value>(line)
-        .ok()?
-        .get("sample")?
-        .as_u64()
+impl Drop for DatasetFolder {
+    /// A run that stops on an error leaves no staging behind (its samples were not
+    /// committed) and frees its shard.
+    fn drop(&mut self) {
+        if self.release_shard().is_ok() {
+            let _ = fs::remove_dir(self.path(STAGING));
+        }
+    }
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
+/// What `root` holds for the dataset `identity`, and this dataset's run.json bytes.
+fn survey(root: &Path, identity: Identity) -> Result<(Holds, Vec<u8>)> {
+    let run_json = root.join(RUN_JSON);
+    let recorded = match fs::read(&run_json) {
+        Ok(bytes) => Some(bytes),
+        Err(e) if e.kind() == io::ErrorKind::NotFound => None,
+        Err(e) => return Err(io_error(e, "reading run.json", root)),
+    };
+    let Some(recorded) = recorded else {
+        let ours = identity(None)?;
+        if root.join(MANIFEST).exists() {
+            let why = "it has a manifest.jsonl but no run.json".to_string();
+            let finished = finished_samples(root)?;
+            return Ok((Holds::Other { why, finished }, ours));
+        }
+        let names: Vec<String> = entries(root)?
+            .into_iter()
+            .filter(|n| n != STAGING && !is_temporary(n))
+            .collect();
+        let holds = if names.is_empty() {
+            Holds::Nothing
+        } else {
+            Holds::Foreign { names }
+        };
+        return Ok((holds, ours));
+    };
+    let (holds, ours) = match serde_json::from_slice::<Value>(&recorded) {
+        Ok(value) => {
+            let ours = identity(Some(&value))?;
+            let parsed: Value = serde_json::from_slice(&ours)?;
+            if parsed == value {
+                let rewrite = ours != recorded;
+                (Holds::Same { rewrite }, ours)
+            } else {
+                let why = differences(&value, &parsed);
+                let finished = finished_samples(root)?;
+                (Holds::Other { why, finished }, ours)
+            }
+        }
+        Err(e) => {
+            let why = format!("its run.json is not valid JSON: {e}");
+            let finished = finished_samples(root)?;
+            (Holds::Other { why, finished }, identity(None)?)
+        }
+    };
+    Ok((holds, ours))
+}
+
+/// The error for what `root` holds, unless opening it for writing may go on.
+fn refuse(root: &Path, holds: &Holds, force: bool) -> Result<()> {
+    match holds {
+        Holds::Other { why, finished } if !force => bail!(
+            "{} holds a different dataset: {why}. Choose another --out, or pass --force to replace it: --force would delete its {finished} finished samples",
+            root.display()
+        ),
+        Holds::Foreign { names } if !force => bail!(
+            "{} is not empty and holds no shmgen dataset (it has {}); choose another --out, or pass --force to write the dataset beside those files (they are kept)",
+            root.display(),
+            names.join(", ")
+        ),
+        _ => Ok(()),
+    }
+}
+
+/// What differs between a recorded run.json and this run's, field by field.
+fn differences(recorded: &Value, ours: &Value) -> String {
+    let mut found = Vec::new();
+    differences_into("", recorded, ours, &mut found);
+    if found.is_empty() {
+        return "its run.json differs".to_string();
+    }
+    let more = found.len().saturating_sub(DIFFERENCES_SHOWN);
+    found.truncate(DIFFERENCES_SHOWN);
+    let mut text = format!("{} (folder vs this run)", found.join("; "));
+    if more > 0 {
+        text += &format!(" and {more} more differences");
+    }
+    text
+}
+
+fn differences_into(path: &str, recorded: &Value, ours: &Value, found: &mut Vec<String>) {
+    let show = |v: Option<&Value>| match v {
+        None => "absent".to_string(),
+        Some(v) => {
+            let text = v.to_string();
+            match text.char_indices().nth(40) {
+                Some((cut, _)) => format!("{}…", &text[..cut]),
+                None => text,
+            }
+        }
+    };
+    if let (Value::Object(a), Value::Object(b)) = (recorded, ours) {
+        let keys: BTreeSet<&String> = a.keys().chain(b.keys()).collect();
+        for key in keys {
+            let inner = if path.is_empty() {
+                key.clone()
+            } else {
+                format!("{path}.{key}")
+            };
+            match (a.get(key), b.get(key)) {
+                (Some(x), Some(y)) => differences_into(&inner, x, y, found),
+                (x, y) => found.push(format!("{inner} {} vs {}", show(x), show(y))),
+            }
+        }
+    } else if recorded != ours {
+        let (a, b) = (show(Some(recorded)), show(Some(ours)));
+        found.push(match path.strip_suffix(".hash") {
+            Some(of) => format!("{of} content changed ({path} {a} vs {b})"),
+            None => format!("{path} {a} vs {b}"),
+        });
+    }
+}
+
+/// Distinct samples listed in the manifest of `root`.
+fn finished_samples(root: &Path) -> Result<u64> {
+    let mut samples = HashSet::new();
+    scan_manifest(&root.join(MANIFEST), |line| {
+        if let Some((sample, _, _)) = line {
+            samples.insert(sample);
+        }
+    })?;
+    Ok(samples.len() as u64)
+}
+
+fn completed_in(root: &Path, (index, count): (u64, u64), total: u64) -> Result<SampleSet> {
+    let mut done = SampleSet::new(count);
+    scan_manifest(&root.join(MANIFEST), |line| {
+        if let Some((sample, _, _)) = line
+            && sample < total
+            && sample % count == index
+        {
+            done.insert(sample);
+        }
+    })?;
+    Ok(done)
+}
+
+/// Calls `each` for every line of the manifest at `path` (none if it is missing), streaming:
+/// with (sample, byte offset, length) for a complete line that parses, else None.
+fn scan_manifest(path: &Path, mut each: impl FnMut(Option<(u64, u64, usize)>)) -> Result<()> {
+    #[derive(serde::Deserialize)]
+    struct Line {
+        sample: u64,
+    }
+    let file = match File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+    };
+    let mut reader = BufReader::new(file);
+    let (mut line, mut offset) = (Vec::new(), 0u64);
+    loop {
+        line.clear();
+        let len = reader
+            .read_until(b'\n', &mut line)
+            .with_context(|| format!("reading {}", path.display()))?;
+        if len == 0 {
+            return Ok(());
+        }
+        let parsed = serde_json::from_slice::<Line>(&line)
+            .ok()
+            .filter(|_| line.ends_with(b"\n"));
+        each(parsed.map(|l| (l.sample, offset, len)));
+        offset += len as u64;
+    }
+}
+
+/// Whether `name` is a temporary file of run.json or the manifest.
+fn is_temporary(name: &str) -> bool {
+    [RUN_JSON, MANIFEST]
+        .iter()
+        .any(|file| name.starts_with(&format!(".{file}.tmp-")))
+}
+
+/// The names in folder `dir` (none if it is missing).
+fn entries(dir: &Path) -> Result<Vec<String>> {
+    let read = match fs::read_dir(dir) {
+        Ok(read) => read,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(e).with_context(|| format!("reading {}", dir.display())),
+    };
+    let mut names = Vec::new();
+    for entry in read {
+        let entry = entry.with_context(|| format!("reading {}", dir.display()))?;
+        names.push(entry.file_name().to_string_lossy().to_string());
+    }
+    names.sort();
+    Ok(names)
+}
+
+/// Removes a file or a folder with its contents, if there.
+fn remove_all(path: &Path) -> Result<()> {
+    let removed = match fs::symlink_metadata(path) {
+        Ok(m) if m.is_dir() => fs::remove_dir_all(path),
+        Ok(_) => fs::remove_file(path),
+        Err(e) => Err(e),
+    };
+    match removed {
+        Err(e) if e.kind() != io::ErrorKind::NotFound => {
+            Err(e).with_context(|| format!("removing {}", path.display()))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// An I/O error while `doing` something in the dataset folder `root`, saying so plainly
+/// when the disk is full.
+fn io_error(e: io::Error, doing: impl Display, root: &Path) -> anyhow::Error {
+    let full = matches!(
+        e.kind(),
+        io::ErrorKind::StorageFull | io::ErrorKind::QuotaExceeded
+    );
+    let context = if full {
+        format!(
+            "{doing} in {}: the disk is full (or the quota is used up); free space, then run the same command again to resume (finished samples are kept)",
+            root.display()
+        )
+    } else {
+        format!("{doing} in {}", root.display())
+    };
+    anyhow::Error::new(e).context(context)
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder, flushed to disk,
+/// and a rename: `path` has either its old or its new bytes, whatever happens. On failure
+/// the temporary file is removed and the error names `path`.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic_with(path, |out| out.write_all(bytes)).map_err(|e| {
+        let full = e.kind() == io::ErrorKind::StorageFull;
+        anyhow::Error::new(e).context(format!(
+            "writing {}{}",
+            path.display(),
+            if full { " (the disk is full)" } else { "" }
+        ))
+    })
+}
+
+fn write_atomic_with(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+) -> io::Result<()> {
+    static TEMPORARIES: AtomicU64 = AtomicU64::new(0);
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("file");
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-    fs::rename(&tmp, path)
-        .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
-    Ok(())
+    let tmp = path.with_file_name(format!(
+        ".{name}.tmp-{}-{}",
+        std::process::id(),
+        TEMPORARIES.fetch_add(1, Ordering::Relaxed)
+    ));
+    let written = (|| {
+        let mut out = BufWriter::new(File::create(&tmp)?);
+        write(&mut out)?;
+        let file = out.into_inner().map_err(|e| e.into_error())?;
+        let point = format!("write:{name}");
+        match fault::at(&point) {
+            Fault::None => {}
+            Fault::Full => {
+                file.set_len(file.metadata()?.len() / 2)?;
+                return Err(fault::disk_full());
+            }
+            Fault::Crash => {
+                file.set_len(file.metadata()?.len() / 2)?;
+                fault::crash(&point);
+            }
+        }
+        file.sync_all()?;
+        fault::check(&format!("rename:{name}"))?;
+        fs::rename(&tmp, path)
+    })();
+    if written.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    written
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn identity(bytes: &'static [u8]) -> impl Fn(Option<&Value>) -> Result<Vec<u8>> {
+        move |_| Ok(bytes.to_vec())
+    }
+
     #[test]
     fn refuses_a_different_dataset_unless_forced() {
         let dir = tempfile::tempdir().unwrap();
         let root = dir.path().join("ds");
-        DatasetFolder::open(&root, b"{\"a\":1}", false).unwrap();
-        DatasetFolder::open(&root, b"{\"a\":1}", false).unwrap();
-        let err = DatasetFolder::open(&root, b"{\"a\":2}", false)
+        let shard = (0, 1);
+        drop(DatasetFolder::open(&root, &identity(b"{\"a\":1}"), false, shard).unwrap());
+        drop(DatasetFolder::open(&root, &identity(b"{ \"a\": 1 }"), false, shard).unwrap());
+        assert_eq!(fs::read(root.join(RUN_JSON)).unwrap(), b"{ \"a\": 1 }");
+        let err = DatasetFolder::open(&root, &identity(b"{\"a\":2}"), false, shard)
             .err()
             .unwrap()
             .to_string();
-        assert!(err.contains("different dataset"), "{err}");
-        DatasetFolder::open(&root, b"{\"a\":2}", true).unwrap();
+        assert!(err.contains("different dataset: a 1 vs 2"), "{err}");
+        assert!(err.contains("would delete its 0 finished samples"), "{err}");
+        drop(DatasetFolder::open(&root, &identity(b"{\"a\":2}"), true, shard).unwrap());
         assert_eq!(fs::read(root.join(RUN_JSON)).unwrap(), b"{\"a\":2}");
     }
 
     #[test]
-    fn torn_manifest_lines_are_ignored_and_finalize_sorts() {
+    fn torn_manifest_lines_are_ignored_and_finishing_sorts() {
         let dir = tempfile::tempdir().unwrap();
-        let folder = DatasetFolder::open(dir.path(), b"{}", true).unwrap();
-        for s in [2u64, 0, 1] {
+        let open = || DatasetFolder::open(dir.path(), &identity(b"{}"), true, (0, 1)).unwrap();
+        let folder = open();
+        for s in [2u64, 0, 1, 0] {
             let mut stage = folder.stage(s).unwrap();
             stage.write(format!("samples/x{s}.txt"), b"data").unwrap();
             folder.commit(stage, 1).unwrap();
@@ -248,12 +822,32 @@ mod tests {
             .open(dir.path().join(MANIFEST))
             .unwrap();
         f.write_all(b"{\"sample\": 7, \"vie").unwrap();
-        assert_eq!(folder.completed().unwrap(), BTreeSet::from([0, 1, 2]));
-        assert!(!folder.finalize(4).unwrap());
-        assert!(folder.finalize(3).unwrap());
+        let done = folder.completed((0, 1), 10).unwrap();
+        assert_eq!(done.len(), 3);
+        assert!((0..3).all(|s| done.contains(s)) && !done.contains(7));
+        assert!(!folder.finish(4).unwrap());
+        assert!(open().finish(3).unwrap());
         let text = fs::read_to_string(dir.path().join(MANIFEST)).unwrap();
-        let order: Vec<u64> = text.lines().filter_map(manifest_sample).collect();
+        let order: Vec<u64> = text
+            .lines()
+            .map(|l| {
+                serde_json::from_str::<Value>(l).unwrap()["sample"]
+                    .as_u64()
+                    .unwrap()
+            })
+            .collect();
         assert_eq!(order, vec![0, 1, 2]);
         assert!(!dir.path().join(STAGING).exists());
+    }
+
+    #[test]
+    fn sample_sets_hold_one_bit_per_sample_of_the_shard() {
+        let mut set = SampleSet::new(3);
+        for s in [1, 4, 301, 4] {
+            set.insert(s);
+        }
+        assert_eq!(set.len(), 3);
+        assert!(set.contains(301) && set.contains(1) && !set.contains(7));
+        assert_eq!(set.bits.len(), 2);
     }
 }

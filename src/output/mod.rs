@@ -5,14 +5,18 @@
 //! per-pixel layers and serialised records, and imports nothing else of the crate. Every file
 //! is written under a temporary name and renamed into place, so a killed run never leaves a
 //! truncated file under a final name, and a sample appears in the manifest only after all of
-//! its files are complete.
+//! its files are complete. File locks keep one process per shard and let shards share a
+//! folder; whatever a crash leaves is ignored, then removed (`folder`). `fault` injects
+//! crashes and full disks for the robustness tests.
 
 mod encode;
+mod fault;
 mod folder;
+mod lock;
 mod writers;
 
 pub use encode::{DEPTH_CHANNEL, MAX_SEGMENTATION_ID, depth_exr, id_png, mask_png, rgb_png};
-pub use folder::{DatasetFolder, SampleStage, write_atomic};
+pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, write_atomic};
 pub use writers::{DEFAULT_OUTPUTS, ViewLayers, WRITERS, Writer, output_names};
 
 /// Relative path of one view's file of the given kind (`rgb.png`, `depth.exr`, ...):

@@ -21,9 +21,10 @@ use crate::output::DatasetFolder;
 use crate::recipe::Recipe;
 use anyhow::{Context, Result, bail};
 use progress::Progress;
-use rayon::prelude::*;
 use std::path::PathBuf;
 use std::str::FromStr;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
 /// This process renders the samples whose index ≡ `index` (mod `count`).
@@ -94,6 +95,29 @@ pub struct RunSummary {
     pub complete: bool,
 }
 
+/// Samples of the shard (the first ones it has to render) drawn and meshed before anything is
+/// written: a recipe that fails for one of them leaves no files. Later samples are drawn,
+/// meshed and rendered in order as the run goes.
+pub const VALIDATED_FIRST: u64 = 1000;
+
+impl Shard {
+    /// Number of samples of a dataset of `total` samples this shard renders.
+    pub fn len(&self, total: u64) -> u64 {
+        total.saturating_sub(self.index).div_ceil(self.count)
+    }
+
+    /// Whether this shard renders no sample of a dataset of `total` samples.
+    pub fn is_empty(&self, total: u64) -> bool {
+        self.len(total) == 0
+    }
+
+    /// The samples of a dataset of `total` samples this shard renders, in order.
+    fn samples(&self, total: u64) -> impl Iterator<Item = u64> + Send + use<> {
+        let (index, count) = (self.index, self.count);
+        (0..self.len(total)).map(move |i| index + i * count)
+    }
+}
+
 /// Renders this shard's unfinished samples of `recipe` into `options.out`.
 pub fn run(recipe: &Recipe, options: &RunOptions) -> Result<RunSummary> {
     let start = Instant::now();
@@ -105,16 +129,36 @@ pub fn run(recipe: &Recipe, options: &RunOptions) -> Result<RunSummary> {
 
 fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<RunSummary> {
     let total = recipe.dataset.samples;
-    let mine: Vec<u64> = (0..total).filter(|&s| options.shard.owns(s)).collect();
-    validate(recipe, &mine)?;
+    let shard = options.shard;
+    let mine = shard.len(total);
+    if mine == 0 {
+        bail!("this shard has no samples (the dataset has {total} samples)");
+    }
+    let identity = |recorded: Option<&serde_json::Value>| run_json(recipe, recorded);
+    let shard_id = (shard.index, shard.count);
 
-    let folder = DatasetFolder::open(&options.out, &run_json(recipe)?, options.force)?;
-    let done = folder.completed()?;
-    let todo: Vec<u64> = mine.iter().copied().filter(|s| !done.contains(s)).collect();
-    let progress = Progress::new(todo.len() as u64, options.quiet);
-    let bytes: u64 = todo
-        .par_iter()
-        .map(|&index| -> Result<u64> {
+    // Before writing anything: the folder must be usable, and the first samples to render
+    // must build.
+    let done = DatasetFolder::check(&options.out, &identity, options.force, shard_id, total)?;
+    let first = shard.samples(total).filter(|s| !done.contains(*s));
+    let ahead = mine.saturating_sub(done.len()).min(VALIDATED_FIRST);
+    let progress = Progress::new("validating", ahead, options.quiet);
+    in_order(first.take(ahead as usize), |index| {
+        prepare(recipe, index)?;
+        progress.sample_done();
+        Ok(0)
+    })
+    .map_err(|(_, e)| e)?;
+    progress.finish();
+
+    let folder = DatasetFolder::open(&options.out, &identity, options.force, shard_id)?;
+    let done = folder.completed(shard_id, total)?;
+    let todo = mine - done.len();
+    let progress = Progress::new("rendering", todo, options.quiet);
+    let rendered = AtomicU64::new(0);
+    let bytes = in_order(
+        shard.samples(total).filter(|s| !done.contains(*s)),
+        |index| {
             let sample = prepare(recipe, index)?;
             let mut stage = folder.stage(index)?;
             let views = write_sample(recipe, &sample, &mut stage)?;
@@ -122,16 +166,23 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
             folder
                 .commit(stage, views)
                 .with_context(|| format!("committing sample {index}"))?;
+            rendered.fetch_add(1, Ordering::Relaxed);
             progress.sample_done();
             Ok(bytes)
-        })
-        .try_reduce(|| 0, |a, b| Ok(a + b))?;
+        },
+    )
+    .map_err(|(index, e)| {
+        e.context(format!(
+            "the run stopped at sample {index}: every sample of this shard before it is complete and listed in {}",
+            options.out.join("manifest.jsonl").display()
+        ))
+    })?;
     progress.finish();
-    let complete = folder.finalize(total)?;
-    let rendered = todo.len() as u64;
+    let complete = folder.finish(total)?;
+    let rendered = rendered.into_inner();
     Ok(RunSummary {
         rendered,
-        skipped: mine.len() as u64 - rendered,
+        skipped: done.len(),
         pairs: rendered * u64::from(recipe.dataset.views),
         bytes,
         seconds: start.elapsed().as_secs_f64(),
@@ -139,24 +190,49 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
     })
 }
 
-/// Draws and meshes every sample of the shard before anything is written, so a recipe that
-/// fails for some sample fails before it leaves partial files. Reports the lowest failing
-/// sample, whatever the thread scheduling.
-fn validate(recipe: &Recipe, samples: &[u64]) -> Result<()> {
-    let results: Vec<Result<()>> = samples
-        .par_iter()
-        .map(|&s| prepare(recipe, s).map(drop))
-        .collect();
-    if let Some(Err(e)) = results.into_iter().find(Result::is_err) {
-        return Err(e);
+/// Runs `work` on `samples` in their order on every thread of the current pool, each thread
+/// taking the next sample when it is free, with memory independent of the number of samples.
+/// After a failure no further sample is started. Returns the sum of the results, or the
+/// lowest failing sample with its error: every sample before it was started before it and
+/// succeeded, whatever the thread count (samples after it already under way may finish too).
+fn in_order(
+    samples: impl Iterator<Item = u64> + Send,
+    work: impl Fn(u64) -> Result<u64> + Sync,
+) -> Result<u64, (u64, anyhow::Error)> {
+    let next = Mutex::new(samples);
+    let stop = AtomicBool::new(false);
+    let failed: Mutex<Option<(u64, anyhow::Error)>> = Mutex::new(None);
+    let sum = AtomicU64::new(0);
+    rayon::broadcast(|_| {
+        loop {
+            let index = {
+                let mut next = next.lock().unwrap();
+                if stop.load(Ordering::SeqCst) {
+                    break;
+                }
+                match next.next() {
+                    Some(index) => index,
+                    None => break,
+                }
+            };
+            match work(index) {
+                Ok(value) => {
+                    sum.fetch_add(value, Ordering::Relaxed);
+                }
+                Err(e) => {
+                    stop.store(true, Ordering::SeqCst);
+                    let mut failed = failed.lock().unwrap();
+                    if failed.as_ref().is_none_or(|(lowest, _)| index < *lowest) {
+                        *failed = Some((index, e));
+                    }
+                }
+            }
+        }
+    });
+    match failed.into_inner().unwrap() {
+        Some(failure) => Err(failure),
+        None => Ok(sum.into_inner()),
     }
-    if samples.is_empty() {
-        bail!(
-            "this shard has no samples (the dataset has {} samples)",
-            recipe.dataset.samples
-        );
-    }
-    Ok(())
 }
 
 #[cfg(test)]
@@ -173,5 +249,38 @@ mod tests {
         for s in 0..30 {
             assert_eq!(shards.iter().filter(|sh| sh.owns(s)).count(), 1);
         }
+        for total in [0, 1, 2, 3, 4, 29, 30, 31] {
+            for sh in &shards {
+                let listed: Vec<u64> = sh.samples(total).collect();
+                let owned: Vec<u64> = (0..total).filter(|&s| sh.owns(s)).collect();
+                assert_eq!(listed, owned);
+                assert_eq!(sh.len(total), owned.len() as u64);
+            }
+        }
+        let huge = Shard { index: 3, count: 7 };
+        assert_eq!(huge.len(1 << 40), ((1u64 << 40) - 3).div_ceil(7));
+    }
+
+    #[test]
+    fn in_order_reports_the_lowest_failure_after_every_earlier_sample() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(4)
+            .build()
+            .unwrap();
+        let worked = Mutex::new(Vec::new());
+        let result = pool.install(|| {
+            in_order(0..u64::MAX, |s| {
+                worked.lock().unwrap().push(s);
+                match s {
+                    57 | 90 => Err(anyhow::anyhow!("bad {s}")),
+                    _ => Ok(1),
+                }
+            })
+        });
+        let (index, e) = result.unwrap_err();
+        assert_eq!((index, e.to_string()), (57, "bad 57".to_string()));
+        let worked = worked.into_inner().unwrap();
+        assert!((0..57).all(|s| worked.contains(&s)));
+        assert_eq!(pool.install(|| in_order(0..100, |_| Ok(2))).unwrap(), 200);
     }
 }

@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 pub enum Progress {
     Bar(ProgressBar),
     Lines {
+        what: &'static str,
         total: u64,
         done: AtomicU64,
         start: Instant,
@@ -18,21 +19,25 @@ pub enum Progress {
 }
 
 impl Progress {
-    pub fn new(total: u64, quiet: bool) -> Self {
+    /// Progress of `what` ("validating", "rendering") `total` samples.
+    pub fn new(what: &'static str, total: u64, quiet: bool) -> Self {
         if quiet || total == 0 {
             return Progress::Quiet;
         }
         if std::io::stderr().is_terminal() {
             let bar = ProgressBar::new(total);
             bar.set_style(
-                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} samples, {per_sec}, ETA {eta}")
+                ProgressStyle::with_template("{spinner} {msg} [{elapsed_precise}] {bar:40} {pos}/{len} samples, {per_sec}, ETA {eta}")
                     .expect("valid template"),
             );
+            bar.set_message(what);
             bar.enable_steady_tick(Duration::from_millis(200));
             Progress::Bar(bar)
         } else {
             let now = Instant::now();
+            eprintln!("{what}: {total} samples");
             Progress::Lines {
+                what,
                 total,
                 done: AtomicU64::new(0),
                 start: now,
@@ -45,6 +50,7 @@ impl Progress {
         match self {
             Progress::Bar(bar) => bar.inc(1),
             Progress::Lines {
+                what,
                 total,
                 done,
                 start,
@@ -57,7 +63,7 @@ impl Progress {
                     let secs = start.elapsed().as_secs_f64();
                     let eta = secs / done as f64 * (total - done) as f64;
                     eprintln!(
-                        "progress: {done}/{total} samples ({:.0}%), {secs:.1} s elapsed, ETA {eta:.0} s",
+                        "{what}: {done}/{total} samples ({:.0}%), {secs:.1} s elapsed, ETA {eta:.0} s",
                         100.0 * done as f64 / *total as f64
                     );
                 }

@@ -71,10 +71,12 @@ pub struct Tool {
 /// recipe, every module it imports and every file it reads: meshes, textures, images).
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct RecipeRecord<'a> {
-    /// File name of the recipe, without its folder.
+    /// File name of the recipe, without its folder, when the dataset was created (a resumed
+    /// run keeps it: a renamed copy of a recipe is the same dataset).
     pub file: String,
-    /// blake3 hash (hex) over the recipe, the modules it imports and the files it reads
-    /// (each by its own blake3); the same recipe and files give the same hash.
+    /// blake3 hash (hex) over the content of the recipe, the modules it imports and the files
+    /// it reads (each by its own blake3, under the name the recipe uses for it); the same
+    /// recipe and files give the same hash, however their paths were spelled.
     pub hash: &'a str,
 }
 
@@ -356,13 +358,19 @@ pub fn json_bytes(record: &impl Serialize) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// `run.json` of `recipe`.
-pub fn run_json(recipe: &Recipe) -> Result<Vec<u8>> {
-    let file = recipe
-        .path
-        .file_name()
-        .map(|f| f.to_string_lossy().to_string())
-        .unwrap_or_default();
+/// `run.json` of `recipe`. `recorded` is the run.json already in the dataset folder, if
+/// any: the recipe's file name does not identify a dataset (no output byte depends on it, and
+/// the hash covers the recipe's content), so a dataset resumed from a renamed copy of its
+/// recipe keeps the name it was created with.
+pub fn run_json(recipe: &Recipe, recorded: Option<&Value>) -> Result<Vec<u8>> {
+    let file = match recorded.and_then(|r| r.pointer("/recipe/file")?.as_str()) {
+        Some(file) => file.to_string(),
+        None => recipe
+            .path
+            .file_name()
+            .map(|f| f.to_string_lossy().to_string())
+            .unwrap_or_default(),
+    };
     json_bytes(&RunRecord {
         schema: RunSchema::V1,
         tool: Tool {

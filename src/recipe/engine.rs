@@ -8,7 +8,7 @@
 use rhai::{Engine, EvalAltResult, Module, Position, Scope, Shared};
 use std::collections::{BTreeMap, HashSet};
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Operations one script evaluation (the recipe, or one sample's scene) may perform.
 pub const MAX_OPERATIONS: u64 = 20_000_000;
@@ -31,12 +31,18 @@ pub fn stdlib_dir() -> PathBuf {
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("stdlib"))
 }
 
-/// Every source file a recipe used, by the label that appears in diagnostics.
+/// Every source file a recipe used, by the label that appears in diagnostics; the first file
+/// recorded is the recipe itself.
 #[derive(Default)]
-pub struct Sources(Mutex<BTreeMap<String, String>>);
+pub struct Sources(Mutex<BTreeMap<String, String>>, OnceLock<String>);
+
+/// Label prefix of the modules of the standard library built into the binary (see
+/// `Resolver::find`).
+const BUILT_IN_STDLIB: &str = "<built-in stdlib>/";
 
 impl Sources {
     pub fn insert(&self, label: &str, text: &str) {
+        self.1.get_or_init(|| label.to_string());
         self.0
             .lock()
             .unwrap()
@@ -58,20 +64,70 @@ impl Sources {
         self.0.lock().unwrap().keys().cloned().collect()
     }
 
-    /// Content hash over every file, in label order.
+    /// Content hash over every file, whatever the spelling of the paths the run was given
+    /// (`r.rhai`, `./r.rhai`, an absolute path, another working directory): the recipe counts
+    /// by its content alone (a renamed or moved copy is the same recipe), every other file by
+    /// the name the recipe reaches it by — its path inside the folder it was found in, the
+    /// recipe's folder or the standard library — and its content. Files are hashed in order
+    /// of that name, never of their labels.
     pub fn hash(&self) -> String {
+        let files = self.0.lock().unwrap();
+        let recipe = self.1.get();
+        let folder = recipe.map(|label| match Path::new(label).parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
+            _ => PathBuf::from("."),
+        });
+        let roots: Vec<PathBuf> = folder
+            .into_iter()
+            .chain([stdlib_dir()])
+            .filter_map(|root| std::fs::canonicalize(root).ok())
+            .collect();
+        let mut entries: Vec<(String, &str)> = files
+            .iter()
+            .map(|(label, text)| {
+                let name = if Some(label) == recipe {
+                    String::new()
+                } else {
+                    name_in_roots(label, &roots)
+                };
+                (name, text.as_str())
+            })
+            .collect();
+        entries.sort_unstable();
         let mut h = blake3::Hasher::new();
-        for (label, text) in self.0.lock().unwrap().iter() {
-            let name = Path::new(label)
-                .file_name()
-                .map_or(label.as_str(), |n| n.to_str().unwrap_or(label));
-            for part in [name, text] {
+        for (name, text) in &entries {
+            for part in [name.as_str(), text] {
                 h.update(&(part.len() as u64).to_le_bytes());
                 h.update(part.as_bytes());
             }
         }
         h.finalize().to_hex().to_string()
     }
+}
+
+/// The name a source file is reached by: its path (with `/`) inside the innermost of `roots`
+/// (canonical folders) that holds it, else its file name.
+fn name_in_roots(label: &str, roots: &[PathBuf]) -> String {
+    if let Some(module) = label.strip_prefix(BUILT_IN_STDLIB) {
+        return module.to_string();
+    }
+    let path = Path::new(label);
+    let file_name = path.file_name().map(Path::new).unwrap_or(path);
+    // Canonicalise the folder, not the file: a symlinked file keeps the name it was read by.
+    let canonical = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => std::fs::canonicalize(parent),
+        _ => std::fs::canonicalize("."),
+    }
+    .map(|folder| folder.join(file_name));
+    roots
+        .iter()
+        .filter_map(|root| canonical.as_ref().ok()?.strip_prefix(root).ok())
+        .min_by_key(|relative| relative.components().count())
+        .map(|relative| {
+            let parts: Vec<_> = relative.iter().map(|c| c.to_string_lossy()).collect();
+            parts.join("/")
+        })
+        .unwrap_or_else(|| file_name.to_string_lossy().to_string())
 }
 
 /// A fresh engine with the sandbox limits; `register` adds the shmgen API.
