@@ -24,6 +24,7 @@ use std::path::Path;
 use super::Mesh;
 use validate::{check_file_size, finish, read_all};
 
+/// How a mesh file is read.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ImportOptions {
     /// The 3DGEN paper's normalisation: centre the axis-aligned bounding box on the origin and
@@ -33,7 +34,9 @@ pub struct ImportOptions {
 
 /// A mesh read from a file, plus human-readable warnings for repairs made (e.g. "dropped 3 degenerate triangles").
 pub struct Imported {
+    /// The checked mesh, in the file's units (metres assumed) and axes.
     pub mesh: Mesh,
+    /// What was repaired, one message each.
     pub warnings: Vec<String>,
 }
 

@@ -128,7 +128,7 @@ mod tests {
         let mut huge = vec![0u8; 80];
         huge.extend_from_slice(&u32::MAX.to_le_bytes());
         let e = err(&write(dir.path(), "huge.stl", &huge));
-        assert_mentions(&e, &["4294967295 triangles, over the limit of 50000000"]);
+        assert_mentions(&e, &["4294967295 triangles, over the limit of 10000000"]);
         let unnamed = std::fs::read_to_string(corpus("tetra_ascii.stl"))
             .unwrap()
             .replace("solid tetra", "solid");

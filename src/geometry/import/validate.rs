@@ -13,8 +13,9 @@ use crate::geometry::Mesh;
 
 /// Larger files are refused before they are read, so a bad path cannot exhaust memory.
 const MAX_FILE_BYTES: u64 = 1 << 30;
-/// Larger meshes are refused as soon as a header or accessor announces them.
-const MAX_TRIANGLES: u64 = 50_000_000;
+/// Larger meshes are refused as soon as a header or accessor announces them: the budget of
+/// any mesh (`geometry::MAX_TRIANGLES`).
+const MAX_TRIANGLES: u64 = crate::geometry::MAX_TRIANGLES as u64;
 /// Below this |cross| / longest edge² a triangle is treated as having zero area: collinear
 /// corners only cancel to rounding error, never to exactly zero.
 const DEGENERATE_RATIO: f64 = 1e-12;
