@@ -5,13 +5,15 @@
 //! pixel centres (pixel (i, j) has its centre at (j + 0.5, i + 0.5)), and sampling poses on a
 //! sphere or band around a target. Must not touch: meshes, tracing or files.
 
+mod distortion;
 mod rig;
 
-pub use rig::{CameraRig, Distance, ViewDraw, orbit_camera};
+pub use distortion::Distortion;
+pub use rig::{CameraRig, Distance, MIN_FOV, ViewDraw, orbit_camera};
 
 use glam::{DMat3, DMat4, DVec3, DVec4};
 
-/// Pinhole intrinsics in pixels.
+/// Intrinsics in pixels: a pinhole K, with optional lens distortion.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Intrinsics {
     /// Image width, pixels.
@@ -26,6 +28,8 @@ pub struct Intrinsics {
     pub cx: f64,
     /// Principal point y, pixels from the top edge of the image.
     pub cy: f64,
+    /// Lens distortion (none for a pinhole).
+    pub distortion: Distortion,
 }
 
 impl Intrinsics {
@@ -39,6 +43,7 @@ impl Intrinsics {
             fy: f,
             cx: 0.5 * f64::from(width),
             cy: 0.5 * f64::from(height),
+            distortion: Distortion::default(),
         }
     }
 
@@ -64,14 +69,27 @@ impl Intrinsics {
         self.ray_through(f64::from(col) + 0.5, f64::from(row) + 0.5)
     }
 
-    /// Direction in camera axes through image point (u, v) (pixel units), unit z.
+    /// Direction in camera axes through image point (u, v) (pixel units), unit z: through
+    /// the undistorted point whose image is (u, v) when the lens distorts.
     pub fn ray_through(&self, u: f64, v: f64) -> DVec3 {
-        DVec3::new((u - self.cx) / self.fx, (v - self.cy) / self.fy, 1.0)
+        let (xd, yd) = ((u - self.cx) / self.fx, (v - self.cy) / self.fy);
+        let (x, y) = self.distortion.undistort(xd, yd).unwrap_or((xd, yd));
+        DVec3::new(x, y, 1.0)
     }
 
-    /// Pixel coordinates (u, v) of a point in camera axes (z > 0).
+    /// Pixel coordinates (u, v) of a point in camera axes (z > 0), distorted by the lens.
     pub fn project(&self, p: DVec3) -> (f64, f64) {
-        (self.fx * p.x / p.z + self.cx, self.fy * p.y / p.z + self.cy)
+        let (x, y) = self.distortion.distort(p.x / p.z, p.y / p.z);
+        (self.fx * x + self.cx, self.fy * y + self.cy)
+    }
+
+    /// The farthest image corner from the principal point, in normalised distorted units.
+    pub fn corner_reach(&self) -> f64 {
+        let (w, h) = (f64::from(self.width), f64::from(self.height));
+        [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
+            .iter()
+            .map(|&(u, v)| ((u - self.cx) / self.fx).hypot((v - self.cy) / self.fy))
+            .fold(0.0, f64::max)
     }
 }
 

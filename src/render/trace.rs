@@ -217,29 +217,50 @@ impl TraceMesh {
         let k = camera.intrinsics;
         let full = (0..k.height as usize, 0..k.width as usize);
         let (lo, hi) = self.local_bounds;
+        let corner = |i: u32| {
+            DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            )
+        };
+        // A distorting lens bends the box's edges in the image: follow them point by point
+        // and widen by the sagitta left between the points.
+        let (steps, margin) = if k.distortion.is_none() {
+            (1, 1.0)
+        } else {
+            (64, 4.0)
+        };
         let (mut u0, mut v0, mut u1, mut v1) = (
             f64::INFINITY,
             f64::INFINITY,
             f64::NEG_INFINITY,
             f64::NEG_INFINITY,
         );
-        for i in 0..8 {
-            let corner = DVec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            );
-            let p = camera.world_to_camera(corner + self.anchor);
-            if p.z <= 1e-9 {
-                return full;
+        for i in 0..8u32 {
+            for bit in [1, 2, 4] {
+                if i & bit != 0 {
+                    continue;
+                }
+                let (a, b) = (corner(i), corner(i | bit));
+                for step in 0..=steps {
+                    let point = a + (b - a) * (f64::from(step) / f64::from(steps));
+                    let p = camera.world_to_camera(point + self.anchor);
+                    if p.z <= 1e-9 {
+                        return full;
+                    }
+                    let (u, v) = k.project(p);
+                    (u0, v0, u1, v1) = (u0.min(u), v0.min(v), u1.max(u), v1.max(v));
+                }
             }
-            let (u, v) = k.project(p);
-            (u0, v0, u1, v1) = (u0.min(u), v0.min(v), u1.max(u), v1.max(v));
+        }
+        if !(u0.is_finite() && v0.is_finite() && u1.is_finite() && v1.is_finite()) {
+            return full;
         }
         let clamp = |x: f64, n: u32| x.clamp(0.0, f64::from(n)) as usize;
         (
-            clamp(v0.floor() - 1.0, k.height)..clamp(v1.ceil() + 1.0, k.height),
-            clamp(u0.floor() - 1.0, k.width)..clamp(u1.ceil() + 1.0, k.width),
+            clamp(v0.floor() - margin, k.height)..clamp(v1.ceil() + margin, k.height),
+            clamp(u0.floor() - margin, k.width)..clamp(u1.ceil() + margin, k.width),
         )
     }
 }
