@@ -8,6 +8,15 @@ use shmgen::recipe::Recipe;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// Counts what each thread allocates, so a recipe's script has a memory budget.
+#[global_allocator]
+static ALLOCATOR: shmgen::recipe::CountingAllocator = shmgen::recipe::CountingAllocator;
+
+/// Most worker threads `--threads` accepts.
+const MAX_THREADS: usize = 1024;
+/// Most samples and views a preview sheet shows.
+const MAX_PREVIEW: u64 = 100;
+
 #[derive(Parser)]
 #[command(
     name = "shmgen",
@@ -31,8 +40,8 @@ enum Command {
         /// Override a recipe parameter declared with param("name", default). Repeatable.
         #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
         sets: Vec<(String, String)>,
-        /// Worker threads (default: every core). Does not change a single output byte.
-        #[arg(long)]
+        /// Worker threads, 1 to 1024 (default: every core). Does not change a single output byte.
+        #[arg(long, value_parser = parse_threads)]
         threads: Option<usize>,
         /// Render only samples with index ≡ K (mod N), e.g. 0/4. Shards share one --out.
         #[arg(long, default_value = "0/1")]
@@ -53,11 +62,11 @@ enum Command {
         /// Override a recipe parameter declared with param("name", default). Repeatable.
         #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
         sets: Vec<(String, String)>,
-        /// Samples in the sheet, from the first.
-        #[arg(long, default_value_t = 4)]
+        /// Samples in the sheet, from the first (1 to 100).
+        #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=MAX_PREVIEW))]
         samples: u64,
-        /// Views of each sample (default: up to 4).
-        #[arg(long)]
+        /// Views of each sample, 1 to 100 (default: up to 4).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_PREVIEW as i64))]
         views: Option<u32>,
         /// Longer side of each image in pixels (never above the recipe's resolution).
         #[arg(
@@ -90,8 +99,8 @@ enum Command {
         /// Override a recipe parameter declared with param("name", default). Repeatable.
         #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
         sets: Vec<(String, String)>,
-        /// Worker threads for the timed render and the estimate (default: every core).
-        #[arg(long)]
+        /// Worker threads for the timed render and the estimate, 1 to 1024 (default: every core).
+        #[arg(long, value_parser = parse_threads)]
         threads: Option<usize>,
     },
 }
@@ -101,6 +110,16 @@ fn parse_scale(s: &str) -> Result<f64, String> {
         Ok(x) if x > 0.0 && x <= 1.0 => Ok(x),
         _ => Err(format!(
             "--scale {s}: expected a number in (0, 1], e.g. 0.25"
+        )),
+    }
+}
+
+fn parse_threads(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if (1..=MAX_THREADS).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "expected a whole number of worker threads from 1 to {MAX_THREADS} (this machine has {} cores; leave --threads out to use them all)",
+            std::thread::available_parallelism().map_or(1, |n| n.get())
         )),
     }
 }

@@ -1,4 +1,5 @@
-//! Typo suggestions for names users type: option keys, parameters, outputs, prompt words.
+//! Words for users: typo suggestions for names they type (option keys, parameters, outputs,
+//! prompt words) and the form numbers take in messages.
 
 /// The known name closest to `word` by edit distance, if it is plausibly a typo of it.
 pub fn nearest<'a>(word: &str, known: &[&'a str]) -> Option<&'a str> {
@@ -28,6 +29,27 @@ pub fn edit_distance(a: &str, b: &str) -> usize {
     row[b.len()]
 }
 
+/// A user's number as messages show it: Rust's shortest round-trip form, switching to
+/// exponent notation for very large or very small magnitudes (so 1e308 prints as `1e308`, not
+/// as 309 digits).
+pub fn number(x: f64) -> String {
+    let magnitude = x.abs();
+    if x.is_finite() && magnitude != 0.0 && !(1e-5..1e15).contains(&magnitude) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+/// `text` cut to its first `max` characters, saying how much was left out, so that a huge
+/// value or source line cannot flood a message.
+pub fn clip(text: &str, max: usize) -> std::borrow::Cow<'_, str> {
+    match text.char_indices().nth(max) {
+        None => text.into(),
+        Some((end, _)) => format!("{}… ({} more bytes)", &text[..end], text.len() - end).into(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -37,5 +59,30 @@ mod tests {
         assert_eq!(nearest("pich", &["pitch", "yaw", "roll"]), Some("pitch"));
         assert_eq!(nearest("zzzzzz", &["pitch", "yaw"]), None);
         assert_eq!(edit_distance("kitten", "sitting"), 3);
+    }
+
+    #[test]
+    fn numbers_in_messages_stay_short() {
+        assert_eq!(number(1e308), "1e308");
+        assert_eq!(number(-f64::MAX), "-1.7976931348623157e308");
+        assert_eq!(number(5e-324), "5e-324");
+        assert_eq!(number(1e15), "1e15");
+        for (x, shown) in [
+            (0.0, "0"),
+            (0.25, "0.25"),
+            (-3.0, "-3"),
+            (123456.5, "123456.5"),
+        ] {
+            assert_eq!(number(x), shown);
+        }
+        assert_eq!(number(0.00001), "0.00001");
+        assert_eq!(number(f64::NAN), "NaN");
+        assert_eq!(number(f64::NEG_INFINITY), "-inf");
+    }
+
+    #[test]
+    fn long_text_is_clipped_on_a_character_boundary() {
+        assert_eq!(clip("short", 5), "short");
+        assert_eq!(clip("ééé", 1), "é… (4 more bytes)");
     }
 }

@@ -5,6 +5,12 @@
 use std::path::Path;
 use std::sync::Arc;
 
+/// Widest or tallest texture or background image, pixels.
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+/// Most pixels in one texture or background image (8192 × 8192); decoded with its mip levels
+/// it takes 16 bytes a pixel.
+pub const MAX_IMAGE_PIXELS: u64 = 1 << 26;
+
 /// A decoded image with the name and hash it is recorded under.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImageFile {
@@ -30,10 +36,33 @@ struct Level {
 }
 
 impl TextureImage {
-    /// Decodes `bytes`; `name` is only used in error messages.
+    /// The width and height `bytes` announce in their header, refusing images wider or taller
+    /// than [`MAX_IMAGE_SIDE`] or with more than [`MAX_IMAGE_PIXELS`]; nothing is decoded.
+    /// `name` is only used in error messages.
+    pub fn size(bytes: &[u8], name: &Path) -> Result<(u32, u32), String> {
+        let (w, h) = reader(bytes, name)?
+            .into_dimensions()
+            .map_err(|e| cannot_read(name, &e))?;
+        if w > MAX_IMAGE_SIDE
+            || h > MAX_IMAGE_SIDE
+            || u64::from(w) * u64::from(h) > MAX_IMAGE_PIXELS
+        {
+            return Err(format!(
+                "image {} is {w}×{h} pixels, over the limit of {MAX_IMAGE_SIDE} pixels a side and {} million pixels",
+                name.display(),
+                MAX_IMAGE_PIXELS / 1_000_000
+            ));
+        }
+        Ok((w, h))
+    }
+
+    /// Decodes `bytes` (after checking their size, see [`TextureImage::size`]); `name` is only
+    /// used in error messages.
     pub fn decode(bytes: &[u8], name: &Path) -> Result<Self, String> {
-        let decoded = ::image::load_from_memory(bytes)
-            .map_err(|e| format!("cannot read image {}: {e}", name.display()))?
+        Self::size(bytes, name)?;
+        let decoded = reader(bytes, name)?
+            .decode()
+            .map_err(|e| cannot_read(name, &e))?
             .into_rgb8();
         let (width, height) = (decoded.width() as usize, decoded.height() as usize);
         if width == 0 || height == 0 {
@@ -74,6 +103,19 @@ impl TextureImage {
         let wanted = (texel * self.width() as f64).max(1.0).log2().floor() as usize;
         self.levels[wanted.min(self.levels.len() - 1)].bilinear(u, v)
     }
+}
+
+fn reader<'a>(
+    bytes: &'a [u8],
+    name: &Path,
+) -> Result<::image::ImageReader<std::io::Cursor<&'a [u8]>>, String> {
+    ::image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| cannot_read(name, &e))
+}
+
+fn cannot_read(name: &Path, e: &dyn std::fmt::Display) -> String {
+    format!("cannot read image {}: {e}", name.display())
 }
 
 impl Level {
@@ -170,6 +212,16 @@ mod tests {
         for (u, v) in [(0.1, 0.2), (0.77, 0.31)] {
             assert!((img.sample(u, v, 1.0)[1] - 0.5).abs() < 1e-6);
         }
+    }
+
+    #[test]
+    fn oversized_images_are_refused_from_their_header() {
+        let big = png(20_000, 1, &[0; 60_000]);
+        let e = TextureImage::decode(&big, Path::new("huge.png")).unwrap_err();
+        assert!(
+            e.contains("huge.png is 20000×1 pixels, over the limit"),
+            "{e}"
+        );
     }
 
     #[test]

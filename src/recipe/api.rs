@@ -2,7 +2,7 @@
 //! validates what it is given; none does per-vertex or per-pixel work.
 
 use super::files::RecipeFiles;
-use super::options::{self, OptResult, Options, number};
+use super::options::{self, OptResult, Options, number, shown};
 use super::result::{Fallible, fail};
 use crate::cameras::{CameraRig, Distance};
 use crate::output::{DEFAULT_OUTPUTS, output_names};
@@ -11,8 +11,10 @@ use crate::scene::{
     SkySpec, SunSpec,
 };
 use crate::seeds::Stream;
-use rhai::{Array, Dynamic, Engine, FnPtr, ImmutableString, Map};
+use crate::words::number as number_shown;
+use rhai::{Array, Dynamic, Engine, FnPtr, ImmutableString, Map, NativeCallContext};
 use std::collections::BTreeMap;
+use std::num::IntErrorKind;
 use std::sync::{Arc, Mutex};
 
 /// What `dataset(#{...})` returns: the dataset settings plus the function that draws a scene.
@@ -56,9 +58,14 @@ pub fn register(
     });
     engine.register_type_with_name::<Dataset>("Dataset");
     let images = files.clone();
-    engine.register_fn("dataset", move |map: Map| -> Fallible<Dataset> {
-        Ok(dataset(map, &images)?)
-    });
+    engine.register_fn(
+        "dataset",
+        move |ctx: NativeCallContext, map: Map| -> Fallible<Dataset> {
+            let dataset = dataset(map, &images)?;
+            check_scene(&ctx, &dataset.scene)?;
+            Ok(dataset)
+        },
+    );
     super::beam_api::register(engine);
     super::shape_api::register(engine, files);
     super::material_api::register(engine, materials);
@@ -74,7 +81,10 @@ fn param(params: &Params, name: &str, default: Dynamic) -> Fallible<Dynamic> {
         serde_json::json!(i)
     } else if let Ok(f) = value.as_float() {
         if !f.is_finite() {
-            return fail(format!("param \"{name}\" = {f} is not a finite number"));
+            return fail(format!(
+                "param \"{name}\" = {} is not a finite number",
+                number_shown(f)
+            ));
         }
         serde_json::json!(f)
     } else if let Ok(b) = value.as_bool() {
@@ -97,13 +107,28 @@ fn param(params: &Params, name: &str, default: Dynamic) -> Fallible<Dynamic> {
 
 fn parse_override(name: &str, text: &str, default: &Dynamic) -> Fallible<Dynamic> {
     let bad = |kind: &str| {
-        format!("--set {name}={text}: expected {kind} (the recipe's default is {default})")
+        format!(
+            "--set {name}={text}: expected {kind} (the recipe's default is {})",
+            shown(default)
+        )
     };
     if default.is_int() {
-        text.trim()
-            .parse::<i64>()
-            .map(Dynamic::from)
-            .map_err(|_| bad("a whole number").into())
+        let text = text.trim();
+        match text.parse::<i64>() {
+            Ok(i) => Ok(Dynamic::from(i)),
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    IntErrorKind::PosOverflow | IntErrorKind::NegOverflow
+                ) =>
+            {
+                fail(format!(
+                    "{}; a larger value, such as a seed up to 2^64 - 1, needs a parameter whose default is a string: param(\"{name}\", \"0\")",
+                    bad(&format!("a whole number from {} to {}", i64::MIN, i64::MAX))
+                ))
+            }
+            Err(_) => fail(bad("a whole number")),
+        }
     } else if default.is_float() {
         match text.trim().parse::<f64>() {
             Ok(f) if f.is_finite() => Ok(Dynamic::from(f)),
@@ -122,7 +147,7 @@ fn parse_override(name: &str, text: &str, default: &Dynamic) -> Fallible<Dynamic
 fn dataset(map: Map, files: &RecipeFiles) -> OptResult<Dataset> {
     let mut o = Options::new(map, "dataset");
     let name = o.string("name", "dataset")?;
-    let seed = o.integer("seed", 0, 0, i64::MAX)? as u64;
+    let seed = o.unsigned("seed", 0)?;
     let samples = o.integer("samples", 1, 1, 1 << 40)? as u64;
     let views = o.integer("views", 1, 1, 100_000)? as u32;
     let background = background(o.take("background"), files)?;
@@ -155,6 +180,26 @@ fn dataset(map: Map, files: &RecipeFiles) -> OptResult<Dataset> {
         },
         scene,
     })
+}
+
+/// The scene function must take the random source. Checked where the error can point at
+/// `dataset(...)`, rather than left to Rhai's "function not found" when the scene is drawn.
+fn check_scene(ctx: &NativeCallContext, scene: &FnPtr) -> OptResult<()> {
+    let curried = scene.curry().len();
+    let takes: Vec<usize> = ctx
+        .iter_namespaces()
+        .flat_map(|m| m.iter_script_fn_info())
+        .filter(|(_, _, name, ..)| *name == scene.fn_name())
+        .map(|(_, _, _, params, _)| params.saturating_sub(curried))
+        .collect();
+    match takes.as_slice() {
+        [] => Ok(()),
+        found if found.contains(&1) => Ok(()),
+        [n, ..] => Err(format!(
+            "dataset.scene takes {n} parameter{}; it must take one, the random source: |rng| {{ ... }}",
+            if *n == 1 { "" } else { "s" }
+        )),
+    }
 }
 
 /// `outputs: ["rgb", "depth", ...]`: names of writers (see `output::WRITERS`).
@@ -335,7 +380,9 @@ fn register_rng(engine: &mut Engine) {
             let (lo, hi) = (number(&lo, "uniform low")?, number(&hi, "uniform high")?);
             if lo > hi {
                 return fail(format!(
-                    "uniform({lo}, {hi}): the low end exceeds the high end"
+                    "uniform({}, {}): the low end exceeds the high end",
+                    number_shown(lo),
+                    number_shown(hi)
                 ));
             }
             Ok(r.0.lock().unwrap().uniform(lo, hi))
@@ -357,7 +404,10 @@ fn register_rng(engine: &mut Engine) {
         |r: &mut ScriptRng, p: Dynamic| -> Fallible<bool> {
             let p = number(&p, "chance probability")?;
             if !(0.0..=1.0).contains(&p) {
-                return fail(format!("chance({p}): the probability must lie in 0..1"));
+                return fail(format!(
+                    "chance({}): the probability must lie in 0..1",
+                    number_shown(p)
+                ));
             }
             Ok(r.0.lock().unwrap().unit() < p)
         },

@@ -2,9 +2,14 @@
 //! `error: ...` then `--> file:line:col`, the source line and a caret, then the call chain.
 //! Warnings take the same form.
 
-use super::engine::{MAX_OPERATIONS, Sources};
+use super::engine::{
+    MAX_ARRAY_ELEMENTS, MAX_CALL_LEVELS, MAX_EXPR_DEPTH, MAX_FUNCTION_EXPR_DEPTH,
+    MAX_MAP_PROPERTIES, MAX_OPERATIONS, MAX_STRING_BYTES, OUT_OF_MEMORY, Sources,
+};
+use super::memory::MAX_SCRIPT_BYTES;
 use crate::scene::SourceSite;
-use rhai::{EvalAltResult, NativeCallContext, ParseError, Position};
+use crate::words::clip;
+use rhai::{EvalAltResult, NativeCallContext, ParseError, ParseErrorType, Position};
 use std::collections::BTreeSet;
 use std::fmt;
 use std::sync::{Arc, Mutex};
@@ -29,7 +34,10 @@ struct Located {
 impl RecipeError {
     /// An error with no place in the recipe's sources.
     pub fn plain(message: impl Into<String>) -> Self {
-        RecipeError(format!("error: {}", message.into()))
+        RecipeError(format!(
+            "error: {}",
+            clip(&message.into(), MAX_MESSAGE_CHARS)
+        ))
     }
 
     /// A syntax error, shown at its place in the file labelled `label`.
@@ -38,7 +46,14 @@ impl RecipeError {
             label: label.to_string(),
             pos: err.1,
         };
-        RecipeError(render("error", &err.0.to_string(), &at, &[], None, sources))
+        RecipeError(render(
+            "error",
+            &parse_message(&err.0),
+            &at,
+            &[],
+            None,
+            sources,
+        ))
     }
 
     /// `context` says what was being evaluated, e.g. "while drawing the scene of sample 3".
@@ -143,46 +158,75 @@ fn innermost(
             ));
             innermost(inner, module, chain)
         }
-        EvalAltResult::ErrorParsing(kind, pos) => (
-            kind.to_string(),
+        leaf => (
+            message(leaf),
             Located {
                 label: label.to_string(),
-                pos: *pos,
+                pos: leaf.position(),
             },
         ),
-        EvalAltResult::ErrorRuntime(value, pos) => (
-            value.to_string(),
-            Located {
-                label: label.to_string(),
-                pos: *pos,
-            },
+    }
+}
+
+/// What went wrong, in the user's terms where Rhai's own words are unclear: the limits are
+/// named with their values.
+fn message(err: &EvalAltResult) -> String {
+    match err {
+        EvalAltResult::ErrorParsing(kind, _) => parse_message(kind),
+        EvalAltResult::ErrorRuntime(value, _) => value.to_string(),
+        EvalAltResult::ErrorTerminated(token, _) if token.to_string() == OUT_OF_MEMORY => format!(
+            "the script holds more than {} MiB; is a list, map or string growing without end?",
+            MAX_SCRIPT_BYTES >> 20
         ),
-        EvalAltResult::ErrorTooManyOperations(pos) => (
-            format!(
-                "the script ran more than {MAX_OPERATIONS} operations; is there an endless loop?"
+        EvalAltResult::ErrorFunctionNotFound(signature, _) if signature.starts_with("anon$") => {
+            closure_not_found(signature)
+        }
+        EvalAltResult::ErrorStackOverflow(_) => format!(
+            "function calls nested more than {MAX_CALL_LEVELS} deep; does a function call itself without end?"
+        ),
+        EvalAltResult::ErrorTooManyOperations(_) => format!(
+            "the script ran more than {MAX_OPERATIONS} operations; is there an endless loop?"
+        ),
+        EvalAltResult::ErrorDataTooLarge(what, _) => match what.as_str() {
+            "Length of string" => {
+                format!("a string would be longer than {MAX_STRING_BYTES} bytes, the limit")
+            }
+            "Size of array/BLOB" => format!(
+                "a list would hold more than {MAX_ARRAY_ELEMENTS} elements (counting those of the lists and maps inside it), the limit"
             ),
-            Located {
-                label: label.to_string(),
-                pos: *pos,
-            },
-        ),
+            "Size of object map" => format!(
+                "a map would hold more than {MAX_MAP_PROPERTIES} properties (counting those of the maps inside it), the limit"
+            ),
+            _ => format!("{what} too large"),
+        },
         other => {
             let pos = other.position();
             let text = other.to_string();
-            let message = text
-                .strip_suffix(&format!(" ({pos})"))
+            text.strip_suffix(&format!(" ({pos})"))
                 .unwrap_or(&text)
-                .to_string();
-            (
-                message,
-                Located {
-                    label: label.to_string(),
-                    pos,
-                },
-            )
+                .to_string()
         }
     }
 }
+
+/// A syntax error's message.
+fn parse_message(kind: &ParseErrorType) -> String {
+    match kind {
+        ParseErrorType::ExprTooDeep => format!(
+            "expressions or blocks nested too deeply (at most {MAX_EXPR_DEPTH} levels, {MAX_FUNCTION_EXPR_DEPTH} inside functions); split them with `let`"
+        ),
+        other => other.to_string(),
+    }
+}
+
+/// Longest message shown, characters (a message may quote a value the script built).
+const MAX_MESSAGE_CHARS: usize = 2000;
+/// Calls shown at each end of a long call chain.
+const CHAIN_ENDS: usize = 5;
+/// Source lines longer than this many characters are shown in part, around the caret.
+const MAX_LINE_CHARS: usize = 160;
+/// Characters of a long source line shown on each side of the caret.
+const LINE_CONTEXT: usize = 60;
 
 fn render(
     severity: &str,
@@ -192,10 +236,12 @@ fn render(
     context: Option<&str>,
     sources: &Sources,
 ) -> String {
-    let mut out = format!("{severity}: {message}\n");
+    let mut out = format!("{severity}: {}\n", clip(message, MAX_MESSAGE_CHARS));
     out += &format!("  --> {}\n", place(at));
     if let (Some(line), Some(col)) = (at.pos.line(), at.pos.position()) {
-        if let Some(text) = sources.line(&at.label, line) {
+        let exact = line < usize::from(u16::MAX) && col < usize::from(u16::MAX);
+        if let Some(text) = sources.line(&at.label, line).filter(|_| exact) {
+            let (text, col) = excerpt(&text, col);
             let gutter = line.to_string().len();
             out += &format!(
                 "{:gutter$} |\n{line} | {text}\n{:gutter$} | {:>col$}\n",
@@ -203,8 +249,19 @@ fn render(
             );
         }
     }
-    for (what, site) in chain.iter().rev().filter(|(_, l)| !l.pos.is_none()) {
-        out += &format!("  = note: {what}, called at {}\n", place(site));
+    let calls: Vec<_> = chain
+        .iter()
+        .rev()
+        .filter(|(_, l)| !l.pos.is_none())
+        .collect();
+    for (i, (what, site)) in calls.iter().enumerate() {
+        let hidden = calls.len().saturating_sub(2 * CHAIN_ENDS);
+        if hidden > 0 && i == CHAIN_ENDS {
+            out += &format!("  = note: ... {hidden} more calls ...\n");
+        }
+        if hidden == 0 || i < CHAIN_ENDS || i >= CHAIN_ENDS + hidden {
+            out += &format!("  = note: {what}, called at {}\n", place(site));
+        }
     }
     if let Some(context) = context {
         out += &format!("  = note: {context}\n");
@@ -212,8 +269,48 @@ fn render(
     out.trim_end().to_string()
 }
 
+/// The part of a long source line around column `col` (counted from 1), with `…` where it
+/// was cut, and the caret's column in what is shown.
+fn excerpt(text: &str, col: usize) -> (String, usize) {
+    if text.chars().nth(MAX_LINE_CHARS).is_none() {
+        return (text.to_string(), col);
+    }
+    let skip = col.saturating_sub(1 + LINE_CONTEXT);
+    let mut shown: String = text.chars().skip(skip).take(2 * LINE_CONTEXT + 1).collect();
+    if text.chars().nth(skip + 2 * LINE_CONTEXT + 1).is_some() {
+        shown.push('…');
+    }
+    if skip == 0 {
+        (shown, col)
+    } else {
+        (format!("…{shown}"), col - skip + 1)
+    }
+}
+
+/// Rhai names a closure `anon$<hash>`; its "function not found" means the closure was called
+/// with a number of arguments it does not take.
+fn closure_not_found(signature: &str) -> String {
+    let args = signature.split_once(' ').map_or("", |(_, args)| {
+        args.trim_start_matches('(').trim_end_matches(')')
+    });
+    let given = if args.is_empty() {
+        0
+    } else {
+        args.split(',').count()
+    };
+    format!(
+        "a closure was called with {given} argument{} ({args}), which is not the number of parameters it takes",
+        if given == 1 { "" } else { "s" }
+    )
+}
+
 fn place(at: &Located) -> String {
+    // Rhai counts lines and columns in 16 bits; beyond, it stops at the largest.
+    let last = usize::from(u16::MAX);
     match (at.pos.line(), at.pos.position()) {
+        (Some(l), Some(c)) if l >= last || c >= last => {
+            format!("{}:{l}:{c} (or further: Rhai counts no further)", at.label)
+        }
         (Some(l), Some(c)) => format!("{}:{l}:{c}", at.label),
         (Some(l), None) => format!("{}:{l}", at.label),
         _ => at.label.clone(),

@@ -2,12 +2,18 @@
 //!
 //! Recipes get no file, process, network or clock access. The only way to reach another file
 //! is `import "name" as alias;`, which finds `name.rhai` in the recipe's own folder or in
-//! `stdlib/` — nowhere else. Limits bound the work any script can do, so an endless loop
-//! becomes an error instead of a hang.
+//! `stdlib/` — nowhere else, symlinks included (see `access`). Limits bound the work and the
+//! memory any script can use, so an endless loop or an ever-growing map becomes an error
+//! instead of a hang or a crash, and `sleep` is refused.
 
-use rhai::{Engine, EvalAltResult, Module, Position, Scope, Shared};
+use super::access::{Allowed, Kind, source_text};
+use super::memory;
+use super::result::{Fallible, fail};
+use crate::words::clip;
+use rhai::{Dynamic, Engine, EvalAltResult, Module, Position, Scope, Shared};
 use std::collections::{BTreeMap, HashSet};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// Operations one script evaluation (the recipe, or one sample's scene) may perform.
@@ -130,33 +136,72 @@ fn name_in_roots(label: &str, roots: &[PathBuf]) -> String {
         .unwrap_or_else(|| file_name.to_string_lossy().to_string())
 }
 
+/// Deepest nesting of expressions and blocks at the top level of a script.
+pub const MAX_EXPR_DEPTH: usize = 128;
+/// Deepest nesting of expressions and blocks inside a function.
+pub const MAX_FUNCTION_EXPR_DEPTH: usize = 64;
+/// Deepest nesting of function calls.
+pub const MAX_CALL_LEVELS: usize = 64;
+/// Longest string a script may build, bytes.
+pub const MAX_STRING_BYTES: usize = 1 << 20;
+/// Most elements an array may hold, nested arrays and maps included.
+pub const MAX_ARRAY_ELEMENTS: usize = 1 << 20;
+/// Most properties a map may hold, nested maps included.
+pub const MAX_MAP_PROPERTIES: usize = 1 << 16;
+/// Lines of `print` and `debug` output shown per recipe load.
+pub const MAX_PRINT_LINES: usize = 1000;
+/// Characters shown of one line of `print` or `debug` output.
+pub const MAX_PRINT_CHARS: usize = 1000;
+
 /// A fresh engine with the sandbox limits; `register` adds the shmgen API.
+///
+/// Rhai checks the size limits on each value a function returns, but not on a map or array
+/// that an indexed assignment (`m[k] = v`) grows, and they bound neither the number of values
+/// nor what they hold together; so the memory a script allocates is bounded as well
+/// ([`memory::MAX_SCRIPT_BYTES`] per evaluation), checked at every operation.
 pub fn sandboxed(resolver: Arc<Resolver>) -> Engine {
     let mut engine = Engine::new();
     engine
         .set_max_operations(MAX_OPERATIONS)
-        .set_max_call_levels(64)
-        .set_max_expr_depths(128, 64)
-        .set_max_string_size(1 << 20)
-        .set_max_array_size(1 << 20)
-        .set_max_map_size(1 << 16)
+        .set_max_call_levels(MAX_CALL_LEVELS)
+        .set_max_expr_depths(MAX_EXPR_DEPTH, MAX_FUNCTION_EXPR_DEPTH)
+        .set_max_string_size(MAX_STRING_BYTES)
+        .set_max_array_size(MAX_ARRAY_ELEMENTS)
+        .set_max_map_size(MAX_MAP_PROPERTIES)
         .set_max_modules(64)
         .set_max_variables(10_000)
         .set_max_functions(10_000)
         .set_strict_variables(true)
         .set_fail_on_invalid_map_property(true)
-        .set_module_resolver(SharedResolver(resolver));
+        .set_module_resolver(SharedResolver(resolver.clone()));
     // `eval` would compile strings at run time, outside the positions we can report.
     engine.disable_symbol("eval");
-    engine.on_print(|s| eprintln!("recipe: {s}"));
-    engine.on_debug(|s, src, pos| eprintln!("recipe debug {}:{pos}: {s}", src.unwrap_or("")));
+    // Recipes never wait: a sample must take the same time whatever the script says.
+    // Registered functions take precedence over Rhai's, by name and through `Fn("sleep")`.
+    engine.register_fn("sleep", |_: i64| -> Fallible<()> { no_sleep() });
+    engine.register_fn("sleep", |_: f64| -> Fallible<()> { no_sleep() });
+    engine.on_progress(|_| memory::over_budget().then(|| Dynamic::from(OUT_OF_MEMORY)));
+    let printer = resolver.clone();
+    engine.on_print(move |s| printer.print(&format!("recipe: {s}")));
+    engine.on_debug(move |s, src, pos| {
+        resolver.print(&format!("recipe debug {}:{pos}: {s}", src.unwrap_or("")))
+    });
     engine
+}
+
+/// What `on_progress` stops a script with when it allocated too much.
+pub const OUT_OF_MEMORY: &str = "shmgen: script memory budget exceeded";
+
+fn no_sleep() -> Fallible<()> {
+    fail("sleep: recipes cannot wait (a recipe must run the same at any speed)".to_string())
 }
 
 /// Finds `import`ed modules in the recipe's folder, then in the standard library.
 pub struct Resolver {
     folders: Vec<PathBuf>,
+    allowed: Allowed,
     sources: Arc<Sources>,
+    printed: AtomicUsize,
     cache: Mutex<BTreeMap<String, Shared<Module>>>,
     loading: Mutex<HashSet<(std::thread::ThreadId, String)>>,
 }
@@ -165,7 +210,9 @@ impl Resolver {
     pub fn new(recipe_folder: &Path, sources: Arc<Sources>) -> Self {
         Resolver {
             folders: vec![recipe_folder.to_path_buf(), stdlib_dir()],
+            allowed: Allowed::new(recipe_folder),
             sources,
+            printed: AtomicUsize::new(0),
             cache: Mutex::default(),
             loading: Mutex::default(),
         }
@@ -186,7 +233,10 @@ impl Resolver {
         if let Some(m) = self.cache.lock().unwrap().get(path) {
             return Ok(m.clone());
         }
-        let (label, text) = self.find(path).ok_or_else(|| {
+        let found = self
+            .find(path)
+            .map_err(|e| runtime(format!("import \"{path}\": {e}")))?;
+        let (label, text) = found.ok_or_else(|| {
             let searched: Vec<String> = self
                 .folders
                 .iter()
@@ -214,17 +264,32 @@ impl Resolver {
         Ok(module)
     }
 
-    fn find(&self, path: &str) -> Option<(String, String)> {
+    /// Prints a line of the recipe's `print` or `debug` output, within the output limits.
+    fn print(&self, line: &str) {
+        match self.printed.fetch_add(1, Ordering::Relaxed) {
+            n if n < MAX_PRINT_LINES => eprintln!("{}", clip(line, MAX_PRINT_CHARS)),
+            MAX_PRINT_LINES => eprintln!(
+                "recipe: (more than {MAX_PRINT_LINES} lines of print and debug output: the rest is not shown)"
+            ),
+            _ => {}
+        }
+    }
+
+    /// The label and text of module `path`: the first `path.rhai` in the search folders, else
+    /// the built-in copy. A file that is there but may not be read (outside the allowed folders,
+    /// not a regular file, too large, not UTF-8) is an error, not a reason to look further.
+    fn find(&self, path: &str) -> Result<Option<(String, String)>, String> {
         for folder in &self.folders {
             let file = folder.join(format!("{path}.rhai"));
-            if let Ok(text) = std::fs::read_to_string(&file) {
-                return Some((file.display().to_string(), text));
+            if let Some(bytes) = self.allowed.read(&file, Kind::Source)? {
+                let text = source_text(bytes).map_err(|e| format!("{}: {e}", file.display()))?;
+                return Ok(Some((file.display().to_string(), text)));
             }
         }
-        EMBEDDED_STDLIB
+        Ok(EMBEDDED_STDLIB
             .iter()
             .find(|(name, _)| *name == path)
-            .map(|(name, text)| (format!("<built-in stdlib>/{name}.rhai"), text.to_string()))
+            .map(|(name, text)| (format!("<built-in stdlib>/{name}.rhai"), text.to_string())))
     }
 }
 

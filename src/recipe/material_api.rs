@@ -12,8 +12,13 @@ use super::options::{self, OptResult, Options};
 use super::result::Fallible;
 use crate::materials::{Material, Texture, prompt};
 use crate::scene::{AssemblySpec, BeamSpec};
+use crate::words::{clip, number};
 use rhai::{Array, Dynamic, Engine, EvalAltResult, ImmutableString, Map, NativeCallContext};
 use std::sync::Arc;
+
+/// Longest material prompt, characters. Every warning about a prompt quotes it, so a prompt of
+/// many unknown words would otherwise take memory quadratic in its length.
+pub const MAX_PROMPT_CHARS: usize = 1000;
 
 /// Where textures keyed by prompt live, relative to the recipe.
 pub const TEXTURES_FOLDER: &str = "textures";
@@ -70,6 +75,12 @@ fn compile(
     let at = |msg: String| Box::new(EvalAltResult::ErrorRuntime(msg.into(), ctx.call_position()));
     let mut o = Options::new(options, "material options");
     let strict = o.flag("strict", false).map_err(at)?;
+    if text.chars().nth(MAX_PROMPT_CHARS).is_some() {
+        return Err(at(format!(
+            "material prompt \"{}\" is longer than {MAX_PROMPT_CHARS} characters; a prompt is a short description such as \"a photo of rusty steel\"",
+            clip(text, 40)
+        )));
+    }
     let compiled = prompt::compile(text, strict).map_err(at)?;
     let label = ctx.call_source().unwrap_or(&c.label);
     for warning in &compiled.warnings {
@@ -93,19 +104,20 @@ fn adjust(m: &mut Material, o: &mut Options, files: &RecipeFiles, text: &str) ->
     if !(m.roughness > 0.0 && m.roughness <= 1.0) {
         return Err(format!(
             "material options.roughness = {} must lie in (0, 1]",
-            m.roughness
+            number(m.roughness)
         ));
     }
     if !(0.0..=1.0).contains(&m.specular) {
         return Err(format!(
             "material options.specular = {} must lie in [0, 1]",
-            m.specular
+            number(m.specular)
         ));
     }
     for (name, value) in [("scale", m.scale), ("texture_size", size)] {
         if value <= 0.0 {
             return Err(format!(
-                "material options.{name} = {value} must be positive (metres)"
+                "material options.{name} = {} must be positive (metres)",
+                number(value)
             ));
         }
     }

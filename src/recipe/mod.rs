@@ -9,18 +9,21 @@
 //! source derived from (seed, sample, "scene"), so samples can be drawn in any order, on any
 //! thread, with the same result.
 
+mod access;
 mod api;
 mod beam_api;
 mod diagnostics;
 mod engine;
 mod files;
 mod material_api;
+mod memory;
 mod options;
 mod result;
 mod shape_api;
 
 pub use diagnostics::RecipeError;
 pub use engine::stdlib_dir;
+pub use memory::CountingAllocator;
 
 use crate::scene::{AssemblySpec, BeamSpec, DatasetSpec, SceneSpec, SourceSite, Structure};
 use crate::seeds::{self, Scope as StreamScope, Stream};
@@ -52,9 +55,16 @@ pub struct Recipe {
 impl Recipe {
     /// Compiles and evaluates the recipe at `path` with `--set` overrides.
     pub fn load(path: &Path, overrides: &[(String, String)]) -> Result<Recipe, RecipeError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            RecipeError::plain(format!("cannot read recipe {}: {e}", path.display()))
-        })?;
+        on_script_stack(|| Self::load_here(path, overrides))?
+    }
+
+    fn load_here(path: &Path, overrides: &[(String, String)]) -> Result<Recipe, RecipeError> {
+        let _budget = memory::Budget::start();
+        let text = access::read_regular(path, access::Kind::Source)
+            .and_then(access::source_text)
+            .map_err(|e| {
+                RecipeError::plain(format!("cannot read recipe {}: {e}", path.display()))
+            })?;
         let label = path.display().to_string();
         let sources = Arc::new(Sources::default());
         sources.insert(&label, &text);
@@ -115,7 +125,7 @@ impl Recipe {
         };
         // Parameters may also be declared inside the scene function: draw one scene before
         // deciding which `--set` names are unknown.
-        recipe.scene(0)?;
+        recipe.scene_here(0)?;
         recipe.params = resolved_params(&params, overrides)?;
         recipe.hash = sources.hash();
         Ok(recipe)
@@ -123,11 +133,16 @@ impl Recipe {
 
     /// Draws the scene of one sample.
     pub fn scene(&self, sample: u64) -> Result<SceneSpec, RecipeError> {
+        on_script_stack(|| self.scene_here(sample))?
+    }
+
+    fn scene_here(&self, sample: u64) -> Result<SceneSpec, RecipeError> {
         let context = format!("while drawing the scene of sample {sample}");
         let rng = ScriptRng::new(
             Stream::new(self.dataset.seed, StreamScope::Sample(sample), seeds::SCENE),
             sample,
         );
+        let _budget = memory::Budget::start();
         // Captured variables are shared cells; give each call private copies so that a scene
         // function that mutates them cannot make one sample depend on another.
         let mut scene = self.scene.clone();
@@ -169,6 +184,28 @@ impl Recipe {
             .filter(|p| p.is_file())
             .collect()
     }
+}
+
+/// Stack for evaluating a script, bytes. Rhai evaluates recursively: the deepest nesting its
+/// limits allow (64 calls, each 64 expressions deep) overflows the 2 MiB of a worker thread.
+/// Only the pages a script touches are committed.
+const SCRIPT_STACK: usize = 64 << 20;
+
+/// Runs `f` on a thread of its own with `SCRIPT_STACK` of stack, so that a deep script ends in
+/// Rhai's error for its limits rather than a stack overflow of the whole process.
+fn on_script_stack<T: Send>(f: impl FnOnce() -> T + Send) -> Result<T, RecipeError> {
+    std::thread::scope(|scope| {
+        let thread = std::thread::Builder::new()
+            .name("recipe script".into())
+            .stack_size(SCRIPT_STACK)
+            .spawn_scoped(scope, f)
+            .map_err(|e| {
+                RecipeError::plain(format!("cannot start a thread for the recipe: {e}"))
+            })?;
+        Ok(thread
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
+    })
 }
 
 /// The structures a scene function returned: one structure, or a list of them.

@@ -4,6 +4,7 @@
 //! and shows the value given. Options that nobody asked for are reported with the nearest
 //! known name, so a typo never passes silently.
 
+use crate::words::{clip, number as number_shown};
 use rhai::{Dynamic, Map};
 
 pub type OptResult<T> = Result<T, String>;
@@ -22,15 +23,28 @@ pub fn number(value: &Dynamic, name: &str) -> OptResult<f64> {
         i as f64
     } else {
         return Err(format!(
-            "{name} = {value} ({}) must be a number",
+            "{name} = {} ({}) must be a number",
+            shown(value),
             value.type_name()
         ));
     };
     if x.is_finite() {
         Ok(x)
     } else {
-        Err(format!("{name} = {x} is not a finite number"))
+        Err(format!(
+            "{name} = {} is not a finite number",
+            number_shown(x)
+        ))
     }
+}
+
+/// Longest rendering of a script value in a message, characters.
+const MAX_SHOWN_CHARS: usize = 80;
+
+/// A script value as messages show it: as Rhai prints it (large and small floats in exponent
+/// form), cut to a readable length.
+pub fn shown(value: &Dynamic) -> String {
+    clip(&value.to_string(), MAX_SHOWN_CHARS).into_owned()
 }
 
 pub fn positive(value: &Dynamic, name: &str, unit: &str) -> OptResult<f64> {
@@ -38,7 +52,10 @@ pub fn positive(value: &Dynamic, name: &str, unit: &str) -> OptResult<f64> {
     if x > 0.0 {
         Ok(x)
     } else {
-        Err(format!("{name} = {x} must be positive ({unit})"))
+        Err(format!(
+            "{name} = {} must be positive ({unit})",
+            number_shown(x)
+        ))
     }
 }
 
@@ -95,12 +112,51 @@ impl Options {
         };
         let i = v
             .as_int()
-            .map_err(|_| format!("{path} = {v} must be a whole number"))?;
+            .map_err(|_| format!("{path} = {} must be a whole number", shown(&v)))?;
         if (min..=max).contains(&i) {
             Ok(i)
         } else {
             Err(format!("{path} = {i} must be between {min} and {max}"))
         }
+    }
+
+    /// A whole number in 0..=u64::MAX. Rhai integers stop at 2⁶³ − 1 and larger literals become
+    /// floats, which are exact only up to 2⁵³; so beyond 2⁵³ a value is given as a string of
+    /// digits, and a float is taken only when it is an exact integer no larger than 2⁵³.
+    pub fn unsigned(&mut self, key: &'static str, default: u64) -> OptResult<u64> {
+        let path = self.path(key);
+        let Some(v) = self.take(key) else {
+            return Ok(default);
+        };
+        const EXACT: f64 = (1u64 << f64::MANTISSA_DIGITS) as f64;
+        let whole = if let Ok(i) = v.as_int() {
+            u64::try_from(i).ok()
+        } else if let Ok(f) = v.as_float() {
+            if f.fract() != 0.0 || !f.is_finite() {
+                None
+            } else if f.abs() > EXACT {
+                return Err(format!(
+                    "{path} = {}: a number this large is not held exactly (Rhai integers stop at {}); write it as a string of digits, e.g. {key}: \"{}\"",
+                    number_shown(f),
+                    i64::MAX,
+                    i64::MAX as u64 + 1
+                ));
+            } else {
+                (f >= 0.0).then_some(f as u64)
+            }
+        } else if v.is_string() {
+            v.to_string().trim().parse::<u64>().ok()
+        } else {
+            None
+        };
+        whole.ok_or_else(|| {
+            format!(
+                "{path} = {} must be a whole number from 0 to {} (a string of digits above {})",
+                shown(&v),
+                u64::MAX,
+                i64::MAX
+            )
+        })
     }
 
     pub fn string(&mut self, key: &'static str, default: &str) -> OptResult<String> {
@@ -118,7 +174,7 @@ impl Options {
         let path = self.path(key);
         self.take(key).map_or(Ok(default), |v| {
             v.as_bool()
-                .map_err(|_| format!("{path} = {v} must be true or false"))
+                .map_err(|_| format!("{path} = {} must be true or false", shown(&v)))
         })
     }
 
@@ -133,7 +189,8 @@ impl Options {
                 [lo, hi] => [number(lo, &path)?, number(hi, &path)?],
                 _ => {
                     return Err(format!(
-                        "{path} = {v} must be a number or a range [low, high]"
+                        "{path} = {} must be a number or a range [low, high]",
+                        shown(&v)
                     ));
                 }
             }
@@ -146,7 +203,8 @@ impl Options {
         } else {
             Err(format!(
                 "{path} = [{}, {}]: the low end exceeds the high end",
-                r[0], r[1]
+                number_shown(r[0]),
+                number_shown(r[1])
             ))
         }
     }
@@ -191,14 +249,18 @@ pub fn colour(v: &Dynamic, path: &str) -> OptResult<[f64; 3]> {
     let arr = v.clone().try_cast::<rhai::Array>().filter(|a| a.len() == 3);
     let Some(arr) = arr else {
         return Err(format!(
-            "{path} = {v} must be [red, green, blue] with components in 0..1"
+            "{path} = {} must be [red, green, blue] with components in 0..1",
+            shown(v)
         ));
     };
     let mut c = [0.0; 3];
     for (slot, x) in c.iter_mut().zip(&arr) {
         *slot = number(x, path)?;
         if !(0.0..=1.0).contains(slot) {
-            return Err(format!("{path} = {v}: colour components must lie in 0..1"));
+            return Err(format!(
+                "{path} = {}: colour components must lie in 0..1",
+                shown(v)
+            ));
         }
     }
     Ok(c)

@@ -4,7 +4,7 @@
 
 use super::diagnostics::call_site;
 use super::files::RecipeFiles;
-use super::options::{Options, number, positive};
+use super::options::{Options, number, positive, shown};
 use super::result::{Fallible, fail};
 use crate::geometry::primitives::Primitive;
 use crate::mechanics::ShellPattern;
@@ -78,7 +78,8 @@ pub fn register(engine: &mut Engine, files: Arc<RecipeFiles>) {
                     Ok(other) => assembly.shapes.extend(other.shapes),
                     Err(other) => {
                         return fail(format!(
-                            "assembly \"{name}\": {other} ({}) is neither a shape nor an assembly",
+                            "assembly \"{name}\": {} ({}) is neither a shape nor an assembly",
+                            shown(&other),
                             other.type_name()
                         ));
                     }
@@ -348,12 +349,22 @@ fn make(
     Ok(ShapeSpec::new(primitive))
 }
 
+/// Most points in an `extrude` or `bend` profile: checking and triangulating a profile takes
+/// time growing with the square of its points (8000 take over a second).
+pub const MAX_PROFILE_POINTS: usize = 10_000;
+
 fn profile_points(profile: &Array) -> Result<Vec<[f64; 2]>, String> {
+    if profile.len() > MAX_PROFILE_POINTS {
+        return Err(format!(
+            "the profile has {} points, more than the {MAX_PROFILE_POINTS} a profile may have",
+            profile.len()
+        ));
+    }
     profile
         .iter()
         .map(|p| match p.clone().try_cast::<Array>().as_deref() {
             Some([x, y]) => Ok([number(x, "profile x")?, number(y, "profile y")?]),
-            _ => Err(format!("profile point {p} must be [x, y]")),
+            _ => Err(format!("profile point {} must be [x, y]", shown(p))),
         })
         .collect()
 }
