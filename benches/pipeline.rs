@@ -78,7 +78,7 @@ fn main() {
             let mesh = TraceMesh::build(&sample.mesh);
             stages[1].1.push(t.elapsed().as_secs_f64());
             for view in 0..20 {
-                let (camera, _) = view_camera(&recipe.dataset, &sample, view).unwrap();
+                let camera = view_camera(&recipe.dataset, &sample, view).unwrap().camera;
                 let t = Instant::now();
                 let g = mesh.trace(&camera);
                 stages[2].1.push(t.elapsed().as_secs_f64());

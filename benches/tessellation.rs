@@ -4,8 +4,9 @@
 //!
 //!     cargo bench --bench tessellation
 
+use glam::DVec3;
 use shmgen::build::{beam_radius, mesh_beam, problem};
-use shmgen::cameras::{CameraRig, Distance};
+use shmgen::cameras::CameraRig;
 use shmgen::mechanics::{Deformation, Load, Support, Target, Theory};
 use shmgen::render::{NO_HIT, TraceMesh};
 use shmgen::scene::{BeamSpec, Tessellation};
@@ -75,10 +76,7 @@ fn smooth_pixels(depth: &[f32], width: usize) -> Vec<bool> {
 }
 
 fn main() {
-    let rig = CameraRig {
-        distance: Distance::Frame { margin: 1.05 },
-        ..CameraRig::default()
-    };
+    let rig = CameraRig::default();
     let views = 6;
     println!(
         "Speed against error, A1 beams (L = 1 m, δ = 0.05 L), 960×960, {views} views each, 1 thread per view"
@@ -114,12 +112,12 @@ fn main() {
         .unwrap();
     pool.install(|| {
         for (name, beam) in beams() {
-            let footprint = rig.nearest_pixel_footprint(beam_radius(&beam));
+            let footprint = rig.nearest_pixel_footprint(DVec3::ZERO, beam_radius(&beam));
             let mut reference = beam.clone();
             reference.tessellation = Tessellation::Segments(4096);
             let reference_mesh = mesh_beam(&reference, footprint).unwrap().mesh;
             let (centre, radius) = reference_mesh.bounding_sphere().unwrap();
-            let cameras: Vec<_> = (0..views).map(|v| rig.draw(&mut Stream::new(1, Scope::View(0, v), "camera"), centre, radius).unwrap().0).collect();
+            let cameras: Vec<_> = (0..views).map(|v| rig.draw(&mut Stream::new(1, Scope::View(0, v), "camera"), v, views, centre, radius).unwrap().0).collect();
             let reference_trace = TraceMesh::build(&reference_mesh);
             let truth: Vec<_> = cameras.iter().map(|c| reference_trace.trace(c)).collect();
             println!("\n{name} (pixel at nearest camera {:.2} mm)", footprint * 1e3);

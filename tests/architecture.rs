@@ -56,7 +56,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("mechanics", &[]),
     ("geometry", &[]),
     ("materials", &["seeds", "words"]),
-    ("cameras", &["seeds"]),
+    ("cameras", &["seeds", "words"]),
     ("seeds", &[]),
     ("words", &[]),
 ];

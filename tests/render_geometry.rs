@@ -3,7 +3,7 @@
 
 use glam::{DMat3, DVec2, DVec3};
 use shmgen::build::mesh_beam;
-use shmgen::cameras::{Camera, CameraRig, Distance, Intrinsics, ViewDraw};
+use shmgen::cameras::{Camera, CameraRig, Distance, Intrinsics, Orbit, Poses};
 use shmgen::geometry::Mesh;
 use shmgen::mechanics::{Load, Section, Support, Target};
 use shmgen::render::{NO_HIT, TraceMesh};
@@ -133,7 +133,7 @@ fn narrow_fields_of_view_are_exact() {
     for fov in [1e-4, 1e-6, 1e-7, 1e-8] {
         let k = Intrinsics::from_fov_y(96, 96, fov);
         let distance = 1.05 * HALF.length() / (0.5 * fov).sin();
-        let draw = ViewDraw {
+        let draw = Orbit {
             yaw: 0.6,
             pitch: 0.3,
             roll: 0.2,
@@ -280,7 +280,12 @@ fn closed_meshes_have_no_holes_from_200_cameras_including_the_poles() {
     let rig = CameraRig {
         width: 160,
         height: 120,
-        distance: Distance::Frame { margin: 1.1 },
+        poses: Poses::Sphere {
+            yaw: [0.0, std::f64::consts::TAU],
+            pitch: [-std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2],
+            roll: [0.0, 0.0],
+            distance: Distance::Frame { margin: 1.1 },
+        },
         ..CameraRig::default()
     };
     for (b, beam) in deformed_beams().iter().enumerate() {
@@ -293,7 +298,7 @@ fn closed_meshes_have_no_holes_from_200_cameras_including_the_poles() {
                 0 => shmgen::cameras::orbit_camera(
                     rig.intrinsics(),
                     centre,
-                    &ViewDraw {
+                    &Orbit {
                         yaw: 0.3,
                         pitch: std::f64::consts::FRAC_PI_2,
                         roll: 0.0,
@@ -303,7 +308,7 @@ fn closed_meshes_have_no_holes_from_200_cameras_including_the_poles() {
                 1 => shmgen::cameras::orbit_camera(
                     rig.intrinsics(),
                     centre,
-                    &ViewDraw {
+                    &Orbit {
                         yaw: 2.0,
                         pitch: -std::f64::consts::FRAC_PI_2,
                         roll: 0.4,
@@ -313,7 +318,7 @@ fn closed_meshes_have_no_holes_from_200_cameras_including_the_poles() {
                 2 => shmgen::cameras::orbit_camera(
                     rig.intrinsics(),
                     centre,
-                    &ViewDraw {
+                    &Orbit {
                         yaw: 0.0,
                         pitch: 0.0,
                         roll: 0.0,
@@ -323,6 +328,8 @@ fn closed_meshes_have_no_holes_from_200_cameras_including_the_poles() {
                 _ => {
                     rig.draw(
                         &mut Stream::new(11, Scope::View(b as u64, view), "camera"),
+                        0,
+                        1,
                         centre,
                         radius,
                     )
@@ -371,6 +378,8 @@ fn back_projected_depth_lies_on_the_mesh() {
             let (cam, _) = rig
                 .draw(
                     &mut Stream::new(5, Scope::View(b as u64, view), "camera"),
+                    0,
+                    1,
                     centre,
                     0.5 * size,
                 )
@@ -432,7 +441,7 @@ fn depth_from_below(beam: &BeamSpec, distance: f64) -> f64 {
     let cam = shmgen::cameras::orbit_camera(
         k,
         centre,
-        &ViewDraw {
+        &Orbit {
             yaw: 0.0,
             pitch: -std::f64::consts::FRAC_PI_2,
             roll: 0.0,
@@ -475,6 +484,8 @@ fn a_deformed_beam_one_kilometre_away_renders_like_one_at_the_origin() {
         let (cam, _) = rig
             .draw(
                 &mut Stream::new(2, Scope::View(0, 0), "camera"),
+                0,
+                1,
                 centre,
                 radius,
             )

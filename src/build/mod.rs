@@ -101,7 +101,9 @@ pub fn build_sample(
         };
         match structure {
             Structure::Beam(beam) => {
-                let footprint = dataset.camera.nearest_pixel_footprint(beam_radius(beam));
+                let footprint = dataset
+                    .camera
+                    .nearest_pixel_footprint(DVec3::from_array(beam.centre), beam_radius(beam));
                 let built = mesh_beam(beam, footprint).map_err(failed)?;
                 let grain = Grain {
                     axis: DMat3::from_rotation_z(beam.yaw) * DVec3::X,
@@ -114,7 +116,10 @@ pub fn build_sample(
                 }));
             }
             Structure::Assembly(a) => {
-                let footprint = dataset.camera.nearest_pixel_footprint(assembly_radius(a));
+                // Shapes are placed in world coordinates: the assembly's sphere is about the origin.
+                let footprint = dataset
+                    .camera
+                    .nearest_pixel_footprint(DVec3::ZERO, assembly_radius(a));
                 for shape in mesh_assembly(a, footprint).map_err(failed)? {
                     let grain = grain_of(&shape.rest);
                     assembled.add(&shape.mesh, &shape.rest, i, shape.part, grain);

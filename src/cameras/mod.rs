@@ -9,7 +9,10 @@ mod distortion;
 mod rig;
 
 pub use distortion::Distortion;
-pub use rig::{CameraRig, Distance, MIN_FOV, ViewDraw, orbit_camera};
+pub use rig::{
+    CameraRig, Distance, DistortionRanges, FixedCamera, MIN_FOV, Orbit, Poses, Stereo, ViewDraw,
+    orbit_camera,
+};
 
 use glam::{DMat3, DMat4, DVec3, DVec4};
 

@@ -183,7 +183,7 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
     Ok(RunSummary {
         rendered,
         skipped: done.len(),
-        pairs: rendered * u64::from(recipe.dataset.views),
+        pairs: rendered * u64::from(recipe.dataset.images_per_sample()),
         bytes,
         seconds: start.elapsed().as_secs_f64(),
         complete,

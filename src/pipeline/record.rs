@@ -3,9 +3,9 @@
 //! generated from these types.
 
 use super::finite::check_finite;
-use super::view::RenderedView;
+use super::view::{Eye, RenderedView, ViewCamera};
 use crate::build::{BackdropDraw, BuiltSample, LightDraw};
-use crate::cameras::{ViewDraw, rows4};
+use crate::cameras::{CameraRig, Distortion, ViewDraw, rows4};
 use crate::materials::MaterialDraw;
 use crate::materials::procedural::CRACK_LABEL_COVER;
 use crate::mechanics::{Labels, SectionProperties};
@@ -139,7 +139,9 @@ pub struct Seeds {
 }
 
 impl Seeds {
-    fn of_view(run_seed: u64, sample: u64, view: u32) -> Self {
+    /// The streams of view `view`, whose camera pose is `pose` (the view itself, or the pair
+    /// of a stereo view).
+    fn of_view(run_seed: u64, sample: u64, view: u32, pose: u32) -> Self {
         let of_sample = |name| StreamRecord {
             scope: vec![sample],
             name,
@@ -151,7 +153,10 @@ impl Seeds {
         Seeds {
             run_seed,
             scene_stream: of_sample(seeds::SCENE),
-            camera_stream: of_view(seeds::CAMERA),
+            camera_stream: StreamRecord {
+                scope: vec![sample, u64::from(pose)],
+                name: seeds::CAMERA,
+            },
             material_stream: of_sample(seeds::MATERIAL),
             light_stream: of_sample(seeds::LIGHT),
             background_stream: of_view(seeds::BACKGROUND),
@@ -171,6 +176,10 @@ pub struct StreamRecord {
 /// The projection model of a camera.
 #[derive(Serialize, schemars::JsonSchema)]
 pub enum CameraModel {
+    /// OpenCV's pinhole with Brown–Conrady distortion (`camera.distortion`), as COLMAP's and
+    /// nerfstudio's "OPENCV".
+    #[serde(rename = "opencv")]
+    Opencv,
     /// An ideal pinhole camera: no lens distortion; a world point projects through `K` and
     /// `w2c_opencv` alone.
     #[serde(rename = "pinhole")]
@@ -206,10 +215,33 @@ pub struct CameraRecord {
     /// Centre of projection, world axes, metres.
     pub position: [f64; 3],
     /// The point the camera was aimed at, world axes, metres: the centre of the sample's
-    /// bounding sphere.
+    /// bounding sphere (or the rig's target), plus any aim jitter.
     pub target: [f64; 3],
-    /// The yaw, pitch, roll and distance drawn for this view.
+    /// Lens distortion in OpenCV's convention (all zero for a pinhole): a pixel's normalised
+    /// coordinates are the distortion of (X/Z, Y/Z).
+    pub distortion: Distortion,
+    /// The values drawn for this view's pose and lens.
     pub drawn: ViewDraw,
+    /// For a view of a stereo rig, its pair (null otherwise).
+    pub stereo: Option<StereoRecord>,
+}
+
+/// A view's place in a stereo pair.
+#[derive(Serialize, schemars::JsonSchema)]
+pub struct StereoRecord {
+    /// The pose both eyes share (views 2·pair and 2·pair + 1).
+    pub pair: u32,
+    /// Which eye this view is.
+    pub eye: Eye,
+    /// The view index of the other eye.
+    pub partner_view: u32,
+    /// Distance between the eyes' centres, metres.
+    pub baseline: f64,
+    /// Turn of the right eye towards the left eye's axis, radians (0: rectified pair).
+    pub toe_in: f64,
+    /// Row-major 4 × 4 taking a point from the left eye's OpenCV camera frame to the right
+    /// eye's: [x_right, 1] = right_from_left · [x_left, 1].
+    pub right_from_left: [[f64; 4]; 4],
 }
 
 /// What a depth value measures.
@@ -457,27 +489,40 @@ impl<'a> SampleRecord<'a> {
     ) -> ViewRecord<'a> {
         let camera = &rendered.camera;
         let view = rendered.view;
+        let rig = &recipe.dataset.camera;
+        let k = &camera.intrinsics;
         ViewRecord {
             schema: ViewSchema::V1,
             dataset: &recipe.dataset.name,
             sample: sample.index,
             view,
             files,
-            seeds: Seeds::of_view(recipe.dataset.seed, sample.index, view),
+            seeds: Seeds::of_view(
+                recipe.dataset.seed,
+                sample.index,
+                view,
+                rendered.drawn.stereo.map_or(view, |(pair, _)| pair),
+            ),
             params: &recipe.params,
             camera: CameraRecord {
-                model: CameraModel::Pinhole,
-                width: camera.intrinsics.width,
-                height: camera.intrinsics.height,
-                fov_y: recipe.dataset.camera.fov_y,
+                model: if k.distortion.is_none() {
+                    CameraModel::Pinhole
+                } else {
+                    CameraModel::Opencv
+                },
+                width: k.width,
+                height: k.height,
+                fov_y: 2.0 * (0.5 * f64::from(k.height) / k.fy).atan(),
                 pixel_center: 0.5,
                 k: camera.intrinsics.matrix(),
                 w2c_opencv: rows4(camera.w2c_cv()),
                 c2w_opencv: rows4(camera.c2w_cv()),
                 c2w_opengl: rows4(camera.c2w_gl()),
                 position: camera.position.to_array(),
-                target: sample.centre.to_array(),
-                drawn: rendered.draw,
+                target: rendered.drawn.draw.aim,
+                distortion: k.distortion,
+                drawn: rendered.drawn.draw,
+                stereo: stereo_record(rig, &rendered.drawn, view),
             },
             depth: DepthConvention {
                 kind: DepthKind::PlanarZ,
@@ -509,6 +554,24 @@ impl<'a> SampleRecord<'a> {
             coverage: rendered.coverage(),
         }
     }
+}
+
+/// The pair of a stereo view: the right eye's pose relative to the left's.
+fn stereo_record(rig: &CameraRig, drawn: &ViewCamera, view: u32) -> Option<StereoRecord> {
+    let (stereo, (pair, eye)) = (rig.stereo?, drawn.stereo?);
+    let left = drawn.left.unwrap_or(drawn.camera);
+    let right = rig.right_eye(&left)?;
+    Some(StereoRecord {
+        pair,
+        eye,
+        partner_view: match eye {
+            Eye::Left => view + 1,
+            Eye::Right => view - 1,
+        },
+        baseline: stereo.baseline,
+        toe_in: stereo.toe_in,
+        right_from_left: rows4(right.w2c_cv() * left.c2w_cv()),
+    })
 }
 
 /// The JSON Schema (draft 2020-12) of each view's JSON, generated from [`ViewRecord`].

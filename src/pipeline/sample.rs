@@ -23,7 +23,7 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<BuiltSample> {
         check_finite(labels)
             .map_err(|e| recipe.locate(&e.to_string(), structure.declared_at(), &context))?;
     }
-    for view in 0..recipe.dataset.views {
+    for view in 0..recipe.dataset.images_per_sample() {
         view_camera(&recipe.dataset, &sample, view)?;
     }
     check_segmentation(recipe, &sample)?;
@@ -53,7 +53,7 @@ pub fn write_sample(recipe: &Recipe, sample: &BuiltSample, stage: &mut SampleSta
     let dataset = &recipe.dataset;
     let renderer = SampleRenderer::new(dataset, sample);
     let record = SampleRecord::new(sample);
-    for view in 0..dataset.views {
+    for view in 0..dataset.images_per_sample() {
         let rendered = renderer.view(view)?;
         let mut files = BTreeMap::new();
         for writer in WRITERS.iter().filter(|w| dataset.outputs.wants(w.output)) {
@@ -67,5 +67,5 @@ pub fn write_sample(recipe: &Recipe, sample: &BuiltSample, stage: &mut SampleSta
         let json = json_bytes(&record.view(recipe, sample, &rendered, files))?;
         stage.write(view_file(sample.index, view, "json"), &json)?;
     }
-    Ok(dataset.views)
+    Ok(dataset.images_per_sample())
 }

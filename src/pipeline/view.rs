@@ -9,19 +9,63 @@ use crate::render::{GBuffer, NO_HIT, SampleSurfaces, TraceMesh, shade};
 use crate::scene::DatasetSpec;
 use crate::seeds::{self, Scope, Stream};
 use anyhow::{Result, anyhow};
+use serde::Serialize;
 use std::sync::OnceLock;
 
-/// The camera of view `view` of a built sample.
-pub fn view_camera(
-    dataset: &DatasetSpec,
-    sample: &BuiltSample,
-    view: u32,
-) -> Result<(Camera, ViewDraw)> {
-    let mut stream = Stream::new(dataset.seed, Scope::View(sample.index, view), seeds::CAMERA);
-    dataset
-        .camera
-        .draw(&mut stream, sample.centre, sample.radius)
-        .map_err(|e| anyhow!("sample {}, view {view}: {e}", sample.index))
+/// Which eye of a stereo pair a view is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Eye {
+    /// The drawn camera.
+    Left,
+    /// The left eye moved by the baseline along its x axis (and turned by the toe-in).
+    Right,
+}
+
+/// The camera of one view, what was drawn for it and, for a stereo rig, its place in the pair.
+#[derive(Clone, Copy, Debug)]
+pub struct ViewCamera {
+    /// The camera the view is rendered with.
+    pub camera: Camera,
+    /// The values drawn for its pose and lens.
+    pub draw: ViewDraw,
+    /// (pose, eye) of a stereo rig: views 2p and 2p + 1 are the left and right eyes of pose p.
+    pub stereo: Option<(u32, Eye)>,
+    /// The left eye's camera, for a right eye.
+    pub left: Option<Camera>,
+}
+
+/// The camera of view `view` of a built sample. Each pose draws from its own stream, so both
+/// eyes of a stereo pair share one draw.
+pub fn view_camera(dataset: &DatasetSpec, sample: &BuiltSample, view: u32) -> Result<ViewCamera> {
+    let rig = &dataset.camera;
+    let (pose, eye) = match rig.stereo {
+        Some(_) => (
+            view / 2,
+            Some(if view % 2 == 0 { Eye::Left } else { Eye::Right }),
+        ),
+        None => (view, None),
+    };
+    let mut stream = Stream::new(dataset.seed, Scope::View(sample.index, pose), seeds::CAMERA);
+    let (left, draw) = rig
+        .draw(
+            &mut stream,
+            pose,
+            dataset.views,
+            sample.centre,
+            sample.radius,
+        )
+        .map_err(|e| anyhow!("sample {}, view {view}: {e}", sample.index))?;
+    let camera = match eye {
+        Some(Eye::Right) => rig.right_eye(&left).expect("a stereo rig"),
+        _ => left,
+    };
+    Ok(ViewCamera {
+        camera,
+        draw,
+        stereo: eye.map(|e| (pose, e)),
+        left: (eye == Some(Eye::Right)).then_some(left),
+    })
 }
 
 /// Everything a sample's views share: the BVH, the surface look of every structure and the
@@ -41,8 +85,8 @@ pub struct RenderedView<'a> {
     pub view: u32,
     /// The camera of the view.
     pub camera: Camera,
-    /// The yaw, pitch, roll and distance drawn for the camera.
-    pub draw: ViewDraw,
+    /// The camera as drawn, with its place in a stereo pair.
+    pub drawn: ViewCamera,
     /// Depth and triangle id of every pixel, from its centre ray.
     pub gbuffer: GBuffer,
     backdrop: Backdrop,
@@ -71,8 +115,14 @@ impl<'a> SampleRenderer<'a> {
 
     /// Traces view `view` and draws its backdrop.
     pub fn view(&self, view: u32) -> Result<RenderedView<'_>> {
+        let drawn = view_camera(self.dataset, self.sample, view)?;
+        Ok(self.view_with(view, drawn.camera, drawn))
+    }
+
+    /// Traces view `view` through `camera` (the drawn one, or one an augmentation changed)
+    /// and draws its backdrop.
+    pub fn view_with(&self, view: u32, camera: Camera, drawn: ViewCamera) -> RenderedView<'_> {
         let dataset = self.dataset;
-        let (camera, draw) = view_camera(dataset, self.sample, view)?;
         let gbuffer = self.trace_mesh.trace(&camera);
         let mut stream = Stream::new(
             dataset.seed,
@@ -81,17 +131,17 @@ impl<'a> SampleRenderer<'a> {
         );
         let frame = (dataset.camera.width, dataset.camera.height);
         let (backdrop, backdrop_drawn) = draw_backdrop(&dataset.background, &mut stream, frame);
-        Ok(RenderedView {
+        RenderedView {
             renderer: self,
             view,
             camera,
-            draw,
+            drawn,
             gbuffer,
             backdrop,
             backdrop_drawn,
             rgb: OnceLock::new(),
             cracks: OnceLock::new(),
-        })
+        }
     }
 }
 

@@ -4,7 +4,7 @@
 use super::files::RecipeFiles;
 use super::options::{self, OptResult, Options, number, shown};
 use super::result::{Fallible, fail};
-use crate::cameras::{CameraRig, Distance};
+use crate::cameras::{CameraRig, Distance, DistortionRanges, FixedCamera, Poses, Stereo};
 use crate::output::{DEFAULT_OUTPUTS, output_names};
 use crate::scene::{
     Background, DatasetSpec, ImageRecord, LightSpec, OUTDOOR_AMBIENT, Outputs, SkyGradient,
@@ -158,7 +158,7 @@ fn dataset(map: Map, files: &RecipeFiles) -> OptResult<Dataset> {
     let antialias = o.flag("antialias", true)?;
     let outputs = outputs(o.take("outputs"))?;
     let camera = match o.sub("camera")? {
-        Some(c) => camera(c)?,
+        Some(c) => camera(c, views)?,
         None => CameraRig::default(),
     };
     let scene = o.required("scene")?;
@@ -230,16 +230,68 @@ fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {
     Ok(Outputs::new(&known, &chosen))
 }
 
-fn camera(mut o: Options) -> OptResult<CameraRig> {
+/// `camera: #{ width, height, fov_y, principal_offset, distortion, aim_jitter, stereo, ... }`
+/// with the poses on a sphere (`yaw`, `pitch`, `roll`, `distance`, `margin`), or one of
+/// `fixed: [...]`, `orbit: #{...}`, `line: #{...}`.
+fn camera(mut o: Options, views: u32) -> OptResult<CameraRig> {
     let d = CameraRig::default();
     let width = o.integer("width", i64::from(d.width), 1, 16_384)? as u32;
     let height = o.integer("height", i64::from(d.height), 1, 16_384)? as u32;
-    let fov_y = o.number("fov_y", d.fov_y)?;
-    let yaw = o.range("yaw", d.yaw)?;
-    let pitch = o.range("pitch", d.pitch)?;
-    let roll = o.range("roll", d.roll)?;
+    let fov_y = o.range("fov_y", d.fov_y)?;
+    let principal_offset = match o.sub("principal_offset")? {
+        None => d.principal_offset,
+        Some(mut p) => {
+            let offset = [p.range("x", [0.0; 2])?, p.range("y", [0.0; 2])?];
+            p.finish()?;
+            offset
+        }
+    };
+    let distortion = match o.sub("distortion")? {
+        None => d.distortion,
+        Some(mut l) => {
+            let lens = DistortionRanges {
+                k1: l.range("k1", [0.0; 2])?,
+                k2: l.range("k2", [0.0; 2])?,
+                p1: l.range("p1", [0.0; 2])?,
+                p2: l.range("p2", [0.0; 2])?,
+                k3: l.range("k3", [0.0; 2])?,
+            };
+            l.finish()?;
+            lens
+        }
+    };
+    let aim_jitter = o.number("aim_jitter", d.aim_jitter)?;
+    let stereo = match o.sub("stereo")? {
+        None => None,
+        Some(mut s) => {
+            let stereo = Stereo {
+                baseline: s.positive("baseline", "metres")?,
+                toe_in: s.number("toe_in", 0.0)?,
+            };
+            s.finish()?;
+            Some(stereo)
+        }
+    };
+    let poses = poses(&mut o)?;
+    o.finish()?;
+    let rig = CameraRig {
+        width,
+        height,
+        fov_y,
+        principal_offset,
+        distortion,
+        poses,
+        aim_jitter,
+        stereo,
+    };
+    rig.validate(views)?;
+    Ok(rig)
+}
+
+/// `distance: [min, max]` or a number (metres), or `"frame"` (with `margin`, default 1.05).
+fn distance(o: &mut Options) -> OptResult<Distance> {
     let margin = o.number("margin", 1.05)?;
-    let distance = match o.take("distance") {
+    Ok(match o.take("distance") {
         None => Distance::Frame { margin },
         Some(v) if v.is_string() && v.to_string() == "frame" => Distance::Frame { margin },
         Some(v) => {
@@ -248,19 +300,80 @@ fn camera(mut o: Options) -> OptResult<CameraRig> {
             let [min, max] = Options::new(wrap, "dataset.camera").range("distance", [0.0, 0.0])?;
             Distance::Range { min, max }
         }
-    };
-    o.finish()?;
-    let rig = CameraRig {
-        width,
-        height,
-        fov_y,
-        yaw,
-        pitch,
-        roll,
-        distance,
-    };
-    rig.validate()?;
-    Ok(rig)
+    })
+}
+
+/// The poses: `fixed`, `orbit` or `line` when given (only one), else the sphere's ranges.
+fn poses(o: &mut Options) -> OptResult<Poses> {
+    let fixed = o.take("fixed");
+    let orbit = o.sub("orbit")?;
+    let line = o.sub("line")?;
+    match (fixed, orbit, line) {
+        (None, None, None) => {
+            let Poses::Sphere {
+                yaw, pitch, roll, ..
+            } = CameraRig::default().poses
+            else {
+                unreachable!("the default rig is a sphere")
+            };
+            Ok(Poses::Sphere {
+                yaw: o.range("yaw", yaw)?,
+                pitch: o.range("pitch", pitch)?,
+                roll: o.range("roll", roll)?,
+                distance: distance(o)?,
+            })
+        }
+        (Some(list), None, None) => {
+            let list = list.try_cast::<Array>().ok_or(
+                "dataset.camera.fixed must be a list like [#{ position: [x, y, z], target: [x, y, z] }, ...]",
+            )?;
+            let cameras = list
+                .into_iter()
+                .enumerate()
+                .map(|(i, item)| {
+                    let path = format!("dataset.camera.fixed[{i}]");
+                    let map = item.try_cast::<Map>().ok_or(format!(
+                        "{path} must be a map like #{{ position: [x, y, z] }}"
+                    ))?;
+                    let mut c = Options::new(map, path.clone());
+                    let camera = FixedCamera {
+                        position: c
+                            .point("position")?
+                            .ok_or(format!("{path}.position is required"))?,
+                        target: c.point("target")?,
+                        roll: c.number("roll", 0.0)?,
+                    };
+                    c.finish()?;
+                    Ok(camera)
+                })
+                .collect::<OptResult<Vec<_>>>()?;
+            Ok(Poses::Fixed { cameras })
+        }
+        (None, Some(mut c), None) => {
+            let poses = Poses::Orbit {
+                distance: distance(&mut c)?,
+                pitch: c.number("pitch", 0.0)?,
+                yaw_start: c.number("yaw_start", 0.0)?,
+                sweep: c.number("sweep", std::f64::consts::TAU)?,
+                roll: c.number("roll", 0.0)?,
+            };
+            c.finish()?;
+            Ok(poses)
+        }
+        (None, None, Some(mut c)) => {
+            let poses = Poses::Line {
+                from: c
+                    .point("from")?
+                    .ok_or("dataset.camera.line.from is required")?,
+                to: c.point("to")?.ok_or("dataset.camera.line.to is required")?,
+                target: c.point("target")?,
+                roll: c.number("roll", 0.0)?,
+            };
+            c.finish()?;
+            Ok(poses)
+        }
+        _ => Err("dataset.camera: give at most one of `fixed`, `orbit` and `line`".into()),
+    }
 }
 
 /// `background: [r, g, b]`, `"black"`, `"sky"`, `#{ sky: #{ zenith, horizon, ground } }` or

@@ -209,6 +209,22 @@ impl Options {
         }
     }
 
+    /// A point `[x, y, z]` (metres), if given.
+    pub fn point(&mut self, key: &'static str) -> OptResult<Option<[f64; 3]>> {
+        let path = self.path(key);
+        let Some(v) = self.take(key) else {
+            return Ok(None);
+        };
+        match v.clone().try_cast::<rhai::Array>().as_deref() {
+            Some([x, y, z]) => Ok(Some([
+                number(x, &path)?,
+                number(y, &path)?,
+                number(z, &path)?,
+            ])),
+            _ => Err(format!("{path} = {} must be a point [x, y, z]", shown(&v))),
+        }
+    }
+
     /// A colour `[r, g, b]`, sRGB components in [0, 1].
     pub fn colour(&mut self, key: &'static str, default: [f64; 3]) -> OptResult<[f64; 3]> {
         let path = self.path(key);

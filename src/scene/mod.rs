@@ -75,6 +75,14 @@ pub struct DatasetSpec {
     pub antialias: bool,
 }
 
+impl DatasetSpec {
+    /// Images written per sample (before augmented copies): one per view, two with a stereo
+    /// rig.
+    pub fn images_per_sample(&self) -> u32 {
+        u32::try_from(self.camera.images(self.views)).unwrap_or(u32::MAX)
+    }
+}
+
 /// Which per-view outputs are written: every output shmgen knows, by name, with whether this
 /// dataset writes it.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
