@@ -22,6 +22,7 @@
 //! render → {geometry, cameras, materials}. `output` and `geometry` import nothing else of the
 //! crate; the recipe asks `output` only which outputs exist.
 
+pub mod augment;
 pub mod build;
 pub mod cameras;
 pub mod geometry;
