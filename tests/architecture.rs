@@ -52,6 +52,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ),
     ("render", &["geometry", "cameras", "materials"]),
     ("scene", &["mechanics", "geometry", "materials", "cameras"]),
+    ("augment", &["seeds"]),
     ("output", &[]),
     ("mechanics", &[]),
     ("geometry", &[]),
