@@ -475,10 +475,7 @@ impl CameraRig {
                 let (s0, s1) = (pitch[0].sin(), pitch[1].sin());
                 let pitch = stream.uniform(s0, s1).clamp(-1.0, 1.0).asin();
                 let roll = stream.uniform(roll[0], roll[1]);
-                let drawn = match *distance {
-                    Distance::Range { min, max } => stream.uniform(min, max),
-                    Distance::Frame { .. } => 0.0,
-                };
+                let drawn = drawn_distance(stream, distance);
                 Place::Around(yaw, pitch, *distance, drawn, roll)
             }
             Poses::Orbit {
@@ -490,10 +487,7 @@ impl CameraRig {
             } => {
                 let closed = (sweep.abs() - std::f64::consts::TAU).abs() < 1e-12;
                 let yaw = yaw_start + sweep * fraction(closed);
-                let drawn = match *distance {
-                    Distance::Range { min, max } => stream.uniform(min, max),
-                    Distance::Frame { .. } => 0.0,
-                };
+                let drawn = drawn_distance(stream, distance);
                 Place::Around(yaw, *pitch, *distance, drawn, *roll)
             }
             Poses::Fixed { cameras } => {
@@ -554,6 +548,14 @@ impl CameraRig {
             rotation: turn * left.rotation,
             position: left.position + stereo.baseline * left.rotation.x_axis,
         })
+    }
+}
+
+/// The distance drawn for a range (none is drawn for framing, which needs the field of view).
+fn drawn_distance(stream: &mut Stream, distance: &Distance) -> f64 {
+    match *distance {
+        Distance::Range { min, max } => stream.uniform(min, max),
+        Distance::Frame { .. } => 0.0,
     }
 }
 

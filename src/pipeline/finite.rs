@@ -52,6 +52,11 @@ impl Checker {
         }
     }
 
+    /// A container at this path, from its first element.
+    fn walk(self) -> Walk {
+        Walk { at: self, index: 0 }
+    }
+
     fn number(&self, x: f64) -> Result<(), NonFinite> {
         if x.is_finite() {
             Ok(())
@@ -142,15 +147,15 @@ impl ser::Serializer for Checker {
     }
 
     fn serialize_seq(self, _: Option<usize>) -> Result<Walk, NonFinite> {
-        Ok(Walk { at: self, index: 0 })
+        Ok(self.walk())
     }
 
     fn serialize_tuple(self, _: usize) -> Result<Walk, NonFinite> {
-        Ok(Walk { at: self, index: 0 })
+        Ok(self.walk())
     }
 
     fn serialize_tuple_struct(self, _: &'static str, _: usize) -> Result<Walk, NonFinite> {
-        Ok(Walk { at: self, index: 0 })
+        Ok(self.walk())
     }
 
     fn serialize_tuple_variant(
@@ -160,18 +165,15 @@ impl ser::Serializer for Checker {
         variant: &'static str,
         _: usize,
     ) -> Result<Walk, NonFinite> {
-        Ok(Walk {
-            at: self.field(variant),
-            index: 0,
-        })
+        Ok(self.field(variant).walk())
     }
 
     fn serialize_map(self, _: Option<usize>) -> Result<Walk, NonFinite> {
-        Ok(Walk { at: self, index: 0 })
+        Ok(self.walk())
     }
 
     fn serialize_struct(self, _: &'static str, _: usize) -> Result<Walk, NonFinite> {
-        Ok(Walk { at: self, index: 0 })
+        Ok(self.walk())
     }
 
     fn serialize_struct_variant(
@@ -181,56 +183,32 @@ impl ser::Serializer for Checker {
         variant: &'static str,
         _: usize,
     ) -> Result<Walk, NonFinite> {
-        Ok(Walk {
-            at: self.field(variant),
-            index: 0,
-        })
+        Ok(self.field(variant).walk())
     }
 }
 
-impl ser::SerializeSeq for Walk {
-    type Ok = ();
-    type Error = NonFinite;
-    fn serialize_element<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), NonFinite> {
-        self.element(value)
-    }
-    fn end(self) -> Result<(), NonFinite> {
-        Ok(())
-    }
+/// The containers whose elements are walked in order, by index.
+macro_rules! elements {
+    ($($trait:ident::$method:ident),* $(,)?) => {
+        $(impl ser::$trait for Walk {
+            type Ok = ();
+            type Error = NonFinite;
+            fn $method<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), NonFinite> {
+                self.element(value)
+            }
+            fn end(self) -> Result<(), NonFinite> {
+                Ok(())
+            }
+        })*
+    };
 }
 
-impl ser::SerializeTuple for Walk {
-    type Ok = ();
-    type Error = NonFinite;
-    fn serialize_element<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), NonFinite> {
-        self.element(value)
-    }
-    fn end(self) -> Result<(), NonFinite> {
-        Ok(())
-    }
-}
-
-impl ser::SerializeTupleStruct for Walk {
-    type Ok = ();
-    type Error = NonFinite;
-    fn serialize_field<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), NonFinite> {
-        self.element(value)
-    }
-    fn end(self) -> Result<(), NonFinite> {
-        Ok(())
-    }
-}
-
-impl ser::SerializeTupleVariant for Walk {
-    type Ok = ();
-    type Error = NonFinite;
-    fn serialize_field<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), NonFinite> {
-        self.element(value)
-    }
-    fn end(self) -> Result<(), NonFinite> {
-        Ok(())
-    }
-}
+elements!(
+    SerializeSeq::serialize_element,
+    SerializeTuple::serialize_element,
+    SerializeTupleStruct::serialize_field,
+    SerializeTupleVariant::serialize_field,
+);
 
 impl ser::SerializeMap for Walk {
     type Ok = ();
@@ -246,35 +224,27 @@ impl ser::SerializeMap for Walk {
     }
 }
 
-impl ser::SerializeStruct for Walk {
-    type Ok = ();
-    type Error = NonFinite;
-    fn serialize_field<T: Serialize + ?Sized>(
-        &mut self,
-        key: &'static str,
-        value: &T,
-    ) -> Result<(), NonFinite> {
-        value.serialize(self.at.field(key))
-    }
-    fn end(self) -> Result<(), NonFinite> {
-        Ok(())
-    }
+/// The containers whose fields are walked by name.
+macro_rules! fields {
+    ($($trait:ident),* $(,)?) => {
+        $(impl ser::$trait for Walk {
+            type Ok = ();
+            type Error = NonFinite;
+            fn serialize_field<T: Serialize + ?Sized>(
+                &mut self,
+                key: &'static str,
+                value: &T,
+            ) -> Result<(), NonFinite> {
+                value.serialize(self.at.field(key))
+            }
+            fn end(self) -> Result<(), NonFinite> {
+                Ok(())
+            }
+        })*
+    };
 }
 
-impl ser::SerializeStructVariant for Walk {
-    type Ok = ();
-    type Error = NonFinite;
-    fn serialize_field<T: Serialize + ?Sized>(
-        &mut self,
-        key: &'static str,
-        value: &T,
-    ) -> Result<(), NonFinite> {
-        value.serialize(self.at.field(key))
-    }
-    fn end(self) -> Result<(), NonFinite> {
-        Ok(())
-    }
-}
+fields!(SerializeStruct, SerializeStructVariant);
 
 #[cfg(test)]
 mod tests {
