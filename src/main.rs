@@ -140,7 +140,13 @@ fn main() -> ExitCode {
     match execute(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("{e:#}");
+            // Recipe errors come formatted, with their source line; every other error gets
+            // the same "error:" heading.
+            if e.downcast_ref::<shmgen::recipe::RecipeError>().is_some() {
+                eprintln!("{e:#}");
+            } else {
+                eprintln!("error: {e:#}");
+            }
             ExitCode::FAILURE
         }
     }

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{BIN, ok, read_json, stderr, write};
+use common::{BIN, ok, read_json, run_limited, stderr, write};
 
 /// A scene that renders in a blink.
 const SCENE: &str = "scene: |rng| beam(#{ length: 2.0, width: 0.2, height: 0.3 })";
@@ -28,43 +28,13 @@ const SECRET: &str = "let secret_token_3141 = 1;\nsecret_token_3141 +;\n";
 
 /// `shmgen ARGS...`, killed and failed if it runs longer than `limit`.
 fn run_within(limit: Duration, args: &[&std::ffi::OsStr]) -> Output {
-    let mut child = Command::new(BIN)
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // Drained while the child runs, so that it never blocks on a full pipe.
-    let drain = |pipe: Option<Box<dyn Read + Send>>| {
-        std::thread::spawn(move || {
-            let mut bytes = Vec::new();
-            pipe.unwrap().read_to_end(&mut bytes).unwrap();
-            bytes
-        })
-    };
-    let stdout = drain(child.stdout.take().map(|p| Box::new(p) as _));
-    let stderr_bytes = drain(child.stderr.take().map(|p| Box::new(p) as _));
-    let start = Instant::now();
-    let status = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status;
-        }
-        if start.elapsed() > limit {
-            child.kill().unwrap();
-            child.wait().unwrap();
-            let text = String::from_utf8_lossy(&stderr_bytes.join().unwrap()).to_string();
-            panic!(
-                "shmgen {args:?} still ran after {limit:?}:\n{}",
-                clip(&text)
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    Output {
-        status,
-        stdout: stdout.join().unwrap(),
-        stderr: stderr_bytes.join().unwrap(),
-    }
+    let (output, finished) = run_limited(limit, args);
+    assert!(
+        finished,
+        "shmgen {args:?} still ran after {limit:?}:\n{}",
+        clip(&stderr(&output))
+    );
+    output
 }
 
 /// The start of a long text, for a failure message.
