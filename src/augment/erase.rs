@@ -155,6 +155,19 @@ impl ErasingSpec {
     }
 }
 
+impl Erasing {
+    /// The erased mask of a `width` × `height` image: 255 inside a rectangle, 0 elsewhere.
+    pub fn mask(&self, width: usize, height: usize) -> Vec<u8> {
+        let mut mask = vec![0u8; width * height];
+        for rect in &self.rects {
+            for i in rect.top as usize..(rect.top + rect.height) as usize {
+                mask[i * width + rect.left as usize..][..rect.width as usize].fill(255);
+            }
+        }
+        mask
+    }
+}
+
 /// Erases the rectangles of `erasing` in an sRGB8 image in place and returns the erased
 /// mask (one byte a pixel, 255 = erased, 0 = kept).
 pub fn erase(rgb: &mut [u8], width: usize, height: usize, erasing: &Erasing) -> Vec<u8> {

@@ -45,7 +45,9 @@ pub use noise::{Noise, NoiseModel, NoiseSpec, SigmaUnit, add_noise};
 pub use tone::{
     Exposure, ExposureSpec, Gamma, GammaSpec, Vignette, VignetteSpec, exposure, gamma, vignette,
 };
-pub use warp::{Frame, Pinhole, Similarity, WarpSpec, warp_labels, warp_rgb, warp_validity};
+pub use warp::{
+    CropSpec, Frame, Pinhole, Similarity, WarpSpec, warp_labels, warp_rgb, warp_validity,
+};
 
 /// Checks that `rgb` holds `width` × `height` pixels of 3 bytes (a caller's bug otherwise).
 fn rgb_pixels(rgb: &[u8], width: usize, height: usize) {

@@ -383,6 +383,46 @@ impl WarpSpec {
     }
 }
 
+/// Crop-and-resize: a window of `size` times the image's sides (the aspect kept), at a place
+/// drawn uniformly inside the image, resized to fill the frame.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CropSpec {
+    /// Range of the window's side, fraction of the image's, within (0, 1].
+    pub size: Range,
+    /// Probability of cropping a view, in [0, 1].
+    pub probability: f64,
+}
+
+impl CropSpec {
+    /// Checks the range and probability; the error names the parameter and its value.
+    pub fn validate(&self) -> Result<(), String> {
+        check_range("crop.size", &self.size, 1e-3, 1.0)?;
+        check_probability("crop", self.probability)
+    }
+
+    /// Draws the crop of one `width` × `height` view as the similarity that resizes it, or
+    /// `None` when the probability says skip.
+    pub fn draw(&self, stream: &mut Stream, width: usize, height: usize) -> Option<Similarity> {
+        if !happens(stream, self.probability) {
+            return None;
+        }
+        let size = self.size.draw(stream);
+        let (w, h) = (width as f64, height as f64);
+        let crop = [size * w, size * h];
+        let (left, top) = (
+            stream.uniform(0.0, w - crop[0]),
+            stream.uniform(0.0, h - crop[1]),
+        );
+        Some(Similarity {
+            zoom: 1.0 / size,
+            angle: 0.0,
+            centre: [left, top],
+            shift: [-left, -top],
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -395,6 +435,25 @@ mod tests {
 
     fn rotate(r: [[f64; 3]; 3], p: [f64; 3]) -> [f64; 3] {
         std::array::from_fn(|i| r[i][0] * p[0] + r[i][1] * p[1] + r[i][2] * p[2])
+    }
+
+    #[test]
+    fn a_drawn_crop_fills_the_frame_from_a_window_inside_the_image() {
+        let spec = CropSpec {
+            size: Range::Span([0.5, 0.9]),
+            probability: 1.0,
+        };
+        let mut s = test_stream("crop");
+        for _ in 0..200 {
+            let sim = spec.draw(&mut s, 640, 480).unwrap();
+            // The output frame's corners come from inside the input image.
+            for corner in [[0.0, 0.0], [640.0, 0.0], [0.0, 480.0], [640.0, 480.0]] {
+                let [x, y] = sim.invert(corner);
+                assert!((-1e-9..=640.0 + 1e-9).contains(&x), "{x}");
+                assert!((-1e-9..=480.0 + 1e-9).contains(&y), "{y}");
+            }
+            assert!((1.0 / 0.9..=2.0).contains(&sim.zoom));
+        }
     }
 
     #[test]

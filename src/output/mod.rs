@@ -20,9 +20,14 @@ pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, write_atomic};
 pub use writers::{DEFAULT_OUTPUTS, ViewLayers, WRITERS, Writer, output_names};
 
 /// Relative path of one view's file of the given kind (`rgb.png`, `depth.exr`, ...):
-/// samples are grouped a thousand to a folder so no folder grows unboundedly.
-pub fn view_file(sample: u64, view: u32, kind: &str) -> String {
-    format!("samples/{:04}/{sample:06}_{view:02}.{kind}", sample / 1000)
+/// samples are grouped a thousand to a folder so no folder grows unboundedly. Augmented copy
+/// k of a view is `…_{view:02}a{k}.{kind}`.
+pub fn view_file(sample: u64, view: u32, copy: Option<u32>, kind: &str) -> String {
+    let copy = copy.map(|k| format!("a{k}")).unwrap_or_default();
+    format!(
+        "samples/{:04}/{sample:06}_{view:02}{copy}.{kind}",
+        sample / 1000
+    )
 }
 
 #[cfg(test)]
@@ -30,7 +35,9 @@ mod tests {
     #[test]
     fn layout_keys_have_no_dots_before_the_kind() {
         // WebDataset splits the key at the first dot of the file name.
-        let f = super::view_file(1234, 7, "depth.exr");
+        let f = super::view_file(1234, 7, None, "depth.exr");
         assert_eq!(f, "samples/0001/001234_07.depth.exr");
+        let copy = super::view_file(1234, 7, Some(2), "depth.exr");
+        assert_eq!(copy, "samples/0001/001234_07a2.depth.exr");
     }
 }

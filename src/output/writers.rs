@@ -21,6 +21,17 @@ pub trait ViewLayers {
     fn instance_ids(&self) -> Vec<u32>;
     /// 255 where a crack is seen, 0 elsewhere.
     fn cracks(&self) -> &[u8];
+    /// 255 where an augmentation erased the image (cut-out), 0 elsewhere.
+    fn erased(&self) -> Vec<u8>;
+    /// 255 where the pixel has a source, 0 where an image-space warp left it without one
+    /// (its depth, mask and ids are then 0).
+    fn valid(&self) -> Vec<u8>;
+
+    /// Share of the pixels that see a structure.
+    fn coverage(&self) -> f64 {
+        let mask = self.mask();
+        mask.iter().filter(|&&m| m != 0).count() as f64 / mask.len().max(1) as f64
+    }
 }
 
 /// An output kind: its name in `dataset.outputs`, the files it writes for each view and how
@@ -45,7 +56,7 @@ impl Writer {
 }
 
 /// Every output shmgen can write, in the order a view's files are written.
-pub const WRITERS: [Writer; 6] = [
+pub const WRITERS: [Writer; 8] = [
     Writer {
         output: "rgb",
         files: &["rgb.png"],
@@ -76,6 +87,22 @@ pub const WRITERS: [Writer; 6] = [
         write: |v| {
             let (w, h) = v.size();
             Ok(vec![mask_png(w, h, v.cracks())])
+        },
+    },
+    Writer {
+        output: "erased",
+        files: &["erased.png"],
+        write: |v| {
+            let (w, h) = v.size();
+            Ok(vec![mask_png(w, h, &v.erased())])
+        },
+    },
+    Writer {
+        output: "valid",
+        files: &["valid.png"],
+        write: |v| {
+            let (w, h) = v.size();
+            Ok(vec![mask_png(w, h, &v.valid())])
         },
     },
     Writer {
@@ -132,6 +159,12 @@ mod tests {
         }
         fn cracks(&self) -> &[u8] {
             &[0, 0]
+        }
+        fn erased(&self) -> Vec<u8> {
+            vec![0, 255]
+        }
+        fn valid(&self) -> Vec<u8> {
+            vec![255, 255]
         }
     }
 

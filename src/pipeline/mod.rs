@@ -7,6 +7,7 @@
 //! depends on the thread count, the shard split or interruptions: every sample is a pure
 //! function of (recipe, seed, sample index) and is committed atomically.
 
+mod augmented;
 mod finite;
 mod progress;
 mod record;

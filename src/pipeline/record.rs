@@ -2,16 +2,17 @@
 //! structs: the one place their fields are defined. Their JSON Schemas (`docs/schema/`) are
 //! generated from these types.
 
+use super::augmented::Applied;
 use super::finite::check_finite;
-use super::view::{Eye, RenderedView, ViewCamera};
+use super::view::{Eye, ViewCamera};
 use crate::build::{BackdropDraw, BuiltSample, LightDraw};
-use crate::cameras::{CameraRig, Distortion, ViewDraw, rows4};
+use crate::cameras::{Camera, CameraRig, Distortion, ViewDraw, rows4};
 use crate::materials::MaterialDraw;
 use crate::materials::procedural::CRACK_LABEL_COVER;
 use crate::mechanics::{Labels, SectionProperties};
 use crate::output::{DEPTH_CHANNEL, WRITERS};
 use crate::recipe::Recipe;
-use crate::scene::{DatasetSpec, Structure};
+use crate::scene::{DatasetSpec, GeometryMode, Structure};
 use crate::seeds;
 use anyhow::Result;
 use serde::Serialize;
@@ -118,6 +119,36 @@ pub struct ViewRecord<'a> {
     pub mesh: MeshRecord,
     /// Share of the pixels that see a structure, 0–1.
     pub coverage: f64,
+    /// For an augmented copy, what was done to it (null for a clean view).
+    pub augmentation: Option<AugmentationRecord<'a>>,
+}
+
+/// How an augmented copy was made. Its camera (K and pose) is the one its files agree with.
+#[derive(Serialize, schemars::JsonSchema)]
+pub struct AugmentationRecord<'a> {
+    /// Copy index of the view, from 0 (its files end in `a{copy}`).
+    pub copy: u32,
+    /// How its geometric operation acted.
+    pub mode: GeometryMode,
+    /// The operations applied, in order, with every value drawn.
+    pub operations: &'a [Applied],
+}
+
+/// What a view's record says about the view itself: which one, through which camera, and
+/// what it shows.
+pub struct ViewFacts<'a> {
+    /// View index within the sample.
+    pub view: u32,
+    /// The camera its files agree with.
+    pub camera: Camera,
+    /// The camera as drawn, with its place in a stereo pair.
+    pub drawn: &'a ViewCamera,
+    /// The background drawn for the view.
+    pub backdrop: &'a BackdropDraw,
+    /// Share of the pixels that see a structure.
+    pub coverage: f64,
+    /// How an augmented copy was made.
+    pub augmentation: Option<AugmentationRecord<'a>>,
 }
 
 /// Where the random values of a view came from: streams derived from the run seed, a scope
@@ -479,16 +510,16 @@ impl<'a> SampleRecord<'a> {
         }
     }
 
-    /// The record of one rendered view of the sample, whose files are `files`.
+    /// The record of one view of the sample, whose files are `files`.
     pub fn view(
         &'a self,
         recipe: &'a Recipe,
         sample: &'a BuiltSample,
-        rendered: &'a RenderedView,
+        facts: ViewFacts<'a>,
         files: BTreeMap<&'static str, String>,
     ) -> ViewRecord<'a> {
-        let camera = &rendered.camera;
-        let view = rendered.view;
+        let camera = &facts.camera;
+        let view = facts.view;
         let rig = &recipe.dataset.camera;
         let k = &camera.intrinsics;
         ViewRecord {
@@ -501,7 +532,7 @@ impl<'a> SampleRecord<'a> {
                 recipe.dataset.seed,
                 sample.index,
                 view,
-                rendered.drawn.stereo.map_or(view, |(pair, _)| pair),
+                facts.drawn.stereo.map_or(view, |(pair, _)| pair),
             ),
             params: &recipe.params,
             camera: CameraRecord {
@@ -519,10 +550,10 @@ impl<'a> SampleRecord<'a> {
                 c2w_opencv: rows4(camera.c2w_cv()),
                 c2w_opengl: rows4(camera.c2w_gl()),
                 position: camera.position.to_array(),
-                target: rendered.drawn.draw.aim,
+                target: facts.drawn.draw.aim,
                 distortion: k.distortion,
-                drawn: rendered.drawn.draw,
-                stereo: stereo_record(rig, &rendered.drawn, view),
+                drawn: facts.drawn.draw,
+                stereo: stereo_record(rig, facts.drawn, view),
             },
             depth: DepthConvention {
                 kind: DepthKind::PlanarZ,
@@ -541,7 +572,7 @@ impl<'a> SampleRecord<'a> {
                 min_cover: CRACK_LABEL_COVER,
             },
             segmentation: &self.segmentation,
-            background: &rendered.backdrop_drawn,
+            background: facts.backdrop,
             light: &sample.light_drawn,
             scene: SceneRecord {
                 structures: &self.structures,
@@ -551,7 +582,8 @@ impl<'a> SampleRecord<'a> {
                 triangles: sample.mesh.triangles.len(),
                 bounding_radius: sample.radius,
             },
-            coverage: rendered.coverage(),
+            coverage: facts.coverage,
+            augmentation: facts.augmentation,
         }
     }
 }

@@ -1,12 +1,14 @@
 //! One sample, end to end: draw its scene, build it, render each view, hand the view's layers
 //! to the dataset's writers, and stage their files with the view's record.
 
+use super::augmented::{Applied, AugmentedView, draw_copy, moved_camera};
 use super::finite::check_finite;
-use super::record::{SampleRecord, json_bytes};
+use super::record::{AugmentationRecord, SampleRecord, ViewFacts, json_bytes};
 use super::view::{SampleRenderer, view_camera};
 use crate::build::{BuiltSample, build_sample};
-use crate::output::{MAX_SEGMENTATION_ID, SampleStage, WRITERS, view_file};
+use crate::output::{MAX_SEGMENTATION_ID, SampleStage, ViewLayers, WRITERS, view_file};
 use crate::recipe::Recipe;
+use crate::scene::GeometryMode;
 use anyhow::{Result, bail};
 use std::collections::BTreeMap;
 
@@ -23,7 +25,7 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<BuiltSample> {
         check_finite(labels)
             .map_err(|e| recipe.locate(&e.to_string(), structure.declared_at(), &context))?;
     }
-    for view in 0..recipe.dataset.images_per_sample() {
+    for view in 0..recipe.dataset.cameras_per_sample() {
         view_camera(&recipe.dataset, &sample, view)?;
     }
     check_segmentation(recipe, &sample)?;
@@ -48,24 +50,92 @@ fn check_segmentation(recipe: &Recipe, sample: &BuiltSample) -> Result<()> {
     Ok(())
 }
 
-/// Renders every view of the sample and stages its files. Returns the number of views written.
+/// Renders every view of the sample, clean and augmented, and stages its files. Returns the
+/// number of images written.
 pub fn write_sample(recipe: &Recipe, sample: &BuiltSample, stage: &mut SampleStage) -> Result<u32> {
     let dataset = &recipe.dataset;
+    let augment = &dataset.augment;
     let renderer = SampleRenderer::new(dataset, sample);
     let record = SampleRecord::new(sample);
-    for view in 0..dataset.images_per_sample() {
-        let rendered = renderer.view(view)?;
-        let mut files = BTreeMap::new();
-        for writer in WRITERS.iter().filter(|w| dataset.outputs.wants(w.output)) {
-            let encoded = (writer.write)(&rendered)?;
-            for ((name, key), bytes) in writer.files.iter().zip(writer.keys()).zip(encoded) {
-                let path = view_file(sample.index, view, name);
-                stage.write(path.clone(), &bytes)?;
-                files.insert(key, path);
-            }
+    let size = (dataset.camera.width, dataset.camera.height);
+    for view in 0..dataset.cameras_per_sample() {
+        let drawn = view_camera(dataset, sample, view)?;
+        let clean = renderer.view_with(view, drawn.camera, drawn);
+        if augment.keep_clean {
+            let facts = ViewFacts {
+                view,
+                camera: clean.camera,
+                drawn: &clean.drawn,
+                backdrop: &clean.backdrop_drawn,
+                coverage: clean.coverage(),
+                augmentation: None,
+            };
+            write_view(recipe, (sample, &record), stage, (&clean, None), facts)?;
         }
-        let json = json_bytes(&record.view(recipe, sample, &rendered, files))?;
-        stage.write(view_file(sample.index, view, "json"), &json)?;
+        for copy in 0..augment.copies {
+            let ids = (sample.index, view, copy);
+            let operations = draw_copy(augment, dataset.seed, ids, size);
+            let geometry = operations.iter().find_map(Applied::geometry);
+            let camera = match &geometry {
+                Some(sim) => moved_camera(&drawn.camera, sim)?,
+                None => drawn.camera,
+            };
+            // Exact geometry renders the moved camera; image mode warps the clean render.
+            let rendered;
+            let (base, warp) = match (augment.mode, geometry) {
+                (GeometryMode::Exact, Some(_)) => {
+                    rendered = renderer.view_with(view, camera, drawn);
+                    (&rendered, None)
+                }
+                (GeometryMode::Image, Some(sim)) => (&clean, Some(sim)),
+                (_, None) => (&clean, None),
+            };
+            let copied = AugmentedView::new(base, warp, &operations);
+            let facts = ViewFacts {
+                view,
+                camera,
+                drawn: &drawn,
+                backdrop: &base.backdrop_drawn,
+                coverage: copied.coverage(),
+                augmentation: Some(AugmentationRecord {
+                    copy,
+                    mode: augment.mode,
+                    operations: &operations,
+                }),
+            };
+            write_view(
+                recipe,
+                (sample, &record),
+                stage,
+                (&copied, Some(copy)),
+                facts,
+            )?;
+        }
     }
     Ok(dataset.images_per_sample())
+}
+
+/// Runs the dataset's writers on one view (or copy) and stages their files and its record.
+fn write_view(
+    recipe: &Recipe,
+    (sample, record): (&BuiltSample, &SampleRecord),
+    stage: &mut SampleStage,
+    (layers, copy): (&dyn ViewLayers, Option<u32>),
+    facts: ViewFacts,
+) -> Result<()> {
+    let view = facts.view;
+    let mut files = BTreeMap::new();
+    for writer in WRITERS
+        .iter()
+        .filter(|w| recipe.dataset.outputs.wants(w.output))
+    {
+        let encoded = (writer.write)(layers)?;
+        for ((name, key), bytes) in writer.files.iter().zip(writer.keys()).zip(encoded) {
+            let path = view_file(sample.index, view, copy, name);
+            stage.write(path.clone(), &bytes)?;
+            files.insert(key, path);
+        }
+    }
+    let json = json_bytes(&record.view(recipe, sample, facts, files))?;
+    stage.write(view_file(sample.index, view, copy, "json"), &json)
 }

@@ -146,13 +146,6 @@ impl<'a> SampleRenderer<'a> {
 }
 
 impl RenderedView<'_> {
-    /// Share of the pixels that see a structure.
-    pub fn coverage(&self) -> f64 {
-        let triangles = &self.gbuffer.triangle;
-        let hits = triangles.iter().filter(|&&t| t != NO_HIT).count();
-        hits as f64 / triangles.len() as f64
-    }
-
     /// Per-pixel id + 1 of what each triangle belongs to (0 = background).
     fn ids(&self, of_triangle: &[u32]) -> Vec<u32> {
         self.gbuffer
@@ -215,5 +208,19 @@ impl ViewLayers for RenderedView<'_> {
             r.surfaces
                 .crack_mask(&self.gbuffer, &self.camera, &r.trace_mesh)
         })
+    }
+
+    fn erased(&self) -> Vec<u8> {
+        vec![0; self.gbuffer.triangle.len()]
+    }
+
+    fn valid(&self) -> Vec<u8> {
+        vec![255; self.gbuffer.triangle.len()]
+    }
+
+    fn coverage(&self) -> f64 {
+        let triangles = &self.gbuffer.triangle;
+        let hits = triangles.iter().filter(|&&t| t != NO_HIT).count();
+        hits as f64 / triangles.len() as f64
     }
 }

@@ -7,8 +7,8 @@ use super::result::{Fallible, fail};
 use crate::cameras::{CameraRig, Distance, DistortionRanges, FixedCamera, Poses, Stereo};
 use crate::output::{DEFAULT_OUTPUTS, output_names};
 use crate::scene::{
-    Background, DatasetSpec, ImageRecord, LightSpec, OUTDOOR_AMBIENT, Outputs, SkyGradient,
-    SkySpec, SunSpec,
+    AugmentSpec, Background, DatasetSpec, GeometryMode, ImageRecord, LightSpec, OUTDOOR_AMBIENT,
+    Operation, Outputs, SkyGradient, SkySpec, SunSpec,
 };
 use crate::seeds::Stream;
 use crate::words::number as number_shown;
@@ -156,6 +156,7 @@ fn dataset(map: Map, files: &RecipeFiles) -> OptResult<Dataset> {
         None => LightSpec::default(),
     };
     let antialias = o.flag("antialias", true)?;
+    let augment = augment(o.take("augment"))?;
     let outputs = outputs(o.take("outputs"))?;
     let camera = match o.sub("camera")? {
         Some(c) => camera(c, views)?,
@@ -177,6 +178,7 @@ fn dataset(map: Map, files: &RecipeFiles) -> OptResult<Dataset> {
             background,
             light,
             antialias,
+            augment,
         },
         scene,
     })
@@ -200,6 +202,63 @@ fn check_scene(ctx: &NativeCallContext, scene: &FnPtr) -> OptResult<()> {
             if *n == 1 { "" } else { "s" }
         )),
     }
+}
+
+/// `augment: "paper"`, `"none"`, or `#{ copies, keep_clean, mode, operations: [#{ op, ... }] }`
+/// (see `scene::Operation` for the operations and their ranges).
+fn augment(value: Option<Dynamic>) -> OptResult<AugmentSpec> {
+    let spec = match value {
+        None => AugmentSpec::default(),
+        Some(v) if v.is_string() => match v.to_string().as_str() {
+            "none" => AugmentSpec::default(),
+            "paper" => AugmentSpec::paper(),
+            other => {
+                return Err(format!(
+                    "dataset.augment = \"{}\": expected \"paper\", \"none\" or a map like #{{ copies: 1, operations: [...] }}",
+                    crate::words::clip(other, 80)
+                ));
+            }
+        },
+        Some(v) => {
+            let map = v
+                .try_cast::<Map>()
+                .ok_or("dataset.augment must be \"paper\", \"none\" or a map")?;
+            let mut o = Options::new(map, "dataset.augment");
+            let copies = o.integer("copies", 1, 0, 1000)? as u32;
+            let keep_clean = o.flag("keep_clean", true)?;
+            let mode = match o.string("mode", "exact")?.as_str() {
+                "exact" => GeometryMode::Exact,
+                "image" => GeometryMode::Image,
+                other => {
+                    return Err(format!(
+                        "dataset.augment.mode = \"{}\": expected \"exact\" (change the camera and render) or \"image\" (warp the rendered images)",
+                        crate::words::clip(other, 80)
+                    ));
+                }
+            };
+            let list = o.take("operations").unwrap_or_default();
+            let operations = match list.try_cast::<Array>() {
+                None => Vec::new(),
+                Some(items) => items
+                    .iter()
+                    .enumerate()
+                    .map(|(i, item)| {
+                        rhai::serde::from_dynamic::<Operation>(item)
+                            .map_err(|e| format!("dataset.augment.operations[{i}]: {e}"))
+                    })
+                    .collect::<OptResult<Vec<_>>>()?,
+            };
+            o.finish()?;
+            AugmentSpec {
+                copies,
+                keep_clean,
+                mode,
+                operations,
+            }
+        }
+    };
+    spec.validate()?;
+    Ok(spec)
 }
 
 /// `outputs: ["rgb", "depth", ...]`: names of writers (see `output::WRITERS`).

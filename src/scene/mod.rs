@@ -7,10 +7,12 @@
 //! records of a dataset.
 
 mod assembly;
+mod augment;
 mod beam;
 mod light;
 
 pub use assembly::{AssemblySpec, Bending, LabelledPattern, ShapeSpec};
+pub use augment::{AugmentSpec, GeometryMode, Operation};
 pub use beam::{BeamSpec, Tessellation};
 pub use light::{
     Background, ImageRecord, LightSpec, OUTDOOR_AMBIENT, SkyGradient, SkySpec, SunSpec,
@@ -73,13 +75,21 @@ pub struct DatasetSpec {
     pub light: LightSpec,
     /// Anti-alias RGB where the image changes (silhouettes, creases); labels never are.
     pub antialias: bool,
+    /// Augmented copies of every view.
+    pub augment: AugmentSpec,
 }
 
 impl DatasetSpec {
-    /// Images written per sample (before augmented copies): one per view, two with a stereo
-    /// rig.
-    pub fn images_per_sample(&self) -> u32 {
+    /// Camera views per sample: one per view, two with a stereo rig.
+    pub fn cameras_per_sample(&self) -> u32 {
         u32::try_from(self.camera.images(self.views)).unwrap_or(u32::MAX)
+    }
+
+    /// Images written per sample: every camera view, clean and augmented (at most 2 × 10⁵
+    /// views × 1001, well inside u32).
+    pub fn images_per_sample(&self) -> u32 {
+        let images = u64::from(self.cameras_per_sample()) * u64::from(self.augment.per_view());
+        u32::try_from(images).unwrap_or(u32::MAX)
     }
 }
 

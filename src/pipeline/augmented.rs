@@ -1,0 +1,240 @@
+//! Augmented copies of a view: the operations drawn for a copy, the camera a geometric one
+//! makes, and the copy's layers. In exact mode the view is rendered again through the new
+//! camera, so every label is exact; in image mode the rendered layers are warped (RGB
+//! bilinearly, labels by nearest neighbour, pixels without a source invalid). Photometric
+//! operations then act on the RGB image only, in the order the recipe lists them.
+
+use crate::augment::{
+    self, Blur, ColourJitter, Erasing, Exposure, Frame, Gamma, Jpeg, Noise, Pinhole, Similarity,
+    Vignette,
+};
+use crate::cameras::Camera;
+use crate::output::ViewLayers;
+use crate::scene::{AugmentSpec, Operation};
+use crate::seeds::{Scope, Stream};
+use anyhow::{Result, anyhow};
+use glam::{DMat3, DVec3};
+use serde::Serialize;
+use std::sync::OnceLock;
+
+/// An operation as applied to one copy: the values drawn for it.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+#[serde(tag = "op", rename_all = "snake_case")]
+pub enum Applied {
+    /// Zoom, rotation and shift: the similarity of pixel coordinates.
+    Warp(Similarity),
+    /// A window resized to the frame: the similarity of pixel coordinates.
+    Crop(Similarity),
+    /// Colour jitter.
+    ColourJitter(ColourJitter),
+    /// Exposure.
+    Exposure(Exposure),
+    /// Gamma.
+    Gamma(Gamma),
+    /// Vignetting.
+    Vignette(Vignette),
+    /// Sensor noise.
+    Noise(Noise),
+    /// Blur.
+    Blur(Blur),
+    /// JPEG re-compression.
+    Jpeg(Jpeg),
+    /// Cut-out: the rectangles erased.
+    Erase(Erasing),
+}
+
+impl Applied {
+    /// The similarity of a geometric operation.
+    pub fn geometry(&self) -> Option<Similarity> {
+        match self {
+            Applied::Warp(s) | Applied::Crop(s) => Some(*s),
+            _ => None,
+        }
+    }
+}
+
+/// The operations of copy `copy` of view `view` of sample `sample`, drawn from one stream
+/// per (copy, operation): adding an operation never shifts another's values. Operations the
+/// probabilities skip are left out.
+pub fn draw_copy(
+    spec: &AugmentSpec,
+    seed: u64,
+    (sample, view, copy): (u64, u32, u32),
+    (width, height): (u32, u32),
+) -> Vec<Applied> {
+    let (w, h) = (width as usize, height as usize);
+    spec.operations
+        .iter()
+        .enumerate()
+        .filter_map(|(i, op)| {
+            let name = format!("augment {copy} {i}");
+            let stream = &mut Stream::new(seed, Scope::View(sample, view), &name);
+            match op {
+                Operation::Warp(s) => s.draw(stream, w, h).map(Applied::Warp),
+                Operation::Crop(s) => s.draw(stream, w, h).map(Applied::Crop),
+                Operation::ColourJitter(s) => s.draw(stream).map(Applied::ColourJitter),
+                Operation::Exposure(s) => s.draw(stream).map(Applied::Exposure),
+                Operation::Gamma(s) => s.draw(stream).map(Applied::Gamma),
+                Operation::Vignette(s) => s.draw(stream).map(Applied::Vignette),
+                Operation::Noise(s) => s.draw(stream).map(Applied::Noise),
+                Operation::Blur(s) => s.draw(stream).map(Applied::Blur),
+                Operation::Jpeg(s) => s.draw(stream).map(Applied::Jpeg),
+                Operation::Erase(s) => s.draw(stream, w, h).map(Applied::Erase),
+            }
+        })
+        .collect()
+}
+
+/// The camera that sees the picture `camera` sees, moved by the pixel similarity `sim`:
+/// K′ with f′ = s·f and p′ = s·R(θ)(p − c) + c + t, the camera turned about its optical axis
+/// by θ (c2w′ = c2w·R_z(θ)ᵀ). Exact for a pinhole; a lens distortion is kept as it is.
+pub fn moved_camera(camera: &Camera, sim: &Similarity) -> Result<Camera> {
+    let k = camera.intrinsics;
+    let moved = sim
+        .intrinsics(&Pinhole {
+            fx: k.fx,
+            fy: k.fy,
+            cx: k.cx,
+            cy: k.cy,
+        })
+        .map_err(|e| anyhow!("an augmentation's warp: {e}"))?;
+    let mut intrinsics = k;
+    (intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy) =
+        (moved.fx, moved.fy, moved.cx, moved.cy);
+    let r = sim.camera_rotation();
+    let rz = DMat3::from_cols(
+        DVec3::new(r[0][0], r[1][0], r[2][0]),
+        DVec3::new(r[0][1], r[1][1], r[2][1]),
+        DVec3::new(r[0][2], r[1][2], r[2][2]),
+    );
+    Ok(Camera {
+        intrinsics,
+        rotation: camera.rotation * rz.transpose(),
+        position: camera.position,
+    })
+}
+
+/// A copy of a view: its base (the view itself, or the view rendered again through the
+/// copy's camera), the image-space warp when the geometry is warped, and the photometric
+/// operations.
+pub struct AugmentedView<'a> {
+    base: &'a dyn ViewLayers,
+    warp: Option<Similarity>,
+    operations: &'a [Applied],
+    rgb: OnceLock<Vec<u8>>,
+    depth: OnceLock<Vec<f32>>,
+    cracks: OnceLock<Vec<u8>>,
+}
+
+impl<'a> AugmentedView<'a> {
+    /// The copy of `base` made by `operations`; `warp` moves pixels (image mode only).
+    pub fn new(
+        base: &'a dyn ViewLayers,
+        warp: Option<Similarity>,
+        operations: &'a [Applied],
+    ) -> Self {
+        AugmentedView {
+            base,
+            warp,
+            operations,
+            rgb: OnceLock::new(),
+            depth: OnceLock::new(),
+            cracks: OnceLock::new(),
+        }
+    }
+
+    fn frame(&self) -> Frame {
+        let (w, h) = self.base.size();
+        Frame::same(w as usize, h as usize)
+    }
+
+    /// A label layer moved by the warp, if any.
+    fn moved<T: Copy + Default + Send + Sync>(&self, layer: Vec<T>) -> Vec<T> {
+        match &self.warp {
+            Some(sim) => augment::warp_labels(&layer, self.frame(), sim),
+            None => layer,
+        }
+    }
+
+    fn photometric(&self, rgb: &mut [u8]) -> Result<(), String> {
+        let (w, h) = self.base.size();
+        let (w, h) = (w as usize, h as usize);
+        for op in self.operations {
+            match op {
+                Applied::Warp(_) | Applied::Crop(_) => {}
+                Applied::ColourJitter(p) => augment::colour_jitter(rgb, w, h, p),
+                Applied::Exposure(p) => augment::exposure(rgb, w, h, p),
+                Applied::Gamma(p) => augment::gamma(rgb, w, h, p),
+                Applied::Vignette(p) => augment::vignette(rgb, w, h, p),
+                Applied::Noise(p) => augment::add_noise(rgb, w, h, p),
+                Applied::Blur(p) => augment::blur(rgb, w, h, p),
+                Applied::Jpeg(p) => augment::jpeg(rgb, w, h, p)?,
+                Applied::Erase(p) => {
+                    augment::erase(rgb, w, h, p);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl ViewLayers for AugmentedView<'_> {
+    fn size(&self) -> (u32, u32) {
+        self.base.size()
+    }
+
+    fn rgb(&self) -> &[u8] {
+        self.rgb.get_or_init(|| {
+            let mut rgb = match &self.warp {
+                Some(sim) => augment::warp_rgb(self.base.rgb(), self.frame(), sim),
+                None => self.base.rgb().to_vec(),
+            };
+            // The operations are validated; an encoder failing in memory is a bug.
+            self.photometric(&mut rgb)
+                .expect("photometric augmentations of a valid image");
+            rgb
+        })
+    }
+
+    fn depth(&self) -> &[f32] {
+        self.depth
+            .get_or_init(|| self.moved(self.base.depth().to_vec()))
+    }
+
+    fn mask(&self) -> Vec<u8> {
+        self.moved(self.base.mask())
+    }
+
+    fn part_ids(&self) -> Vec<u32> {
+        self.moved(self.base.part_ids())
+    }
+
+    fn instance_ids(&self) -> Vec<u32> {
+        self.moved(self.base.instance_ids())
+    }
+
+    fn cracks(&self) -> &[u8] {
+        self.cracks
+            .get_or_init(|| self.moved(self.base.cracks().to_vec()))
+    }
+
+    fn erased(&self) -> Vec<u8> {
+        let (w, h) = self.base.size();
+        let mut mask = vec![0u8; (w * h) as usize];
+        for op in self.operations {
+            if let Applied::Erase(e) = op {
+                for (m, e) in mask.iter_mut().zip(e.mask(w as usize, h as usize)) {
+                    *m |= e;
+                }
+            }
+        }
+        mask
+    }
+
+    fn valid(&self) -> Vec<u8> {
+        match &self.warp {
+            Some(sim) => augment::warp_validity(self.frame(), sim),
+            None => self.base.valid(),
+        }
+    }
+}
