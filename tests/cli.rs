@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{BIN, hashes, ok, read_json, run, write};
+use common::{BIN, hashes, ok, read_exr, read_json, run, write};
 
 /// A small recipe (low resolution so the suite stays fast) importing the stdlib beam module.
 const SMALL: &str = r#"
@@ -195,22 +195,8 @@ fn written_files_round_trip_through_other_readers() {
     }
 }
 
-fn read_exr(path: &Path) -> Vec<f32> {
-    use exr::prelude::*;
-    let image = read_first_flat_layer_from_file(path).unwrap();
-    let channels = &image.layer_data.channel_data.list;
-    assert_eq!(channels.len(), 1);
-    assert_eq!(channels[0].name, Text::from("Z"));
-    channels[0].sample_data.values_as_f32().collect()
-}
-
 fn read_png(path: &Path) -> Vec<u8> {
-    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-    let mut reader = decoder.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    buf.truncate(info.buffer_size());
-    buf
+    common::read_png(path).3
 }
 
 /// Runs a bad recipe; it must fail with a message containing every `expected` fragment and

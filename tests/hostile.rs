@@ -3,15 +3,14 @@
 //! the errors it gets. Every run here must end quickly, with a clear message, and show nothing
 //! of a file the recipe may not read.
 
-use std::io::Read;
 use std::os::unix::fs::symlink;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{BIN, ok, read_json, run_limited, stderr, write};
+use common::{ok, read_json, run_limited, stderr, write};
 
 /// A scene that renders in a blink.
 const SCENE: &str = "scene: |rng| beam(#{ length: 2.0, width: 0.2, height: 0.3 })";

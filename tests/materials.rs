@@ -30,7 +30,9 @@ use std::sync::Arc;
 
 mod common;
 
-use common::{blake3_hex, hashes, ok, read_json, run, stderr, write};
+use common::{
+    blake3_hex, hashes, ok, read_exr, read_json, read_png, run, stderr, view_path, write,
+};
 
 // ---------------------------------------------------------------------------------------------
 // Helpers: running the binary and reading what it wrote.
@@ -62,29 +64,6 @@ fn location(recipe: &Path, needle: &str) -> String {
     format!("{}:{line}:{col}", recipe.display())
 }
 
-/// 8-bit PNG through the `png` crate: (width, height, channels, samples).
-fn read_png(path: &Path) -> (usize, usize, usize, Vec<u8>) {
-    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
-        .read_info()
-        .unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    assert_eq!(info.bit_depth, png::BitDepth::Eight);
-    buf.truncate(info.buffer_size());
-    let (w, h) = (info.width as usize, info.height as usize);
-    (w, h, buf.len() / (w * h), buf)
-}
-
-fn read_exr(path: &Path) -> Vec<f32> {
-    use exr::prelude::*;
-    let image = read_first_flat_layer_from_file(path).unwrap();
-    image.layer_data.channel_data.list[0]
-        .sample_data
-        .values_as_f32()
-        .collect()
-}
-
 /// A solid-colour RGB PNG, encoded by the `png` crate.
 fn solid_png(rgb: [u8; 3], side: u32) -> Vec<u8> {
     let mut out = Vec::new();
@@ -110,10 +89,7 @@ struct View {
 }
 
 fn view_file(out: &Path, sample: u64, view: u32, kind: &str) -> PathBuf {
-    out.join(format!(
-        "samples/{:04}/{sample:06}_{view:02}.{kind}",
-        sample / 1000
-    ))
+    view_path(out, sample, view, None, kind)
 }
 
 fn load_view(out: &Path, sample: u64, view: u32) -> View {

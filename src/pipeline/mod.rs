@@ -14,8 +14,9 @@ mod record;
 mod sample;
 mod view;
 
+pub use record::ViewFacts;
 pub use record::{RunRecord, ViewRecord, json_bytes, run_json, run_schema, view_schema};
-pub use sample::{prepare, write_sample};
+pub use sample::{for_each_image, prepare, write_sample};
 pub use view::{RenderedView, SampleRenderer, view_camera};
 
 use crate::output::DatasetFolder;

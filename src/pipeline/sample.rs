@@ -54,65 +54,73 @@ fn check_segmentation(recipe: &Recipe, sample: &BuiltSample) -> Result<()> {
 /// number of images written.
 pub fn write_sample(recipe: &Recipe, sample: &BuiltSample, stage: &mut SampleStage) -> Result<u32> {
     let dataset = &recipe.dataset;
-    let augment = &dataset.augment;
     let renderer = SampleRenderer::new(dataset, sample);
     let record = SampleRecord::new(sample);
-    let size = (dataset.camera.width, dataset.camera.height);
     for view in 0..dataset.cameras_per_sample() {
-        let drawn = view_camera(dataset, sample, view)?;
-        let clean = renderer.view_with(view, drawn.camera, drawn);
-        if augment.keep_clean {
-            let facts = ViewFacts {
-                view,
-                camera: clean.camera,
-                drawn: &clean.drawn,
-                backdrop: &clean.backdrop_drawn,
-                coverage: clean.coverage(),
-                augmentation: None,
-            };
-            write_view(recipe, (sample, &record), stage, (&clean, None), facts)?;
-        }
-        for copy in 0..augment.copies {
-            let ids = (sample.index, view, copy);
-            let operations = draw_copy(augment, dataset.seed, ids, size);
-            let geometry = operations.iter().find_map(Applied::geometry);
-            let camera = match &geometry {
-                Some(sim) => moved_camera(&drawn.camera, sim)?,
-                None => drawn.camera,
-            };
-            // Exact geometry renders the moved camera; image mode warps the clean render.
-            let rendered;
-            let (base, warp) = match (augment.mode, geometry) {
-                (GeometryMode::Exact, Some(_)) => {
-                    rendered = renderer.view_with(view, camera, drawn);
-                    (&rendered, None)
-                }
-                (GeometryMode::Image, Some(sim)) => (&clean, Some(sim)),
-                (_, None) => (&clean, None),
-            };
-            let copied = AugmentedView::new(base, warp, &operations);
-            let facts = ViewFacts {
-                view,
-                camera,
-                drawn: &drawn,
-                backdrop: &base.backdrop_drawn,
-                coverage: copied.coverage(),
-                augmentation: Some(AugmentationRecord {
-                    copy,
-                    mode: augment.mode,
-                    operations: &operations,
-                }),
-            };
-            write_view(
-                recipe,
-                (sample, &record),
-                stage,
-                (&copied, Some(copy)),
-                facts,
-            )?;
-        }
+        for_each_image(&renderer, view, |layers, copy, facts| {
+            write_view(recipe, (sample, &record), stage, (layers, copy), facts)
+        })?;
     }
     Ok(dataset.images_per_sample())
+}
+
+/// Calls `each` with every image of camera view `view`: the clean one when the dataset keeps
+/// it (copy None), then each augmented copy, with what its record says.
+pub fn for_each_image(
+    renderer: &SampleRenderer,
+    view: u32,
+    mut each: impl FnMut(&dyn ViewLayers, Option<u32>, ViewFacts) -> Result<()>,
+) -> Result<()> {
+    let (dataset, sample) = (renderer.dataset(), renderer.sample());
+    let augment = &dataset.augment;
+    let size = (dataset.camera.width, dataset.camera.height);
+    let drawn = view_camera(dataset, sample, view)?;
+    let clean = renderer.view_with(view, drawn.camera, drawn);
+    if augment.keep_clean {
+        let facts = ViewFacts {
+            view,
+            camera: clean.camera,
+            drawn: &clean.drawn,
+            backdrop: &clean.backdrop_drawn,
+            coverage: clean.coverage(),
+            augmentation: None,
+        };
+        each(&clean, None, facts)?;
+    }
+    for copy in 0..augment.copies {
+        let ids = (sample.index, view, copy);
+        let operations = draw_copy(augment, dataset.seed, ids, size);
+        let geometry = operations.iter().find_map(Applied::geometry);
+        let camera = match &geometry {
+            Some(sim) => moved_camera(&drawn.camera, sim)?,
+            None => drawn.camera,
+        };
+        // Exact geometry renders the moved camera; image mode warps the clean render.
+        let rendered;
+        let (base, warp) = match (augment.mode, geometry) {
+            (GeometryMode::Exact, Some(_)) => {
+                rendered = renderer.view_with(view, camera, drawn);
+                (&rendered, None)
+            }
+            (GeometryMode::Image, Some(sim)) => (&clean, Some(sim)),
+            (_, None) => (&clean, None),
+        };
+        let copied = AugmentedView::new(base, warp, &operations);
+        let facts = ViewFacts {
+            view,
+            camera,
+            drawn: &drawn,
+            backdrop: &base.backdrop_drawn,
+            coverage: copied.coverage(),
+            augmentation: Some(AugmentationRecord {
+                copy,
+                mode: augment.mode,
+                operations: &operations,
+            }),
+        };
+        each(&copied, Some(copy), facts)?;
+    }
+    Ok(())
 }
 
 /// Runs the dataset's writers on one view (or copy) and stages their files and its record.

@@ -113,6 +113,16 @@ impl<'a> SampleRenderer<'a> {
         }
     }
 
+    /// The dataset the views belong to.
+    pub fn dataset(&self) -> &'a DatasetSpec {
+        self.dataset
+    }
+
+    /// The sample being viewed.
+    pub fn sample(&self) -> &'a BuiltSample {
+        self.sample
+    }
+
     /// Traces view `view` and draws its backdrop.
     pub fn view(&self, view: u32) -> Result<RenderedView<'_>> {
         let drawn = view_camera(self.dataset, self.sample, view)?;

@@ -6,7 +6,7 @@
 //! `output::rgb_png`), nor the recipe's files.
 
 use crate::output::{ViewLayers, rgb_png};
-use crate::pipeline::{SampleRenderer, prepare};
+use crate::pipeline::{SampleRenderer, for_each_image, prepare};
 use crate::recipe::Recipe;
 use anyhow::Result;
 use rayon::prelude::*;
@@ -77,10 +77,19 @@ pub fn render(recipe: &mut Recipe, options: &PreviewOptions) -> Result<Preview> 
         .map(|index| -> Result<Vec<Row>> {
             let sample = prepare(recipe, index)?;
             let renderer = SampleRenderer::new(&recipe.dataset, &sample);
+            // One row per image: the clean view (if kept) and its augmented copies.
             (0..views)
                 .into_par_iter()
-                .map(|view| Ok(row(&renderer.view(view)?, &columns)))
-                .collect::<Result<Vec<Row>>>()
+                .map(|view| {
+                    let mut rows = Vec::new();
+                    for_each_image(&renderer, view, |layers, _, _| {
+                        rows.push(row(layers, &columns));
+                        Ok(())
+                    })?;
+                    Ok(rows)
+                })
+                .collect::<Result<Vec<Vec<Row>>>>()
+                .map(|views| views.into_iter().flatten().collect())
         })
         .collect::<Result<Vec<Vec<Row>>>>()?
         .into_iter()
@@ -104,7 +113,10 @@ pub fn render(recipe: &mut Recipe, options: &PreviewOptions) -> Result<Preview> 
 fn shrink(recipe: &mut Recipe, options: &PreviewOptions) -> (u64, u32) {
     let dataset = &mut recipe.dataset;
     let samples = options.samples.clamp(1, dataset.samples.max(1));
-    let views = options.views.unwrap_or(4).clamp(1, dataset.views.max(1));
+    let views = options
+        .views
+        .unwrap_or(4)
+        .clamp(1, dataset.cameras_per_sample().max(1));
     let camera = &mut dataset.camera;
     let scale = match options.size {
         Size::Scale(s) => s,
@@ -131,7 +143,7 @@ fn columns(recipe: &Recipe) -> Vec<Column> {
     columns
 }
 
-fn row(view: &impl ViewLayers, columns: &[Column]) -> Row {
+fn row(view: &dyn ViewLayers, columns: &[Column]) -> Row {
     let wanted = |c: Column| columns.contains(&c);
     Row {
         rgb: view.rgb().to_vec(),

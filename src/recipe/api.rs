@@ -212,9 +212,13 @@ fn augment(value: Option<Dynamic>) -> OptResult<AugmentSpec> {
         Some(v) if v.is_string() => match v.to_string().as_str() {
             "none" => AugmentSpec::default(),
             "paper" => AugmentSpec::paper(),
+            "paper_image" => AugmentSpec {
+                mode: GeometryMode::Image,
+                ..AugmentSpec::paper()
+            },
             other => {
                 return Err(format!(
-                    "dataset.augment = \"{}\": expected \"paper\", \"none\" or a map like #{{ copies: 1, operations: [...] }}",
+                    "dataset.augment = \"{}\": expected \"paper\", \"paper_image\", \"none\" or a map like #{{ copies: 1, operations: [...] }}",
                     crate::words::clip(other, 80)
                 ));
             }

@@ -106,3 +106,36 @@ pub fn blake3_hex(bytes: &[u8]) -> String {
 pub fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
+
+/// 8-bit PNG through the `png` crate: (width, height, channels, samples).
+pub fn read_png(path: &Path) -> (usize, usize, usize, Vec<u8>) {
+    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.bit_depth, png::BitDepth::Eight);
+    buf.truncate(info.buffer_size());
+    let (w, h) = (info.width as usize, info.height as usize);
+    (w, h, buf.len() / (w * h), buf)
+}
+
+/// The depth channel `Z` of an OpenEXR file, through the `exr` crate's reader.
+pub fn read_exr(path: &Path) -> Vec<f32> {
+    use exr::prelude::*;
+    let image = read_first_flat_layer_from_file(path).unwrap();
+    let channels = &image.layer_data.channel_data.list;
+    assert_eq!(channels.len(), 1);
+    assert_eq!(channels[0].name, Text::from("Z"));
+    channels[0].sample_data.values_as_f32().collect()
+}
+
+/// A view's file of `kind` in dataset `out` (copy k of a view is `…a{k}`).
+pub fn view_path(out: &Path, sample: u64, view: u32, copy: Option<u32>, kind: &str) -> PathBuf {
+    let copy = copy.map(|k| format!("a{k}")).unwrap_or_default();
+    out.join(format!(
+        "samples/{:04}/{sample:06}_{view:02}{copy}.{kind}",
+        sample / 1000
+    ))
+}
