@@ -33,9 +33,6 @@ pub mod srgb;
 pub mod tone;
 pub mod warp;
 
-#[cfg(test)]
-mod bench;
-
 pub use blur::{Blur, BlurSpec, blur};
 pub use colour::{ColourJitter, ColourJitterSpec, ColourOp, colour_jitter};
 pub use draw::Range;

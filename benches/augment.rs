@@ -1,8 +1,15 @@
-//! Cost of each operation on a 960 × 960 image on one thread (the median of 7 runs).
+//! Augmentation benchmark: the cost of each operation on one 960×960 view of a textured beam
+//! (scripts/augmentations.rhai), one thread, medians; and what an exact geometric copy costs
+//! (the view traced and shaded again) against the image-space warp. Asserts nothing.
 //!
-//! Run: `cargo test --release augment::bench -- --ignored --nocapture`
+//!     cargo bench --bench augment
 
-use super::*;
+use shmgen::augment::*;
+use shmgen::output::ViewLayers;
+use shmgen::pipeline::{SampleRenderer, prepare, view_camera};
+use shmgen::recipe::Recipe;
+use shmgen::seeds::{Scope, Stream};
+use std::path::Path;
 use std::time::Instant;
 
 const SIDE: usize = 960;
@@ -25,14 +32,36 @@ fn median_ms(image: &[u8], mut op: impl FnMut(&mut Vec<u8>)) -> f64 {
     times[RUNS / 2]
 }
 
-#[test]
-#[ignore = "timing; run with --ignored --nocapture"]
-fn cost_per_operation_on_960_by_960() {
-    on_threads(1, report);
+fn main() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/augmentations.rhai");
+    let sets = [("size".to_string(), SIDE.to_string())];
+    let recipe = Recipe::load(&path, &sets).expect("the augmentations recipe loads");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    println!(
+        "augmentation benchmark: {SIDE}×{SIDE}, one thread, median of {RUNS} (machine: {cores} cores)"
+    );
+    pool.install(|| {
+        let sample = prepare(&recipe, 0).expect("sample 0");
+        let renderer = SampleRenderer::new(&recipe.dataset, &sample);
+        let drawn = view_camera(&recipe.dataset, &sample, 0).expect("a camera");
+        let render_ms = median_ms(&[], |_| {
+            let view = renderer.view_with(0, drawn.camera, drawn);
+            std::hint::black_box(view.rgb());
+        });
+        println!(
+            "  {:<26} {render_ms:8.2} ms  (trace + shade: the cost of an exact geometric copy)",
+            "render the view again"
+        );
+        let view = renderer.view_with(0, drawn.camera, drawn);
+        report(view.rgb());
+    });
 }
 
-fn report() {
-    let image = textured_image(SIDE, SIDE);
+fn report(image: &[u8]) {
     let (w, h) = (SIDE, SIDE);
     let jitter = ColourJitter {
         brightness: 1.1,
@@ -48,7 +77,7 @@ fn report() {
         count: Range::Fixed(3.0),
         ..ErasingSpec::paper()
     }
-    .draw(&mut test_stream("bench"), w, h)
+    .draw(&mut Stream::new(0, Scope::Sample(0), "bench"), w, h)
     .unwrap_or(Erasing {
         rects: Vec::new(),
         fill: Filled::Black,
@@ -124,6 +153,6 @@ fn report() {
     ];
     println!("augment cost, {SIDE}×{SIDE}, one thread, median of {RUNS}:");
     for (name, op) in rows {
-        println!("  {name:<26} {:8.2} ms", median_ms(&image, op));
+        println!("  {name:<26} {:8.2} ms", median_ms(image, op));
     }
 }
