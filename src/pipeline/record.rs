@@ -460,8 +460,13 @@ fn layout(dataset: &DatasetSpec) -> String {
         .flat_map(|w| w.files.iter().copied())
         .chain(["json"])
         .collect();
+    let copy = if dataset.augment.copies > 0 {
+        "[a{copy}]"
+    } else {
+        ""
+    };
     format!(
-        "samples/{{sample/1000:04}}/{{sample:06}}_{{view:02}}.{{{}}}",
+        "samples/{{sample/1000:04}}/{{sample:06}}_{{view:02}}{copy}.{{{}}}",
         files.join(",")
     )
 }
