@@ -145,7 +145,7 @@ fn main() -> ExitCode {
             if e.downcast_ref::<shmgen::recipe::RecipeError>().is_some() {
                 eprintln!("{e:#}");
             } else {
-                eprintln!("error: {e:#}");
+                eprintln!("error: {}", shmgen::words::short_numbers(&format!("{e:#}")));
             }
             ExitCode::FAILURE
         }

@@ -41,6 +41,50 @@ pub fn number(x: f64) -> String {
     }
 }
 
+/// `text` with every number written out in more than 17 significant digits (what a value
+/// like 1e300 becomes through `{}`) put in the short form of [`number`]. Messages are made in
+/// many layers; this keeps all of them short where they are shown. Digit runs that touch
+/// letters (hashes, names) are left alone.
+pub fn short_numbers(text: &str) -> std::borrow::Cow<'_, str> {
+    let bytes = text.as_bytes();
+    let mut out = String::new();
+    let (mut copied, mut i) = (0, 0);
+    while i < bytes.len() {
+        let start = i;
+        let word_before =
+            start > 0 && (bytes[start - 1].is_ascii_alphanumeric() || bytes[start - 1] == b'_');
+        let mut end = start;
+        while end < bytes.len() && (bytes[end].is_ascii_digit() || bytes[end] == b'.') {
+            end += 1;
+        }
+        if end == start {
+            i += 1;
+            continue;
+        }
+        let word_after =
+            end < bytes.len() && (bytes[end].is_ascii_alphanumeric() || bytes[end] == b'_');
+        let token = text[start..end].trim_end_matches('.');
+        let digits = token.bytes().filter(u8::is_ascii_digit).count();
+        // Whole numbers up to 20 digits may be exact integers (u64 seeds): kept as written.
+        let long = if token.contains('.') {
+            digits > 17
+        } else {
+            digits > 20
+        };
+        if let (false, false, true, Ok(x)) = (word_before, word_after, long, token.parse::<f64>()) {
+            out.push_str(&text[copied..start]);
+            out.push_str(&number(x));
+            copied = end;
+        }
+        i = end;
+    }
+    if copied == 0 {
+        return text.into();
+    }
+    out.push_str(&text[copied..]);
+    out.into()
+}
+
 /// `text` cut to its first `max` characters, saying how much was left out, so that a huge
 /// value or source line cannot flood a message.
 pub fn clip(text: &str, max: usize) -> std::borrow::Cow<'_, str> {
@@ -59,6 +103,29 @@ mod tests {
         assert_eq!(nearest("pich", &["pitch", "yaw", "roll"]), Some("pitch"));
         assert_eq!(nearest("zzzzzz", &["pitch", "yaw"]), None);
         assert_eq!(edit_distance("kitten", "sitting"), 3);
+    }
+
+    #[test]
+    fn long_numbers_in_finished_messages_are_shortened() {
+        let long = format!("height = {} m must lie inside the shell", 1e300);
+        assert_eq!(
+            short_numbers(&long),
+            "height = 1e300 m must lie inside the shell"
+        );
+        let negative = format!("at ({}, 0, {}) m", -1e25, 2.5e-30);
+        assert_eq!(short_numbers(&negative), "at (-1e25, 0, 2.5e-30) m");
+        let tiny = format!("{}", 1.5e-20);
+        assert_eq!(short_numbers(&tiny), "1.5e-20");
+        for kept in [
+            "sample 123456 of 1000000",
+            "seed 18446744073709551615",
+            "hash 0123456789012345678901234abc",
+            "0.30000000000000004",
+            "file_123456789012345678901",
+            "done.",
+        ] {
+            assert_eq!(short_numbers(kept), kept);
+        }
     }
 
     #[test]

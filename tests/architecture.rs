@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 /// Each top-level module and the modules it may import. `main` is the binary.
 const ALLOWED: &[(&str, &[&str])] = &[
-    ("main", &["preview", "pipeline", "recipe"]),
+    ("main", &["preview", "pipeline", "recipe", "words"]),
     (
         "preview",
         &["pipeline", "recipe", "build", "output", "scene"],
@@ -20,6 +20,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "render",
             "output",
             "scene",
+            "augment",
             "mechanics",
             "materials",
             "cameras",
@@ -51,7 +52,10 @@ const ALLOWED: &[(&str, &[&str])] = &[
         ],
     ),
     ("render", &["geometry", "cameras", "materials"]),
-    ("scene", &["mechanics", "geometry", "materials", "cameras"]),
+    (
+        "scene",
+        &["augment", "mechanics", "geometry", "materials", "cameras"],
+    ),
     ("augment", &["seeds"]),
     ("output", &[]),
     ("mechanics", &[]),

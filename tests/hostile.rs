@@ -636,3 +636,48 @@ fn thread_and_preview_counts_are_bounded_with_a_clear_error() {
         stderr(&output)
     );
 }
+
+#[test]
+fn magnitudes_beyond_any_structure_are_refused_at_the_recipe_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let with_scene = |name: &str, scene: &str| {
+        let text = recipe("", "").replace(SCENE, &format!("scene: |rng| {scene}"));
+        write(dir.path(), name, &text)
+    };
+    // Far from the origin, f64 positions quantise the structure: refused, not rendered.
+    let far = with_scene(
+        "far.rhai",
+        "beam(#{ length: 2.0, width: 0.2, height: 0.3 }).at(1e15, 0.0, 0.0)",
+    );
+    refused(
+        &far,
+        &[],
+        &[
+            "far.rhai:2:",
+            "1e7 m any scene coordinate may reach",
+            "1e15",
+        ],
+    );
+    // A shell pattern reaching the axis is a collapse, not a damage state; two patterns that
+    // are each fine may not sum past the limit.
+    let collapse = with_scene(
+        "collapse.rhai",
+        "assembly(\"s\", [shape::tube(1.0, 3.0, 0.05).elephant_foot(1e20, 0.5)])",
+    );
+    refused(
+        &collapse,
+        &[],
+        &["collapse.rhai:2:", "elephant_foot", "at most 0.5 m"],
+    );
+    let summed = with_scene(
+        "summed.rhai",
+        "assembly(\"s\", [shape::tube(1.0, 3.0, 0.05).hoop_expansion(0.3).ovalise(0.3, 2, 0.0)])",
+    );
+    refused(&summed, &[], &["summed.rhai:2:", "reach 0.6 m together"]);
+    // Just inside the limits renders.
+    let inside = with_scene(
+        "inside.rhai",
+        "assembly(\"s\", [shape::tube(1.0, 3.0, 0.05).hoop_expansion(0.2).ovalise(0.3, 2, 0.0).translate(9e6, 0.0, 0.0)])",
+    );
+    ok(run(&inside, &[]));
+}

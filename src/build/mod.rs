@@ -18,7 +18,7 @@ pub use beam::{BuiltBeam, beam_radius, mesh_beam, problem, section_outline, stat
 pub use light::{BackdropDraw, LightDraw, SkyDraw, SunDraw, draw_backdrop, draw_light};
 pub use tessellation::{chord_tolerance, segments_for_chord};
 
-use crate::geometry::{self, MAX_TRIANGLES, Mesh};
+use crate::geometry::{self, MAX_COORDINATE, MAX_TRIANGLES, Mesh};
 use crate::materials::{Grain, Lighting, Shader};
 use crate::mechanics::Labels;
 use crate::scene::{DatasetSpec, SceneSpec, SourceSite, Structure};
@@ -105,6 +105,7 @@ pub fn build_sample(
                     .camera
                     .nearest_pixel_footprint(DVec3::from_array(beam.centre), beam_radius(beam));
                 let built = mesh_beam(beam, footprint).map_err(failed)?;
+                within_range(&built.mesh).map_err(failed)?;
                 let grain = Grain {
                     axis: DMat3::from_rotation_z(beam.yaw) * DVec3::X,
                     centre: DVec3::from_array(beam.centre),
@@ -121,6 +122,8 @@ pub fn build_sample(
                     .camera
                     .nearest_pixel_footprint(DVec3::ZERO, assembly_radius(a));
                 for shape in mesh_assembly(a, footprint).map_err(failed)? {
+                    within_range(&shape.mesh)
+                        .map_err(|m| failed(format!("part \"{}\": {m}", shape.part)))?;
                     let grain = grain_of(&shape.rest);
                     assembled.add(&shape.mesh, &shape.rest, i, shape.part, grain);
                 }
@@ -143,12 +146,6 @@ pub fn build_sample(
         piece,
         pieces,
     } = assembled;
-    if !mesh.is_finite() {
-        return Err(BuildError::whole_scene(
-            "the deformed mesh has non-finite vertices (check the structure's dimensions and loads)"
-                .to_string(),
-        ));
-    }
     let (centre, radius) = mesh
         .bounding_sphere()
         .expect("a scene has at least one structure");
@@ -184,6 +181,18 @@ pub fn build_sample(
         centre,
         radius,
     })
+}
+
+/// Refuses a built structure with a vertex that is not finite or lies beyond
+/// [`MAX_COORDINATE`]: its dimensions, placement or deformation are out of any sensible range.
+fn within_range(mesh: &Mesh) -> Result<(), String> {
+    match mesh.vertex_out_of_range() {
+        None => Ok(()),
+        Some(p) => Err(format!(
+            "a vertex of the built mesh lies at ({}, {}, {}) m, beyond the {MAX_COORDINATE:e} m any scene coordinate may reach (check the structure's dimensions, placement and loads)",
+            p.x, p.y, p.z
+        )),
+    }
 }
 
 /// The scene mesh being put together, with each triangle's structure, part and piece.

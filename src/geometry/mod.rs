@@ -19,6 +19,13 @@ use glam::DVec3;
 /// It bounds the memory a sample takes (about 100 bytes a triangle with its BVH).
 pub const MAX_TRIANGLES: usize = 10_000_000;
 
+/// The largest coordinate, in metres, a vertex of a scene may have (10,000 km, the size of
+/// the Earth). Inside it f64 positions resolve 2 nm, far finer than any depth is written;
+/// beyond it they quantise structures visibly, and the BVH's single-precision areas
+/// (extent squared) approach overflow. No civil structure comes near it, so a vertex beyond
+/// it means a magnitude in the recipe is wrong.
+pub const MAX_COORDINATE: f64 = 1e7;
+
 /// Axis-aligned bounds (min, max) of some points; None for none.
 pub fn bounds(points: &[DVec3]) -> Option<(DVec3, DVec3)> {
     let first = *points.first()?;
@@ -120,5 +127,14 @@ impl Mesh {
     /// Whether every vertex coordinate is finite.
     pub fn is_finite(&self) -> bool {
         self.positions.iter().all(|p| p.is_finite())
+    }
+
+    /// The first vertex that is not finite or lies beyond [`MAX_COORDINATE`] of the origin
+    /// along some axis, if any.
+    pub fn vertex_out_of_range(&self) -> Option<DVec3> {
+        self.positions
+            .iter()
+            .copied()
+            .find(|p| !(p.abs().max_element() <= MAX_COORDINATE))
     }
 }

@@ -83,6 +83,12 @@ pub struct Shell {
     pub height: f64,
 }
 
+/// The largest summed peak |w| of the patterns on one shell, as a share of its radius. The
+/// patterns are labelled damage and load states of a thin shell: real ones are millimetres to
+/// decimetres on radii of metres. Half the radius leaves every exaggeration a study could want
+/// while keeping r + w well away from the axis, where the radial parametrisation would fold.
+pub const MAX_PEAK_SHARE: f64 = 0.5;
+
 const E: f64 = super::STEEL_E;
 const NU: f64 = super::STEEL_NU;
 
@@ -168,6 +174,49 @@ impl ShellPattern {
                     ))
                 }
             }
+        }
+    }
+
+    /// The largest |w| the pattern reaches, metres.
+    pub fn peak(&self) -> f64 {
+        match *self {
+            ShellPattern::HoopExpansion { amplitude }
+            | ShellPattern::Ovalisation { amplitude, .. }
+            | ShellPattern::Dimple { amplitude, .. }
+            | ShellPattern::ElephantFoot { amplitude, .. }
+            | ShellPattern::Buckle { amplitude, .. } => amplitude.abs(),
+        }
+    }
+
+    /// Checks `patterns`, applied together to `shell`: each one's parameters, and their summed
+    /// peaks against [`MAX_PEAK_SHARE`] of the radius.
+    pub fn validate_together(patterns: &[ShellPattern], shell: &Shell) -> Result<(), String> {
+        patterns.iter().try_for_each(|p| p.validate(shell))?;
+        let limit = MAX_PEAK_SHARE * shell.radius;
+        let beyond = |what: String| {
+            Err(format!(
+                "{what}, beyond what a radial pattern of this shell represents: at most {limit} m, {MAX_PEAK_SHARE} of the radius {} m (a wall pushed that far towards the axis is a collapse, not a deformation state)",
+                shell.radius
+            ))
+        };
+        if let Some(p) = patterns.iter().find(|p| p.peak() > limit) {
+            return beyond(format!("{} amplitude = {} m", p.name(), p.peak()));
+        }
+        let total: f64 = patterns.iter().map(ShellPattern::peak).sum();
+        if total > limit {
+            return beyond(format!("the shell patterns reach {total} m together"));
+        }
+        Ok(())
+    }
+
+    /// The pattern's name in the recipe API.
+    pub fn name(&self) -> &'static str {
+        match self {
+            ShellPattern::HoopExpansion { .. } => "hoop_expansion",
+            ShellPattern::Ovalisation { .. } => "ovalise",
+            ShellPattern::Dimple { .. } => "dimple",
+            ShellPattern::ElephantFoot { .. } => "elephant_foot",
+            ShellPattern::Buckle { .. } => "buckle",
         }
     }
 
@@ -312,6 +361,31 @@ mod tests {
         wall: 0.006,
         height: 15.0,
     };
+
+    #[test]
+    fn patterns_reaching_towards_the_axis_are_refused_alone_and_together() {
+        let shell = Shell {
+            radius: 2.0,
+            wall: 0.01,
+            height: 6.0,
+        };
+        let hoop = |amplitude| ShellPattern::HoopExpansion { amplitude };
+        let foot = |amplitude| ShellPattern::ElephantFoot {
+            amplitude,
+            height: 0.5,
+        };
+        assert!(ShellPattern::validate_together(&[hoop(1.0)], &shell).is_ok());
+        assert!(ShellPattern::validate_together(&[hoop(-0.6), foot(0.4)], &shell).is_ok());
+        let alone = ShellPattern::validate_together(&[hoop(0.1), foot(-1.5)], &shell);
+        assert!(
+            alone
+                .unwrap_err()
+                .starts_with("elephant_foot amplitude = 1.5 m")
+        );
+        let together = ShellPattern::validate_together(&[hoop(0.6), foot(0.6)], &shell);
+        assert!(together.unwrap_err().contains("reach 1.2 m together"));
+        assert!(ShellPattern::validate_together(&[hoop(f64::NAN)], &shell).is_err());
+    }
 
     #[test]
     fn plausible_amplitudes_match_the_worked_examples() {

@@ -510,12 +510,12 @@ impl Drop for DatasetFolder {
 /// What `root` holds for the dataset `identity`, and this dataset's run.json bytes.
 fn survey(root: &Path, identity: Identity) -> Result<(Holds, Vec<u8>)> {
     let run_json = root.join(RUN_JSON);
-    let recorded = match fs::read(&run_json) {
-        Ok(bytes) => Some(bytes),
-        Err(e) if e.kind() == io::ErrorKind::NotFound => None,
-        Err(e) => return Err(io_error(e, "reading run.json", root)),
-    };
-    let Some(recorded) = recorded else {
+    let recorded = loop {
+        match fs::read(&run_json) {
+            Ok(bytes) => break bytes,
+            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
+            Err(e) => return Err(io_error(e, "reading run.json", root)),
+        }
         let ours = identity(None)?;
         if root.join(MANIFEST).exists() {
             let why = "it has a manifest.jsonl but no run.json".to_string();
@@ -526,6 +526,12 @@ fn survey(root: &Path, identity: Identity) -> Result<(Holds, Vec<u8>)> {
             .into_iter()
             .filter(|n| n != STAGING && !is_temporary(n))
             .collect();
+        // Another shard opening the folder (`check` does not take the folder lock) may have
+        // renamed run.json into place since it was read: look again rather than call the
+        // folder foreign.
+        if names.iter().any(|n| n == RUN_JSON) {
+            continue;
+        }
         let holds = if names.is_empty() {
             Holds::Nothing
         } else {

@@ -8,7 +8,7 @@ use super::engine::{
 };
 use super::memory::MAX_SCRIPT_BYTES;
 use crate::scene::SourceSite;
-use crate::words::clip;
+use crate::words::{clip, short_numbers};
 use rhai::{EvalAltResult, NativeCallContext, ParseError, ParseErrorType, Position};
 use std::collections::BTreeSet;
 use std::fmt;
@@ -34,9 +34,10 @@ struct Located {
 impl RecipeError {
     /// An error with no place in the recipe's sources.
     pub fn plain(message: impl Into<String>) -> Self {
+        let message = message.into();
         RecipeError(format!(
             "error: {}",
-            clip(&message.into(), MAX_MESSAGE_CHARS)
+            clip(&short_numbers(&message), MAX_MESSAGE_CHARS)
         ))
     }
 
@@ -236,7 +237,10 @@ fn render(
     context: Option<&str>,
     sources: &Sources,
 ) -> String {
-    let mut out = format!("{severity}: {}\n", clip(message, MAX_MESSAGE_CHARS));
+    let mut out = format!(
+        "{severity}: {}\n",
+        clip(&short_numbers(message), MAX_MESSAGE_CHARS)
+    );
     out += &format!("  --> {}\n", place(at));
     if let (Some(line), Some(col)) = (at.pos.line(), at.pos.position()) {
         let exact = line < usize::from(u16::MAX) && col < usize::from(u16::MAX);

@@ -200,7 +200,9 @@ fn register_shell_patterns(engine: &mut Engine) {
         let Some(shell) = s.shell() else {
             return fail("shell patterns apply to tubes (shape::tube)".to_string());
         };
-        pattern.validate(&shell).or_else(fail)?;
+        let mut patterns: Vec<ShellPattern> = s.shell.iter().map(|l| l.pattern.clone()).collect();
+        patterns.push(pattern.clone());
+        ShellPattern::validate_together(&patterns, &shell).or_else(fail)?;
         s.shell.push(LabelledPattern::new(pattern, &shell));
         Ok(s.clone())
     }
