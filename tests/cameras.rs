@@ -7,9 +7,7 @@
 
 mod common;
 
-use common::{ok, read_exr, read_json, read_png, run, view_path, write};
-use serde_json::Value;
-use std::path::Path;
+use common::{load, matrix, read_png, render, run, transform, view_path, write};
 
 /// The box every test looks at: 2 × 1 × 0.5 m, centred on the origin.
 const HALF: [f64; 3] = [1.0, 0.5, 0.25];
@@ -26,81 +24,6 @@ fn box_recipe(camera: &str, augment: &str) -> String {
     )
 }
 
-/// A written view: its depth, mask and record.
-struct View {
-    width: usize,
-    height: usize,
-    depth: Vec<f32>,
-    mask: Vec<u8>,
-    json: Value,
-}
-
-fn load(out: &Path, view: u32, copy: Option<u32>) -> View {
-    let json = read_json(&view_path(out, 0, view, copy, "json"));
-    let (width, height, _, mask) = read_png(&view_path(out, 0, view, copy, "mask.png"));
-    View {
-        width,
-        height,
-        depth: read_exr(&view_path(out, 0, view, copy, "depth.exr")),
-        mask,
-        json,
-    }
-}
-
-fn matrix<const R: usize, const C: usize>(value: &Value) -> [[f64; C]; R] {
-    std::array::from_fn(|i| std::array::from_fn(|j| value[i][j].as_f64().unwrap()))
-}
-
-impl View {
-    fn k(&self) -> [[f64; 3]; 3] {
-        matrix(&self.json["camera"]["K"])
-    }
-
-    fn c2w(&self) -> [[f64; 4]; 4] {
-        matrix(&self.json["camera"]["c2w_opencv"])
-    }
-
-    fn w2c(&self) -> [[f64; 4]; 4] {
-        matrix(&self.json["camera"]["w2c_opencv"])
-    }
-
-    /// The world point pixel (row, col) sees, back-projected with the written K and pose
-    /// (pinhole).
-    fn point(&self, row: usize, col: usize) -> Option<[f64; 3]> {
-        let z = f64::from(self.depth[row * self.width + col]);
-        (z > 0.0).then(|| {
-            let k = self.k();
-            let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
-            let cam = [(u - k[0][2]) * z / k[0][0], (v - k[1][2]) * z / k[1][1], z];
-            transform(&self.c2w(), cam)
-        })
-    }
-
-    /// Where world point `p` projects (pinhole), with its planar depth.
-    fn project(&self, p: [f64; 3]) -> ([f64; 2], f64) {
-        let k = self.k();
-        let c = transform(&self.w2c(), p);
-        (
-            [
-                k[0][0] * c[0] / c[2] + k[0][2],
-                k[1][1] * c[1] / c[2] + k[1][2],
-            ],
-            c[2],
-        )
-    }
-
-    /// Whether pixel (row, col) and its 8 neighbours all see the box.
-    fn inside(&self, row: usize, col: usize) -> bool {
-        (row > 0 && col > 0 && row + 1 < self.height && col + 1 < self.width)
-            && (row - 1..=row + 1)
-                .all(|r| (col - 1..=col + 1).all(|c| self.mask[r * self.width + c] == 255))
-    }
-}
-
-fn transform(m: &[[f64; 4]; 4], p: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|i| m[i][0] * p[0] + m[i][1] * p[1] + m[i][2] * p[2] + m[i][3])
-}
-
 /// How far `p` is from the box's surface, metres (inside or outside).
 fn off_box(p: [f64; 3]) -> f64 {
     let outside = (0..3)
@@ -112,14 +35,6 @@ fn off_box(p: [f64; 3]) -> f64 {
         .fold(f64::INFINITY, f64::min)
         .max(0.0);
     outside.max(inside)
-}
-
-fn render(recipe: &str, extra: &[&str]) -> (tempfile::TempDir, std::path::PathBuf) {
-    let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "cameras.rhai", recipe);
-    let out = dir.path().join("out");
-    ok(run(&path, &out, extra));
-    (dir, out)
 }
 
 #[test]

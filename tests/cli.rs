@@ -18,6 +18,10 @@ dataset(#{
     seed: param("seed", 0),
     samples: samples,
     views: param("views", 3),
+    outputs: if param("ground_truth", false) {
+        ["rgb", "depth", "mask", "normals", "displacement", "flow", "rest_rgb", "rest_depth", "ray_distance", "mesh", "mesh_gltf", "points"]
+    } else { ["rgb", "depth", "mask"] },
+    points: 500,
     camera: #{ width: param("width", 96), height: param("height", 72), pitch: [deg(-60), deg(90)] },
     scene: |rng| {
         let length = rng.uniform(1.0, 4.0);
@@ -45,6 +49,39 @@ fn same_bytes_with_one_or_two_threads() {
         "run.json, manifest and 4 files per view"
     );
     assert_eq!(a, b);
+}
+
+#[test]
+fn ground_truth_outputs_have_the_same_bytes_with_one_or_two_threads_and_in_shards() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write(dir.path(), "small.rhai", SMALL);
+    let gt = ["--set", "ground_truth=true", "--set", "samples=5"];
+    ok(run(
+        &recipe,
+        &dir.path().join("t1"),
+        &[&gt[..], &["--threads", "1"]].concat(),
+    ));
+    ok(run(
+        &recipe,
+        &dir.path().join("t2"),
+        &[&gt[..], &["--threads", "2"]].concat(),
+    ));
+    let sharded = dir.path().join("sharded");
+    ok(run(
+        &recipe,
+        &sharded,
+        &[&gt[..], &["--shard", "1/2"]].concat(),
+    ));
+    ok(run(
+        &recipe,
+        &sharded,
+        &[&gt[..], &["--shard", "0/2", "--threads", "1"]].concat(),
+    ));
+    let one = hashes(&dir.path().join("t1"));
+    // run.json, manifest, 11 files per view (json included) and 4 per sample.
+    assert_eq!(one.len(), 2 + 5 * (3 * 11 + 4));
+    assert_eq!(one, hashes(&dir.path().join("t2")));
+    assert_eq!(one, hashes(&sharded));
 }
 
 #[test]

@@ -9,6 +9,7 @@
 
 mod augmented;
 mod finite;
+mod geometry;
 mod progress;
 mod record;
 mod sample;
