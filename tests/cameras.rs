@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{load, matrix, read_png, render, run, transform, view_path, write};
+use common::{load, matrix, off_box, read_png, render, run, transform, view_path, write};
 
 /// The box every test looks at: 2 × 1 × 0.5 m, centred on the origin.
 const HALF: [f64; 3] = [1.0, 0.5, 0.25];
@@ -22,19 +22,6 @@ fn box_recipe(camera: &str, augment: &str) -> String {
             scene: |rng| assembly(\"box\", [shape::box(2.0, 1.0, 0.5)]),
         }})\n"
     )
-}
-
-/// How far `p` is from the box's surface, metres (inside or outside).
-fn off_box(p: [f64; 3]) -> f64 {
-    let outside = (0..3)
-        .map(|i| (p[i].abs() - HALF[i]).max(0.0).powi(2))
-        .sum::<f64>()
-        .sqrt();
-    let inside = (0..3)
-        .map(|i| HALF[i] - p[i].abs())
-        .fold(f64::INFINITY, f64::min)
-        .max(0.0);
-    outside.max(inside)
 }
 
 #[test]
@@ -55,7 +42,7 @@ fn exact_geometric_copies_back_project_onto_the_box_and_agree_across_views() {
                     let Some(p) = v.point(row, col) else { continue };
                     seen += 1;
                     assert!(
-                        off_box(p) < 1e-4,
+                        off_box(p, HALF) < 1e-4,
                         "view {view} {copy:?} ({row},{col}): {p:?}"
                     );
                     // Seen from the clean view 0 too (unless hidden or off its frame), the

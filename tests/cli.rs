@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{BIN, hashes, ok, read_exr, read_json, run, write};
+use common::{BIN, hashes, off_box, ok, read_exr, read_json, run, write};
 
 /// A small recipe (low resolution so the suite stays fast) importing the stdlib beam module.
 const SMALL: &str = r#"
@@ -213,20 +213,8 @@ fn written_files_round_trip_through_other_readers() {
                 .collect();
             let local = [p[0] - 10.0, p[1] + 20.0, p[2] - 5.0];
             let half = [1.5, 0.2, 0.4];
-            // Distance to the box surface for a point near it.
-            let outside: f64 = (0..3)
-                .map(|a| (local[a].abs() - half[a]).max(0.0).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            let inside = (0..3)
-                .map(|a| half[a] - local[a].abs())
-                .fold(f64::INFINITY, f64::min)
-                .max(0.0);
-            assert!(
-                outside.max(inside) < 1e-5 * 3.2,
-                "pixel {i}: {} m off the box",
-                outside.max(inside)
-            );
+            let off = off_box(local, half);
+            assert!(off < 1e-5 * 3.2, "pixel {i}: {off} m off the box");
         }
         assert!(hits > 100, "{hits} hits");
     }

@@ -10,8 +10,8 @@
 mod common;
 
 use common::{
-    View, load, ok, read_exr, read_exr_channels, read_json, read_ply, read_png, render, run,
-    sample_path, view_path, write,
+    View, load, off_box, ok, read_exr, read_exr_channels, read_json, read_ply, read_png, render,
+    run, sample_path, view_path, write,
 };
 use ply_rs_bw::ply::Property;
 use std::path::Path;
@@ -100,19 +100,6 @@ impl Beam {
         let half = [0.5 * self.length, 0.5 * self.width, 0.5 * self.height];
         off_box(std::array::from_fn(|i| p[i] - self.centre[i]), half)
     }
-}
-
-/// How far `p` is from the surface of the box [−half, half], inside or out.
-fn off_box(p: [f64; 3], half: [f64; 3]) -> f64 {
-    let outside = (0..3)
-        .map(|i| (p[i].abs() - half[i]).max(0.0).powi(2))
-        .sum::<f64>()
-        .sqrt();
-    let inside = (0..3)
-        .map(|i| half[i] - p[i].abs())
-        .fold(f64::INFINITY, f64::min)
-        .max(0.0);
-    outside.max(inside)
 }
 
 /// A one-sample recipe: `outputs`, a camera block, extra dataset options and a scene
@@ -537,8 +524,11 @@ impl Glb {
     }
 }
 
-/// Vertices (x, y, z) and faces (indices, part) of a mesh PLY.
-fn ply_mesh(path: &Path) -> (Vec<[f64; 3]>, Vec<([u32; 3], i32)>) {
+/// The faces of a mesh PLY: vertex indices and part id.
+type Faces = Vec<([u32; 3], i32)>;
+
+/// Vertices (x, y, z) and faces of a mesh PLY.
+fn ply_mesh(path: &Path) -> (Vec<[f64; 3]>, Faces) {
     let ply = read_ply(path);
     let double = |p: &Property| match p {
         Property::Double(x) => *x,
@@ -1043,4 +1033,60 @@ fn view_records_name_the_sample_files_and_the_conventions() {
     assert_eq!(json["ray_distance"]["channel"], "Y");
     let manifest = std::fs::read_to_string(out.join("manifest.jsonl")).unwrap();
     assert!(manifest.contains("samples/0000/000000.points.ply"));
+}
+
+#[test]
+fn the_rest_mesh_is_the_unbent_shape_for_bent_imports_and_the_still_beam_for_vibrations() {
+    // A box and an imported tetrahedron bent as beams: their rest mesh is the mesh of the same
+    // assembly unbent, vertex for vertex and face for face.
+    let dir = tempfile::tempdir().unwrap();
+    let tetra = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/tetra.obj");
+    std::fs::copy(tetra, dir.path().join("tetra.obj")).unwrap();
+    let bend = |length: f64| {
+        format!(
+            ".deform_as_beam(\"x\", \"-z\", beam(#{{ length: {length:?}, width: 0.2, height: 0.2 }}).point_load({:?}, 0.05))",
+            0.5 * length
+        )
+    };
+    let assembly = |bent: bool| {
+        let (box_bend, tetra_bend) = if bent {
+            (bend(2.0), bend(1.0))
+        } else {
+            (String::new(), String::new())
+        };
+        format!(
+            "assembly(\"bent\", [shape::box(2.0, 0.2, 0.2){box_bend}.translate(0.0, 0.0, 1.0), shape::mesh(\"tetra.obj\"){tetra_bend}.translate(2.0, 0.0, 0.0)])"
+        )
+    };
+    let camera = "width: 32, height: 24";
+    let mut meshes = Vec::new();
+    for bent in [true, false] {
+        let path = write(
+            dir.path(),
+            &format!("bent_{bent}.rhai"),
+            recipe(r#"["mesh"]"#, camera, "", &assembly(bent)),
+        );
+        let out = dir.path().join(format!("out_{bent}"));
+        ok(run(&path, &out, &[]));
+        let read = |kind| std::fs::read(sample_path(&out, 0, kind)).unwrap();
+        meshes.push((read("mesh.ply"), read("rest.ply")));
+    }
+    let ((bent, bent_rest), (still, still_rest)) = (&meshes[0], &meshes[1]);
+    assert!(bent_rest == still && still_rest == still && bent != still);
+
+    // A vibration snapshot moves the beam about its still position: the rest mesh is the
+    // analytic box.
+    let vibrating = BEAM.rhai(false).replace(
+        ".segments(400)",
+        ".segments(60).vibration([[1, 0.05], [3, 0.02]])",
+    );
+    let (_dir, out) = render(&recipe(r#"["mesh"]"#, camera, "", &vibrating), &[]);
+    let (rest, _) = ply_mesh(&sample_path(&out, 0, "rest.ply"));
+    let (loaded, _) = ply_mesh(&sample_path(&out, 0, "mesh.ply"));
+    assert!(rest.iter().all(|&p| BEAM.off_surface(p) < 1e-12));
+    assert!(loaded.iter().any(|&p| BEAM.off_surface(p) > 0.01));
+    for k in 0..3 {
+        let extent = rest.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+        assert_eq!(extent, 0.5 * [BEAM.length, BEAM.width, BEAM.height][k]);
+    }
 }

@@ -156,8 +156,9 @@ fn float_exr(
 mod tests {
     use super::*;
 
-    /// Reads a depth EXR back with the exr crate's own reader (a separate code path).
-    pub fn read_depth(bytes: &[u8]) -> (usize, usize, Vec<f32>) {
+    /// Reads an EXR back with the exr crate's own reader (a separate code path): its size and
+    /// every channel by name, which must be float32.
+    fn read_channels(bytes: &[u8]) -> ((usize, usize), Vec<(String, Vec<f32>)>) {
         let image = read()
             .no_deep_data()
             .largest_resolution_level()
@@ -166,15 +167,27 @@ mod tests {
             .all_attributes()
             .from_buffered(Cursor::new(bytes))
             .unwrap();
-        let layer = &image.layer_data[0];
         assert_eq!(image.layer_data.len(), 1);
-        assert_eq!(layer.channel_data.list.len(), 1);
-        let channel = &layer.channel_data.list[0];
-        assert_eq!(channel.name, Text::from(DEPTH_CHANNEL));
-        let FlatSamples::F32(values) = &channel.sample_data else {
-            panic!("depth must be f32")
-        };
-        (layer.size.width(), layer.size.height(), values.clone())
+        let layer = &image.layer_data[0];
+        let channels = layer.channel_data.list.iter().map(|channel| {
+            let FlatSamples::F32(values) = &channel.sample_data else {
+                panic!("float32 channels only")
+            };
+            (channel.name.to_string(), values.clone())
+        });
+        (
+            (layer.size.width(), layer.size.height()),
+            channels.collect(),
+        )
+    }
+
+    /// A depth EXR: its size and its one channel, which must be `Z`.
+    fn read_depth(bytes: &[u8]) -> (usize, usize, Vec<f32>) {
+        let ((w, h), mut channels) = read_channels(bytes);
+        assert_eq!(channels.len(), 1);
+        let (name, values) = channels.pop().unwrap();
+        assert_eq!(name, DEPTH_CHANNEL);
+        (w, h, values)
     }
 
     #[test]
@@ -211,22 +224,11 @@ mod tests {
             .map(|i| [i as f32, -0.5 * i as f32, 1e-7 * i as f32])
             .collect();
         let bytes = vector_exr((4, 3), ["X", "Y", "Z"], &values, ("note", "test")).unwrap();
-        let image = read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .all_layers()
-            .all_attributes()
-            .from_buffered(Cursor::new(&bytes))
-            .unwrap();
-        let channels = &image.layer_data[0].channel_data.list;
+        let ((w, h), channels) = read_channels(&bytes);
+        assert_eq!((w, h), (4, 3));
         for (k, name) in ["X", "Y", "Z"].iter().enumerate() {
-            let channel = channels
-                .iter()
-                .find(|c| c.name == Text::from(*name))
-                .unwrap();
-            let back: Vec<f32> = channel.sample_data.values_as_f32().collect();
-            assert_eq!(back, values.iter().map(|v| v[k]).collect::<Vec<_>>());
+            let (_, back) = channels.iter().find(|(n, _)| n == name).unwrap();
+            assert_eq!(*back, values.iter().map(|v| v[k]).collect::<Vec<_>>());
         }
         // Flow's channels come out in EXR's name order whatever order they are given in.
         let flow = vector_exr((2, 1), ["V", "U"], &[[1.0, 2.0], [3.0, 4.0]], ("n", "t")).unwrap();

@@ -206,24 +206,36 @@ fn glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Result<Vec<u8>> {
 mod tests {
     use super::*;
 
-    fn tetrahedron() -> (Vec<DVec3>, Vec<[u32; 3]>, Vec<u32>) {
-        let far = DVec3::new(5e6, -3e6, 120.0);
-        let positions = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(0.25, 0.25, 1.0)]
-            .map(|p| p + far)
-            .to_vec();
-        let triangles = vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]];
-        (positions, triangles, vec![1, 1, 2, 2])
+    /// A tetrahedron of two parts, far from the origin.
+    struct Tetrahedron {
+        positions: Vec<DVec3>,
+        triangles: Vec<[u32; 3]>,
+        parts: Vec<u32>,
+    }
+
+    impl Tetrahedron {
+        fn new() -> Self {
+            let far = DVec3::new(5e6, -3e6, 120.0);
+            let corners = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(0.25, 0.25, 1.0)];
+            Tetrahedron {
+                positions: corners.map(|p| p + far).to_vec(),
+                triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]],
+                parts: vec![1, 1, 2, 2],
+            }
+        }
+
+        fn layer(&self) -> MeshLayer<'_> {
+            MeshLayer {
+                positions: &self.positions,
+                triangles: &self.triangles,
+                parts: &self.parts,
+            }
+        }
     }
 
     #[test]
     fn ply_header_lists_the_elements_and_the_body_has_their_size() {
-        let (positions, triangles, parts) = tetrahedron();
-        let mesh = MeshLayer {
-            positions: &positions,
-            triangles: &triangles,
-            parts: &parts,
-        };
-        let bytes = mesh_ply(&mesh).unwrap();
+        let bytes = mesh_ply(&Tetrahedron::new().layer()).unwrap();
         let text = String::from_utf8_lossy(&bytes);
         let end = text.find("end_header\n").unwrap() + "end_header\n".len();
         assert!(text.starts_with("ply\nformat binary_little_endian 1.0\n"));
@@ -238,13 +250,7 @@ mod tests {
 
     #[test]
     fn glb_chunks_are_aligned_and_sized() {
-        let (positions, triangles, parts) = tetrahedron();
-        let mesh = MeshLayer {
-            positions: &positions,
-            triangles: &triangles,
-            parts: &parts,
-        };
-        let bytes = mesh_glb(&mesh).unwrap();
+        let bytes = mesh_glb(&Tetrahedron::new().layer()).unwrap();
         let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
         assert_eq!(&bytes[..4], b"glTF");
         assert_eq!(word(8), bytes.len());

@@ -141,6 +141,6 @@ pub fn flow(
             .first_hit(camera, moved / moved.z)
             .is_some_and(|(z, _)| f64::from(z) < moved.z * (1.0 - tolerance));
         let (u0, v0) = (f64::from(col) + 0.5, f64::from(row) + 0.5);
-        (!hidden).then(|| [(u - u0) as f32, (v - v0) as f32])
+        (!hidden).then_some([(u - u0) as f32, (v - v0) as f32])
     })
 }

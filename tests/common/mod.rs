@@ -252,6 +252,19 @@ impl View {
     }
 }
 
+/// How far `p` is from the surface of the box [−half, half], metres, inside or out.
+pub fn off_box(p: [f64; 3], half: [f64; 3]) -> f64 {
+    let outside = (0..3)
+        .map(|i| (p[i].abs() - half[i]).max(0.0).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let inside = (0..3)
+        .map(|i| half[i] - p[i].abs())
+        .fold(f64::INFINITY, f64::min)
+        .max(0.0);
+    outside.max(inside)
+}
+
 /// `m · [p, 1]`, the first three rows.
 pub fn transform(m: &[[f64; 4]; 4], p: [f64; 3]) -> [f64; 3] {
     std::array::from_fn(|i| m[i][0] * p[0] + m[i][1] * p[1] + m[i][2] * p[2] + m[i][3])
