@@ -7,7 +7,9 @@
 
 mod common;
 
-use common::{load, matrix, off_box, read_png, render, run, transform, view_path, write};
+use common::{
+    load, matrix, off_box, read_png, render, run, transform, undistort, view_path, write,
+};
 
 /// The box every test looks at: 2 × 1 × 0.5 m, centred on the origin.
 const HALF: [f64; 3] = [1.0, 0.5, 0.25];
@@ -183,21 +185,6 @@ fn photometric_copies_leave_depth_masks_and_labels_byte_identical() {
         let copied = std::fs::read(view_path(&out, 0, view, Some(0), "rgb.png")).unwrap();
         assert!(clean != copied, "the RGB image must change");
     }
-}
-
-/// OpenCV's undistortPoints iteration (its documentation's model, solved by fixed point):
-/// x ← (x_d − δ(x)) / radial(x), independent of shmgen's Newton solver.
-fn undistort(d: &[f64; 5], xd: f64, yd: f64) -> (f64, f64) {
-    let [k1, k2, p1, p2, k3] = *d;
-    let (mut x, mut y) = (xd, yd);
-    for _ in 0..200 {
-        let r2 = x * x + y * y;
-        let radial = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
-        let dx = 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
-        let dy = p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
-        (x, y) = ((xd - dx) / radial, (yd - dy) / radial);
-    }
-    (x, y)
 }
 
 /// Planar depth of the first hit of the camera ray (x, y, 1) with the box, slab method.

@@ -231,6 +231,35 @@ impl View {
         })
     }
 
+    /// The lens of the view, (k1, k2, p1, p2, k3) (all zero for a pinhole).
+    pub fn lens(&self) -> [f64; 5] {
+        let d = &self.json["camera"]["distortion"];
+        ["k1", "k2", "p1", "p2", "k3"].map(|k| d[k].as_f64().unwrap())
+    }
+
+    /// The world point pixel (row, col) sees, back-projected with the written K, lens and pose:
+    /// the pixel undistorted by OpenCV's model.
+    pub fn point_through_lens(&self, row: usize, col: usize) -> Option<[f64; 3]> {
+        let z = f64::from(self.depth[row * self.width + col]);
+        (z > 0.0).then(|| {
+            let k = self.k();
+            let (xd, yd) = (
+                (col as f64 + 0.5 - k[0][2]) / k[0][0],
+                (row as f64 + 0.5 - k[1][2]) / k[1][1],
+            );
+            let (x, y) = undistort(&self.lens(), xd, yd);
+            transform(&self.c2w(), [x * z, y * z, z])
+        })
+    }
+
+    /// Where world point `p` projects through the written pose, lens and K.
+    pub fn project_through_lens(&self, p: [f64; 3]) -> [f64; 2] {
+        let k = self.k();
+        let c = transform(&self.w2c(), p);
+        let (x, y) = distort(&self.lens(), c[0] / c[2], c[1] / c[2]);
+        [k[0][0] * x + k[0][2], k[1][1] * y + k[1][2]]
+    }
+
     /// Where world point `p` projects (pinhole), with its planar depth.
     pub fn project(&self, p: [f64; 3]) -> ([f64; 2], f64) {
         let k = self.k();
@@ -250,6 +279,34 @@ impl View {
             && (row - 1..=row + 1)
                 .all(|r| (col - 1..=col + 1).all(|c| self.mask[r * self.width + c] == 255))
     }
+}
+
+/// OpenCV's undistortPoints iteration (its documentation's model, solved by fixed point):
+/// x ← (x_d − δ(x)) / radial(x), independent of shmgen's Newton solver. `d` is
+/// (k1, k2, p1, p2, k3).
+pub fn undistort(d: &[f64; 5], xd: f64, yd: f64) -> (f64, f64) {
+    let (mut x, mut y) = (xd, yd);
+    for _ in 0..200 {
+        let (radial, dx, dy) = distortion_terms(d, x, y);
+        (x, y) = ((xd - dx) / radial, (yd - dy) / radial);
+    }
+    (x, y)
+}
+
+/// OpenCV's distortion of normalised coordinates (x, y): x·radial + δx, y·radial + δy.
+pub fn distort(d: &[f64; 5], x: f64, y: f64) -> (f64, f64) {
+    let (radial, dx, dy) = distortion_terms(d, x, y);
+    (x * radial + dx, y * radial + dy)
+}
+
+/// The radial factor and tangential terms of OpenCV's model at (x, y).
+fn distortion_terms(d: &[f64; 5], x: f64, y: f64) -> (f64, f64, f64) {
+    let [k1, k2, p1, p2, k3] = *d;
+    let r2 = x * x + y * y;
+    let radial = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
+    let dx = 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+    let dy = p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+    (radial, dx, dy)
 }
 
 /// How far `p` is from the surface of the box [−half, half], metres, inside or out.
