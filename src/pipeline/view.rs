@@ -127,7 +127,7 @@ impl<'a> SampleRenderer<'a> {
     /// over the undeformed vertices.
     fn rest(&self) -> &Traced {
         self.rest
-            .get_or_init(|| Traced::moved(&self.sample.mesh, &self.sample.rest))
+            .get_or_init(|| Traced::with_positions(&self.sample.mesh, &self.sample.rest))
     }
 
     /// The loaded structure with the undeformed position of every vertex.
@@ -285,12 +285,10 @@ impl ViewLayers for RenderedView<'_> {
     }
 
     fn flow(&self) -> Flow {
-        let rest = self.renderer.rest();
-        let rest_view = (&rest.mesh, &rest.bvh);
         let field = flow(
             self.rest_gbuffer(),
             &self.camera,
-            rest_view,
+            self.renderer.rest(),
             &self.renderer.deformed(),
         );
         Flow {

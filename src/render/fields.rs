@@ -8,7 +8,7 @@
 
 use super::shade::{facing_normal, hit_geometry};
 use super::surfaces::barycentric;
-use super::trace::{GBuffer, NO_HIT, TraceMesh};
+use super::trace::{GBuffer, NO_HIT, TraceMesh, Traced};
 use crate::cameras::Camera;
 use crate::geometry::Mesh;
 use glam::{DMat3, DVec3};
@@ -112,14 +112,14 @@ fn occlusion_tolerance(camera: &Camera) -> f64 {
 }
 
 /// Optical flow on the unloaded image: for each pixel of `rest_g` (the unloaded structure
-/// traced through `camera`), where its surface point lands in the loaded image, minus the
+/// `rest` traced through `camera`), where its surface point lands in the loaded image, minus the
 /// pixel centre, in pixels (through the lens, when it distorts). None where no surface is
 /// seen, where the point lands behind the camera or outside the frame, or where the loaded
 /// structure hides it (traced from the camera towards it).
 pub fn flow(
     rest_g: &GBuffer,
     camera: &Camera,
-    (rest_mesh, rest_traced): (&Mesh, &TraceMesh),
+    rest: &Traced,
     deformed: &Deformed,
 ) -> Vec<Option<[f32; 2]>> {
     let k = camera.intrinsics;
@@ -127,8 +127,8 @@ pub fn flow(
     let tolerance = occlusion_tolerance(camera);
     per_hit(rest_g, |row, col, tri, depth| {
         let view = k.ray_through_pixel(row, col);
-        let (p, _, _) = hit_geometry(camera, rest_traced, tri, view, depth);
-        let moved = camera.world_to_camera(carried(rest_mesh, tri, p, &deformed.mesh.positions));
+        let (p, _, _) = hit_geometry(camera, &rest.bvh, tri, view, depth);
+        let moved = camera.world_to_camera(carried(&rest.mesh, tri, p, &deformed.mesh.positions));
         if !(moved.z > 0.0) {
             return None;
         }

@@ -66,7 +66,7 @@ pub struct Traced {
 impl Traced {
     /// `mesh`'s triangles over other positions of its vertices (the unloaded ones, in the
     /// same order), with their BVH.
-    pub fn moved(mesh: &Mesh, positions: &[DVec3]) -> Self {
+    pub fn with_positions(mesh: &Mesh, positions: &[DVec3]) -> Self {
         let mesh = Mesh {
             positions: positions.to_vec(),
             triangles: mesh.triangles.clone(),
