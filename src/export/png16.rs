@@ -1,0 +1,43 @@
+//! `--format png16`: every view's depth as `samples/NNNN/{stem}.depth_mm.png`, 16-bit grey in
+//! whole millimetres (see `depth_mm`), mirroring the dataset's `samples/` folder, for loaders
+//! that read no OpenEXR.
+
+use super::depth_mm;
+use super::staging::Placer;
+use super::{Summary, needed};
+use crate::dataset::Dataset;
+use anyhow::Result;
+use serde_json::{Value, json};
+use std::path::Path;
+
+pub(super) fn write(
+    dataset: &Dataset,
+    out: &Path,
+    placer: &mut Placer,
+    summary: &mut Summary,
+) -> Result<Value> {
+    for view in dataset.views() {
+        let depth = needed(view, "depth.exr", "png16")?;
+        let (png, clamped) = depth_mm::png_of(&dataset.path(depth))?;
+        let target = format!("{}/{}.depth_mm.png", view.folder(), view.stem);
+        placer.write(&out.join(target), &png)?;
+        summary.views += 1;
+        summary.saturated += clamped.saturated;
+        summary.raised += clamped.raised;
+    }
+    Ok(json!({
+        "layout": "samples/{sample/1000:04}/{sample:06}_{view:02}[a{copy}].depth_mm.png",
+        "depth_mm": depth_record(summary),
+    }))
+}
+
+/// How depth was encoded, and how many pixels did not fit: for `export.json`.
+pub(super) fn depth_record(summary: &Summary) -> Value {
+    json!({
+        "encoding": "16-bit grey PNG, planar z in whole millimetres (rounded to nearest), 0 = no surface",
+        "saturated_pixels": summary.saturated,
+        "saturated_rule": "depth beyond 65.535 m written as 65535",
+        "raised_pixels": summary.raised,
+        "raised_rule": "depth closer than 0.5 mm written as 1, so no surface is lost",
+    })
+}
