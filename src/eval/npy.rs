@@ -242,7 +242,7 @@ mod tests {
                 "{'descr': '<i8', 'fortran_order': False, 'shape': (1,), }",
                 &[0; 8]
             ))
-            .contains("'<i8'")
+            .contains("\"<i8\" is not float32")
         );
         assert!(
             err(&npy(
