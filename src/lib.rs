@@ -14,13 +14,14 @@
 //! `pipeline` drives the steps for every sample and writes the typed records; `preview` serves
 //! the person writing a recipe (`watch`, `check`); `export` and `eval` serve the person using a
 //! finished dataset (other tools' layouts, metrics of predictions), reading it through
-//! `dataset`. Below them sit the domain modules the steps
-//! use: `mechanics` (beam theories, shells), `geometry` (meshes, outlines, mesh files),
-//! `materials` (how surfaces, light and backdrops look) and `cameras`. `seeds` derives every
+//! `dataset`. Below them sit the domain modules the steps use: `mechanics` (beam theories,
+//! shells), `geometry` (meshes, outlines, mesh files), `materials` (how surfaces, light and
+//! backdrops look) and `cameras`. `seeds` derives every
 //! random stream from (seed, sample, view, name); `words` suggests corrections for typos.
 //!
 //! Imports only point down this order: main → preview → pipeline → {recipe, build, render,
-//! output}; main → {export, eval} → dataset → output (eval also reads meshes with geometry); recipe → scene; build → {scene, mechanics, geometry, materials, cameras};
+//! output}; main → {export, eval} → dataset (export encodes with output, eval reads meshes
+//! with geometry); recipe → scene; build → {scene, mechanics, geometry, materials, cameras};
 //! render → {geometry, cameras, materials}. `output` and `geometry` import nothing else of the
 //! crate; the recipe asks `output` only which outputs exist.
 

@@ -10,7 +10,8 @@
 use crate::dataset::read_exr;
 use crate::output::{DEPTH_CHANNEL, grey16_png};
 use anyhow::{Result, bail};
-use std::path::Path;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
 
 /// Pixels that did not fit whole millimetres in 16 bits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -58,6 +59,11 @@ pub(super) fn png_of(path: &Path) -> Result<(Vec<u8>, Clamped)> {
         grey16_png(layer.width as u32, layer.height as u32, &mm),
         clamped,
     ))
+}
+
+/// `png_of` for each path, on every core, in the paths' order.
+pub(super) fn pngs_of(paths: &[PathBuf]) -> Result<Vec<(Vec<u8>, Clamped)>> {
+    paths.par_iter().map(|p| png_of(p)).collect()
 }
 
 #[cfg(test)]

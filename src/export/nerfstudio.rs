@@ -39,8 +39,17 @@ pub(super) fn write(
         // nerfstudio wants a mask (and a depth) for every frame or for none.
         let masks = views.iter().all(|v| v.file("mask.png").is_some());
         let depths = views.iter().all(|v| v.file("depth.exr").is_some());
+        let depth_pngs = if depths {
+            let paths: Vec<_> = views
+                .iter()
+                .map(|v| dataset.path(v.file("depth.exr").unwrap_or_default()))
+                .collect();
+            depth_mm::pngs_of(&paths)?.into_iter().map(Some).collect()
+        } else {
+            vec![None; views.len()]
+        };
         let mut list = Vec::with_capacity(views.len());
-        for (view, camera) in views.iter().zip(&cameras) {
+        for ((view, camera), depth_png) in views.iter().zip(&cameras).zip(depth_pngs) {
             let rgb = needed(view, "rgb.png", "nerfstudio")?;
             let image = format!("images/{}.png", view.stem);
             placer.place(&dataset.path(rgb), &scene.join(&image))?;
@@ -66,9 +75,7 @@ pub(super) fn write(
                 }
             }
             frame.insert("transform_matrix".into(), json!(camera.c2w_opengl));
-            if depths {
-                let exr = dataset.path(view.file("depth.exr").unwrap_or_default());
-                let (png, clamped) = depth_mm::png_of(&exr)?;
+            if let Some((png, clamped)) = depth_png {
                 let depth = format!("depth/{}.png", view.stem);
                 placer.write(&scene.join(&depth), &png)?;
                 summary.saturated += clamped.saturated;

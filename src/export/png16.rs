@@ -5,10 +5,13 @@
 use super::depth_mm;
 use super::staging::Placer;
 use super::{Summary, needed};
-use crate::dataset::Dataset;
+use crate::dataset::{Dataset, View};
 use anyhow::Result;
 use serde_json::{Value, json};
 use std::path::Path;
+
+/// Views converted together.
+const BATCH: usize = 64;
 
 pub(super) fn write(
     dataset: &Dataset,
@@ -16,14 +19,20 @@ pub(super) fn write(
     placer: &mut Placer,
     summary: &mut Summary,
 ) -> Result<Value> {
-    for view in dataset.views() {
-        let depth = needed(view, "depth.exr", "png16")?;
-        let (png, clamped) = depth_mm::png_of(&dataset.path(depth))?;
-        let target = format!("{}/{}.depth_mm.png", view.folder(), view.stem);
-        placer.write(&out.join(target), &png)?;
-        summary.views += 1;
-        summary.saturated += clamped.saturated;
-        summary.raised += clamped.raised;
+    let views: Vec<&View> = dataset.views().collect();
+    // Converted a batch at a time on every core, written in order: memory stays bounded.
+    for batch in views.chunks(BATCH) {
+        let paths = batch
+            .iter()
+            .map(|v| Ok(dataset.path(needed(v, "depth.exr", "png16")?)))
+            .collect::<Result<Vec<_>>>()?;
+        for (view, (png, clamped)) in batch.iter().zip(depth_mm::pngs_of(&paths)?) {
+            let target = format!("{}/{}.depth_mm.png", view.folder(), view.stem);
+            placer.write(&out.join(target), &png)?;
+            summary.views += 1;
+            summary.saturated += clamped.saturated;
+            summary.raised += clamped.raised;
+        }
     }
     Ok(json!({
         "layout": "samples/{sample/1000:04}/{sample:06}_{view:02}[a{copy}].depth_mm.png",
