@@ -20,7 +20,7 @@
 //! random stream from (seed, sample, view, name); `words` suggests corrections for typos.
 //!
 //! Imports only point down this order: main → preview → pipeline → {recipe, build, render,
-//! output}; main → {export, eval} → dataset (export encodes with output, eval reads meshes
+//! output}; main → {export, eval} → dataset (both write through output; eval reads meshes
 //! with geometry); recipe → scene; build → {scene, mechanics, geometry, materials, cameras};
 //! render → {geometry, cameras, materials}. `output` and `geometry` import nothing else of the
 //! crate; the recipe asks `output` only which outputs exist.

@@ -331,9 +331,7 @@ fn execute(command: Command) -> Result<()> {
             }
             print!("{}", report.text());
             if let Some(path) = json {
-                let mut bytes = serde_json::to_vec_pretty(&report)?;
-                bytes.push(b'\n');
-                shmgen::output::write_atomic(&path, &bytes)?;
+                report.write_json(&path)?;
             }
             Ok(())
         }

@@ -9,12 +9,10 @@ use std::path::{Path, PathBuf};
 const ALLOWED: &[(&str, &[&str])] = &[
     (
         "main",
-        &[
-            "preview", "pipeline", "recipe", "words", "export", "eval", "output",
-        ],
+        &["preview", "pipeline", "recipe", "words", "export", "eval"],
     ),
     ("export", &["dataset", "output"]),
-    ("eval", &["dataset", "geometry"]),
+    ("eval", &["dataset", "geometry", "output"]),
     ("dataset", &[]),
     (
         "preview",

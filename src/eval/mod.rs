@@ -20,6 +20,7 @@ pub use depth::Align;
 
 use crate::dataset::{Dataset, View, read_exr, read_grey_png};
 use crate::geometry::import::{import_mesh, import_surface};
+use crate::output::write_atomic;
 use anyhow::{Context, Result, bail};
 use predictions::Quantity;
 use rayon::prelude::*;
@@ -414,6 +415,13 @@ fn surfaces(
 }
 
 impl Report {
+    /// Writes the report as pretty JSON to `path`, atomically.
+    pub fn write_json(&self, path: &Path) -> Result<()> {
+        let mut bytes = serde_json::to_vec_pretty(self)?;
+        bytes.push(b'\n');
+        write_atomic(path, &bytes)
+    }
+
     /// The report for a person: one block per kind of prediction found.
     pub fn text(&self) -> String {
         let mut out = String::new();
