@@ -13,7 +13,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ),
     ("export", &["dataset", "output"]),
     ("eval", &["dataset", "geometry", "output"]),
-    ("dataset", &[]),
+    ("dataset", &["cameras"]),
     (
         "preview",
         &["pipeline", "recipe", "build", "output", "scene"],

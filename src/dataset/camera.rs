@@ -1,23 +1,9 @@
 //! A view's camera as its record (`camera` in the view's JSON) states it: size, K, the
 //! poses in both conventions and the Brown–Conrady coefficients of a distorted lens.
 
+use crate::cameras::Distortion;
 use anyhow::{Context, Result, bail};
 use serde_json::Value;
-
-/// OpenCV's Brown–Conrady coefficients, in OpenCV's order.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Distortion {
-    /// Radial r², r⁴.
-    pub k1: f64,
-    /// Radial r⁴.
-    pub k2: f64,
-    /// Tangential.
-    pub p1: f64,
-    /// Tangential.
-    pub p2: f64,
-    /// Radial r⁶.
-    pub k3: f64,
-}
 
 /// One view's camera; pixel (i, j) has its centre at (j + 0.5, i + 0.5).
 #[derive(Clone, Debug)]

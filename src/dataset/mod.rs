@@ -9,7 +9,7 @@
 mod camera;
 mod read;
 
-pub use camera::{Camera, Distortion};
+pub use camera::Camera;
 pub use read::{GreyImage, Layer, read_exr, read_grey_png};
 
 use anyhow::{Context, Result, bail};
@@ -58,13 +58,18 @@ pub struct View {
     pub files: Vec<String>,
 }
 
+/// The one of `files` of `kind`.
+fn of_kind<'a>(files: &'a [String], kind: &str) -> Option<&'a str> {
+    files
+        .iter()
+        .find(|f| kind_of(f) == Some(kind))
+        .map(String::as_str)
+}
+
 impl View {
     /// The file of `kind` (`rgb.png`, `depth.exr`, `json`, …), relative to the root.
     pub fn file(&self, kind: &str) -> Option<&str> {
-        self.files
-            .iter()
-            .find(|f| kind_of(f) == Some(kind))
-            .map(String::as_str)
+        of_kind(&self.files, kind)
     }
 
     /// The folder of its files relative to the root, e.g. `samples/0000`.
@@ -85,10 +90,7 @@ impl View {
 impl Sample {
     /// The per-sample file of `kind` (`mesh.ply`, `rest.ply`, …), relative to the root.
     pub fn file(&self, kind: &str) -> Option<&str> {
-        self.files
-            .iter()
-            .find(|f| kind_of(f) == Some(kind))
-            .map(String::as_str)
+        of_kind(&self.files, kind)
     }
 }
 

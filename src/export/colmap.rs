@@ -16,21 +16,14 @@
 //! (0.5, 0.5), as we do, so K's principal point is written unchanged. Numbers are written in
 //! the shortest form that reads back to the same f64.
 
-use super::staging::Placer;
-use super::{ExportOptions, Summary, frames, intrinsics, needed};
-use crate::dataset::{Camera, Dataset, View};
+use super::{Job, frames, intrinsics, needed};
+use crate::dataset::{Camera, View};
 use anyhow::{Result, bail};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
-use std::path::Path;
 
-pub(super) fn write(
-    dataset: &Dataset,
-    out: &Path,
-    options: &ExportOptions,
-    placer: &mut Placer,
-    summary: &mut Summary,
-) -> Result<Value> {
+pub(super) fn write(job: &mut Job) -> Result<Value> {
+    let (dataset, out, options) = (job.dataset, job.out, job.options);
     for (sample, views) in frames(dataset, options)? {
         let scene = out.join(format!("{sample:06}"));
         let mut cameras = String::from(
@@ -49,7 +42,8 @@ pub(super) fn write(
             let camera = dataset.camera(view)?;
             let name = format!("{}.png", view.stem);
             let rgb = needed(view, "rgb.png", "colmap")?;
-            placer.place(&dataset.path(rgb), &scene.join("images").join(&name))?;
+            job.placer
+                .place(&dataset.path(rgb), &scene.join("images").join(&name))?;
             writeln!(cameras, "{id} {}", camera_line(&camera, view)?)?;
             let [qw, qx, qy, qz] = quaternion(rotation(&camera, view)?);
             let t = camera.w2c_opencv;
@@ -58,12 +52,14 @@ pub(super) fn write(
                 "{id} {qw} {qx} {qy} {qz} {} {} {} {id} {name}\n",
                 t[0][3], t[1][3], t[2][3]
             )?;
-            summary.views += 1;
+            job.summary.views += 1;
         }
         let sparse = scene.join("sparse/0");
-        placer.write(&sparse.join("cameras.txt"), cameras.as_bytes())?;
-        placer.write(&sparse.join("images.txt"), images.as_bytes())?;
-        placer.write(
+        job.placer
+            .write(&sparse.join("cameras.txt"), cameras.as_bytes())?;
+        job.placer
+            .write(&sparse.join("images.txt"), images.as_bytes())?;
+        job.placer.write(
             &sparse.join("points3D.txt"),
             b"# 3D point list with one line of data per point:\n#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n# Number of points: 0, mean track length: 0\n",
         )?;

@@ -98,6 +98,16 @@ pub struct Summary {
     pub raised: u64,
 }
 
+/// What each format's writer works with: the dataset, the folder being written, the options,
+/// and the counts of what was done.
+struct Job<'a> {
+    dataset: &'a Dataset,
+    out: &'a Path,
+    options: &'a ExportOptions,
+    placer: Placer,
+    summary: Summary,
+}
+
 /// Exports the finished dataset at `source` as `options` say.
 pub fn export(source: &Path, options: &ExportOptions) -> Result<Summary> {
     let dataset = Dataset::open(source)?;
@@ -105,20 +115,24 @@ pub fn export(source: &Path, options: &ExportOptions) -> Result<Summary> {
         bail!("--shard-size 0: a shard holds at least one view");
     }
     let staging = Staging::create(&options.out, dataset.root())?;
-    let mut placer = Placer::new(options.copy);
-    let mut summary = Summary::default();
-    let extra = match options.format {
-        Format::Nerfstudio => {
-            nerfstudio::write(&dataset, staging.path(), options, &mut placer, &mut summary)?
-        }
-        Format::Colmap => {
-            colmap::write(&dataset, staging.path(), options, &mut placer, &mut summary)?
-        }
-        Format::Webdataset => {
-            webdataset::write(&dataset, staging.path(), options, &mut placer, &mut summary)?
-        }
-        Format::Png16 => png16::write(&dataset, staging.path(), &mut placer, &mut summary)?,
+    let mut job = Job {
+        dataset: &dataset,
+        out: staging.path(),
+        options,
+        placer: Placer::new(options.copy),
+        summary: Summary::default(),
     };
+    let extra = match options.format {
+        Format::Nerfstudio => nerfstudio::write(&mut job)?,
+        Format::Colmap => colmap::write(&mut job)?,
+        Format::Webdataset => webdataset::write(&mut job)?,
+        Format::Png16 => png16::write(&mut job)?,
+    };
+    let Job {
+        mut placer,
+        mut summary,
+        ..
+    } = job;
     let mut record = json!({
         "schema": "shmgen.export/1",
         "format": options.format.name(),

@@ -15,20 +15,12 @@
 //! OpenCV (`IMREAD_ANYDEPTH`, no EXR unless enabled) and multiplies by its
 //! `depth_unit_scale_factor`, whose default is 0.001.
 
-use super::staging::Placer;
-use super::{ExportOptions, Summary, depth_mm, frames, intrinsics, needed, png16};
-use crate::dataset::Dataset;
+use super::{Job, depth_mm, frames, intrinsics, needed, png16};
 use anyhow::Result;
 use serde_json::{Map, Value, json};
-use std::path::Path;
 
-pub(super) fn write(
-    dataset: &Dataset,
-    out: &Path,
-    options: &ExportOptions,
-    placer: &mut Placer,
-    summary: &mut Summary,
-) -> Result<Value> {
+pub(super) fn write(job: &mut Job) -> Result<Value> {
+    let (dataset, out, options) = (job.dataset, job.out, job.options);
     for (sample, views) in frames(dataset, options)? {
         let scene = out.join(format!("{sample:06}"));
         let cameras = views
@@ -52,7 +44,7 @@ pub(super) fn write(
         for ((view, camera), depth_png) in views.iter().zip(&cameras).zip(depth_pngs) {
             let rgb = needed(view, "rgb.png", "nerfstudio")?;
             let image = format!("images/{}.png", view.stem);
-            placer.place(&dataset.path(rgb), &scene.join(&image))?;
+            job.placer.place(&dataset.path(rgb), &scene.join(&image))?;
             let [fx, fy, cx, cy] = intrinsics(&camera.k, view)?;
             let mut frame = Map::new();
             frame.insert("file_path".into(), json!(image));
@@ -77,19 +69,19 @@ pub(super) fn write(
             frame.insert("transform_matrix".into(), json!(camera.c2w_opengl));
             if let Some((png, clamped)) = depth_png {
                 let depth = format!("depth/{}.png", view.stem);
-                placer.write(&scene.join(&depth), &png)?;
-                summary.saturated += clamped.saturated;
-                summary.raised += clamped.raised;
+                job.placer.write(&scene.join(&depth), &png)?;
+                job.summary.saturated += clamped.saturated;
+                job.summary.raised += clamped.raised;
                 frame.insert("depth_file_path".into(), json!(depth));
             }
             if masks {
                 let mask = format!("masks/{}.png", view.stem);
                 let from = dataset.path(view.file("mask.png").unwrap_or_default());
-                placer.place(&from, &scene.join(&mask))?;
+                job.placer.place(&from, &scene.join(&mask))?;
                 frame.insert("mask_path".into(), json!(mask));
             }
             list.push(Value::Object(frame));
-            summary.views += 1;
+            job.summary.views += 1;
         }
         let transforms = json!({
             "camera_model": if distorted { "OPENCV" } else { "PINHOLE" },
@@ -100,11 +92,11 @@ pub(super) fn write(
         });
         let mut bytes = serde_json::to_vec_pretty(&transforms)?;
         bytes.push(b'\n');
-        placer.write(&scene.join("transforms.json"), &bytes)?;
+        job.placer.write(&scene.join("transforms.json"), &bytes)?;
     }
     Ok(json!({
         "layout": "{sample:06}/transforms.json with images/, depth/ (16-bit mm), masks/",
-        "depth_mm": png16::depth_record(summary),
+        "depth_mm": png16::depth_record(&job.summary),
         "nerfstudio_arguments": "nerfstudio-data --orientation-method none --center-method none --auto-scale-poses False keeps metric, z-up poses",
     }))
 }

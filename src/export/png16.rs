@@ -3,22 +3,16 @@
 //! that read no OpenEXR.
 
 use super::depth_mm;
-use super::staging::Placer;
-use super::{Summary, needed};
-use crate::dataset::{Dataset, View};
+use super::{Job, Summary, needed};
+use crate::dataset::View;
 use anyhow::Result;
 use serde_json::{Value, json};
-use std::path::Path;
 
 /// Views converted together.
 const BATCH: usize = 64;
 
-pub(super) fn write(
-    dataset: &Dataset,
-    out: &Path,
-    placer: &mut Placer,
-    summary: &mut Summary,
-) -> Result<Value> {
+pub(super) fn write(job: &mut Job) -> Result<Value> {
+    let (dataset, out) = (job.dataset, job.out);
     let views: Vec<&View> = dataset.views().collect();
     // Converted a batch at a time on every core, written in order: memory stays bounded.
     for batch in views.chunks(BATCH) {
@@ -28,15 +22,15 @@ pub(super) fn write(
             .collect::<Result<Vec<_>>>()?;
         for (view, (png, clamped)) in batch.iter().zip(depth_mm::pngs_of(&paths)?) {
             let target = format!("{}/{}.depth_mm.png", view.folder(), view.stem);
-            placer.write(&out.join(target), &png)?;
-            summary.views += 1;
-            summary.saturated += clamped.saturated;
-            summary.raised += clamped.raised;
+            job.placer.write(&out.join(target), &png)?;
+            job.summary.views += 1;
+            job.summary.saturated += clamped.saturated;
+            job.summary.raised += clamped.raised;
         }
     }
     Ok(json!({
         "layout": "samples/{sample/1000:04}/{sample:06}_{view:02}[a{copy}].depth_mm.png",
-        "depth_mm": depth_record(summary),
+        "depth_mm": depth_record(&job.summary),
     }))
 }
 

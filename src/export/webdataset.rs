@@ -8,8 +8,7 @@
 //! Shards are byte-for-byte deterministic: views in sample, view, copy order; POSIX ustar
 //! headers with mode 0644, uid and gid 0, empty owner names and mtime 0.
 
-use super::staging::Placer;
-use super::{ExportOptions, Summary};
+use super::Job;
 use crate::dataset::{Dataset, View};
 use anyhow::{Context, Result};
 use serde_json::{Value, json};
@@ -17,21 +16,16 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
-pub(super) fn write(
-    dataset: &Dataset,
-    out: &Path,
-    options: &ExportOptions,
-    placer: &mut Placer,
-    summary: &mut Summary,
-) -> Result<Value> {
+pub(super) fn write(job: &mut Job) -> Result<Value> {
+    let (dataset, out, options) = (job.dataset, job.out, job.options);
     let views: Vec<&View> = dataset.views().collect();
     let mut shards = Vec::new();
     for (k, chunk) in views.chunks(options.shard_size).enumerate() {
         let name = format!("shard-{k:06}.tar");
         let path = out.join(&name);
         write_shard(dataset, &path, chunk).with_context(|| format!("writing {name}"))?;
-        placer.written += 1;
-        summary.views += chunk.len();
+        job.placer.written += 1;
+        job.summary.views += chunk.len();
         shards.push(json!({
             "file": name,
             "views": chunk.len(),

@@ -107,16 +107,22 @@ pub fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
 
-/// 8-bit PNG through the `png` crate: (width, height, channels, samples).
-pub fn read_png(path: &Path) -> (usize, usize, usize, Vec<u8>) {
+/// A PNG through the `png` crate: its frame information and bytes.
+fn decode_png(path: &Path) -> (png::OutputInfo, Vec<u8>) {
     let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut reader = png::Decoder::new(std::io::BufReader::new(file))
         .read_info()
         .unwrap();
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
     let info = reader.next_frame(&mut buf).unwrap();
-    assert_eq!(info.bit_depth, png::BitDepth::Eight);
     buf.truncate(info.buffer_size());
+    (info, buf)
+}
+
+/// 8-bit PNG through the `png` crate: (width, height, channels, samples).
+pub fn read_png(path: &Path) -> (usize, usize, usize, Vec<u8>) {
+    let (info, buf) = decode_png(path);
+    assert_eq!(info.bit_depth, png::BitDepth::Eight);
     let (w, h) = (info.width as usize, info.height as usize);
     (w, h, buf.len() / (w * h), buf)
 }
@@ -170,17 +176,12 @@ pub fn manifest_files(out: &Path) -> Vec<String> {
 
 /// A 16-bit grey PNG through the `png` crate: (width, height, samples).
 pub fn read_png16(path: &Path) -> (usize, usize, Vec<u16>) {
-    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
-        .read_info()
-        .unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
+    let (info, buf) = decode_png(path);
     assert_eq!(
         (info.bit_depth, info.color_type),
         (png::BitDepth::Sixteen, png::ColorType::Grayscale)
     );
-    let values = buf[..info.buffer_size()]
+    let values = buf
         .chunks_exact(2)
         .map(|b| u16::from_be_bytes([b[0], b[1]]))
         .collect();
