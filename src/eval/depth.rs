@@ -106,7 +106,7 @@ pub(super) fn score(
         let e = d - t;
         let ratio = (d / t).max(t / d);
         let log = d.ln() - t.ln();
-        for (sum, v) in sums.iter_mut().zip([
+        let values = [
             e.abs() / t,
             e * e / t,
             e * e,
@@ -114,7 +114,14 @@ pub(super) fn score(
             f64::from(u8::from(ratio < 1.25)),
             f64::from(u8::from(ratio < 1.25 * 1.25)),
             f64::from(u8::from(ratio < 1.25 * 1.25 * 1.25)),
-        ]) {
+        ];
+        // A value so large its square overflows would make every mean infinite: left out
+        // like a non-finite one, so no metric is ever infinite.
+        if values.iter().any(|v| !v.is_finite()) {
+            excluded += 1;
+            continue;
+        }
+        for (sum, v) in sums.iter_mut().zip(values) {
             *sum += v;
         }
         pixels += 1;
@@ -229,6 +236,12 @@ mod tests {
             Align::None,
         );
         assert_eq!((r.pixels, r.excluded), (1, 1));
+        let huge = score(&[1.0, 1.0], &[1e200, 1.0], &[true; 2], Align::None);
+        assert_eq!(
+            (huge.pixels, huge.excluded),
+            (1, 1),
+            "(1e200)² overflows: left out"
+        );
         assert_eq!(r.metrics.unwrap()[0], 0.0);
         assert!(
             score(&[1.0, 2.0], &[3.0, 3.0], &[true; 2], Align::LstsqShift)

@@ -1,6 +1,7 @@
 //! End-point error of a vector field (optical flow in pixels, displacement in metres): the
 //! Euclidean norm ‖f − f*‖ per valid pixel, where the truth is valid and the prediction is
-//! finite (a non-finite prediction is left out and counted); the image's mean and median.
+//! finite (a non-finite prediction, or one so far off that the error overflows, is left out
+//! and counted); the image's mean and median.
 
 use super::stats::median;
 
@@ -31,6 +32,12 @@ pub(super) fn score(truth: &[Vec<f32>], prediction: &[Vec<f64>], valid: &[bool])
             .zip(prediction)
             .map(|(t, p)| (p[i] - f64::from(t[i])).powi(2))
             .sum();
+        // An error whose square overflows is left out like a non-finite prediction, so the
+        // means stay finite.
+        if !squared.is_finite() {
+            excluded += 1;
+            continue;
+        }
         errors.push(squared.sqrt());
     }
     let pixels = errors.len() as u64;
