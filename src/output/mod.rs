@@ -15,7 +15,9 @@ mod folder;
 mod lock;
 mod writers;
 
-pub use encode::{DEPTH_CHANNEL, MAX_SEGMENTATION_ID, depth_exr, id_png, mask_png, rgb_png};
+pub use encode::{
+    DEPTH_CHANNEL, MAX_SEGMENTATION_ID, depth_exr, grey16_png, id_png, mask_png, rgb_png,
+};
 pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, write_atomic};
 pub use writers::{DEFAULT_OUTPUTS, ViewLayers, WRITERS, Writer, output_names};
 
