@@ -86,7 +86,7 @@ fn report(image: &[u8]) {
     let rows: Vec<(&str, Op)> = vec![
         (
             "colour jitter (all four)",
-            Box::new(|i| colour_jitter(i, w, h, &jitter)),
+            Box::new(|i| colour_jitter(i, w, h, &jitter, None)),
         ),
         (
             "exposure",
@@ -136,7 +136,7 @@ fn report(image: &[u8]) {
         ),
         (
             "erase 3 rects",
-            Box::new(|i| drop(erase(i, w, h, &erasing))),
+            Box::new(|i| drop(erase(i, w, h, &erasing, None))),
         ),
         (
             "warp rgb (bilinear)",

@@ -2,6 +2,8 @@
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
+use shmgen::eval::{self, Align, EvalOptions, Mask};
+use shmgen::export::{self, ExportOptions, Format};
 use shmgen::pipeline::{self, RunOptions, Shard};
 use shmgen::preview::{self, PreviewOptions, Size, WatchOptions};
 use shmgen::recipe::Recipe;
@@ -102,6 +104,50 @@ enum Command {
         /// Worker threads for the timed render and the estimate, 1 to 1024 (default: every core).
         #[arg(long, value_parser = parse_threads)]
         threads: Option<usize>,
+    },
+    /// Convert a finished dataset for other tools (nothing is rendered again): nerfstudio
+    /// scenes, COLMAP text models, WebDataset tar shards or 16-bit millimetre depth PNGs.
+    Export {
+        /// The dataset folder (`shmgen run --out`), finished.
+        dataset: PathBuf,
+        /// nerfstudio, colmap, webdataset or png16.
+        #[arg(long, value_parser = str::parse::<Format>)]
+        format: Format,
+        /// The folder to create (it must not exist; it appears only when complete).
+        #[arg(long)]
+        out: PathBuf,
+        /// webdataset: views per tar shard.
+        #[arg(long, value_name = "N", default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..))]
+        shard_size: u64,
+        /// Copy images instead of hard-linking them to the dataset's.
+        #[arg(long)]
+        copy: bool,
+        /// nerfstudio, colmap: also make frames of augmented copies of views.
+        #[arg(long)]
+        with_copies: bool,
+    },
+    /// Score predictions against a finished dataset: depth metrics (AbsRel, SqRel, RMSE,
+    /// RMSE log, δ), Chamfer distance and F-score of surfaces, flow and displacement EPE.
+    Eval {
+        /// The dataset folder, finished.
+        dataset: PathBuf,
+        /// Predictions mirroring the dataset's samples/ folder (e.g. 0000/000003_01.depth.exr).
+        predictions: PathBuf,
+        /// Also write the report as JSON to this file.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Per-image alignment of depth: none, median, lstsq or lstsq_shift.
+        #[arg(long, default_value = "none", value_parser = str::parse::<Align>)]
+        align: Align,
+        /// Depth pixels scored: structure (mask > 0) or valid (all with true depth).
+        #[arg(long, default_value = "structure", value_parser = str::parse::<Mask>)]
+        mask: Mask,
+        /// F-score threshold τ in metres.
+        #[arg(long, value_name = "METRES", default_value_t = 0.01)]
+        fscore_threshold: f64,
+        /// Points sampled on each mesh (true and predicted) for Chamfer distance and F-score.
+        #[arg(long, value_name = "N", default_value_t = 100_000, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+        surface_samples: u64,
     },
 }
 
@@ -218,5 +264,76 @@ fn execute(command: Command) -> Result<()> {
             sets,
             threads,
         } => preview::check(&recipe, &sets, threads),
+        Command::Export {
+            dataset,
+            format,
+            out,
+            shard_size,
+            copy,
+            with_copies,
+        } => {
+            let started = std::time::Instant::now();
+            let summary = export::export(
+                &dataset,
+                &ExportOptions {
+                    format,
+                    out: out.clone(),
+                    shard_size: usize::try_from(shard_size).unwrap_or(usize::MAX),
+                    copy,
+                    with_copies,
+                },
+            )?;
+            if summary.saturated > 0 {
+                eprintln!(
+                    "warning: {} depth pixels beyond 65.535 m were written as 65535 mm",
+                    summary.saturated
+                );
+            }
+            if summary.raised > 0 {
+                eprintln!(
+                    "warning: {} depth pixels closer than 0.5 mm were written as 1 mm (0 means no surface)",
+                    summary.raised
+                );
+            }
+            println!(
+                "done: {} views exported as {} in {:.2} s to {} ({} files linked, {} copied, {} written)",
+                summary.views,
+                format.name(),
+                started.elapsed().as_secs_f64(),
+                out.display(),
+                summary.linked,
+                summary.copied,
+                summary.written
+            );
+            Ok(())
+        }
+        Command::Eval {
+            dataset,
+            predictions,
+            json,
+            align,
+            mask,
+            fscore_threshold,
+            surface_samples,
+        } => {
+            let report = eval::evaluate(
+                &dataset,
+                &predictions,
+                &EvalOptions {
+                    align,
+                    mask,
+                    fscore_threshold,
+                    surface_samples: usize::try_from(surface_samples).unwrap_or(usize::MAX),
+                },
+            )?;
+            for warning in report.warnings() {
+                eprintln!("warning: {warning}");
+            }
+            print!("{}", report.text());
+            if let Some(path) = json {
+                report.write_json(&path)?;
+            }
+            Ok(())
+        }
     }
 }

@@ -8,8 +8,10 @@
 mod common;
 
 use common::{
-    load, matrix, off_box, read_png, render, run, transform, undistort, view_path, write,
+    View, load, matrix, off_box, ok, read_json, read_png, render, run, transform, view_path, write,
 };
+use serde_json::Value;
+use std::path::{Path, PathBuf};
 
 /// The box every test looks at: 2 × 1 × 0.5 m, centred on the origin.
 const HALF: [f64; 3] = [1.0, 0.5, 0.25];
@@ -24,6 +26,20 @@ fn box_recipe(camera: &str, augment: &str) -> String {
             scene: |rng| assembly(\"box\", [shape::box(2.0, 1.0, 0.5)]),
         }})\n"
     )
+}
+
+/// The box seen by `camera`, with two copies made by `operations` warping the rendered
+/// images, and again rendering them exactly: (folders to keep, image mode, exact mode).
+fn both_modes(camera: &str, operations: &str) -> ([tempfile::TempDir; 2], PathBuf, PathBuf) {
+    let recipe = |mode: &str| {
+        box_recipe(
+            camera,
+            &format!("augment: #{{ copies: 2, mode: \"{mode}\", {operations} }},"),
+        )
+    };
+    let (image_dir, image) = render(&recipe("image"), &[]);
+    let (exact_dir, exact) = render(&recipe("exact"), &[]);
+    ([image_dir, exact_dir], image, exact)
 }
 
 #[test]
@@ -77,13 +93,7 @@ fn exact_geometric_copies_back_project_onto_the_box_and_agree_across_views() {
 fn image_space_warps_agree_with_the_exact_render_and_their_record() {
     let camera = "width: 160, height: 120, pitch: [0.3, 0.9], yaw: [0.2, 1.3]";
     let operations = "operations: [#{ op: \"warp\", zoom: [0.9, 1.2], rotation: [-0.6, 0.6], shift_x: [-0.05, 0.05], shift_y: 0.0, probability: 1.0 }]";
-    let image = box_recipe(
-        camera,
-        &format!("augment: #{{ copies: 2, mode: \"image\", {operations} }},"),
-    );
-    let exact = box_recipe(camera, &format!("augment: #{{ copies: 2, {operations} }},"));
-    let (_a, warped) = render(&image, &[]);
-    let (_b, rendered) = render(&exact, &[]);
+    let (_dirs, warped, rendered) = both_modes(camera, operations);
     for view in 0..3 {
         let clean = load(&warped, view, None);
         for copy in [0, 1] {
@@ -200,6 +210,31 @@ fn box_depth(c2w: &[[f64; 4]; 4], x: f64, y: f64) -> Option<f64> {
     (t0 <= t1 && t0 > 0.0).then_some(t0)
 }
 
+/// Checks every pixel of `v` against the box: where its ray (the written camera's, undistorted
+/// as OpenCV does) meets the box, the depth written is that hit's; elsewhere nothing, but for
+/// the silhouette. Returns the pixels that see the box.
+fn assert_depth_is_the_box_through_the_written_lens(v: &View) -> usize {
+    let mut hits = 0;
+    for row in 0..v.height {
+        for col in 0..v.width {
+            let (x, y) = v.ray(row, col);
+            let truth = box_depth(&v.c2w(), x, y);
+            let z = v.depth[row * v.width + col];
+            match truth {
+                Some(t) if z > 0.0 => {
+                    hits += 1;
+                    let off = (f64::from(z) - t).abs();
+                    assert!(off < 1e-5 * t, "({row},{col}) {z} vs {t}");
+                }
+                None if z == 0.0 => {}
+                // Coverage may differ only along the silhouette.
+                _ => assert!(!v.inside(row, col), "({row},{col}) {z} vs {truth:?}"),
+            }
+        }
+    }
+    hits
+}
+
 #[test]
 fn a_distorted_render_is_the_pinhole_render_seen_through_opencvs_lens_model() {
     let lens = "distortion: #{ k1: -0.25, k2: 0.06, p1: 0.0012, p2: -0.0008, k3: -0.004 }";
@@ -219,49 +254,126 @@ fn a_distorted_render_is_the_pinhole_render_seen_through_opencvs_lens_model() {
         let v = load(&distorted, view, None);
         let p = load(&pinhole, view, None);
         assert_eq!(v.json["camera"]["model"], "opencv");
-        let d = &v.json["camera"]["distortion"];
-        let coefficients = ["k1", "k2", "p1", "p2", "k3"].map(|k| d[k].as_f64().unwrap());
+        // Each distorted pixel's ray, undistorted by OpenCV's model, meets the box at the
+        // depth written.
+        let hits = assert_depth_is_the_box_through_the_written_lens(&v);
+        // And the pinhole render sees the same point where OpenCV's undistortion sends the
+        // pixel.
         let k = v.k();
-        let (mut agree, mut hits) = (0, 0);
+        let mut agree = 0;
         for row in 0..150 {
             for col in 0..200 {
-                // Each distorted pixel's ray, undistorted by OpenCV's model, meets the box at
-                // the depth written.
-                let (xd, yd) = (
-                    (col as f64 + 0.5 - k[0][2]) / k[0][0],
-                    (row as f64 + 0.5 - k[1][2]) / k[1][1],
-                );
-                let (x, y) = undistort(&coefficients, xd, yd);
-                let truth = box_depth(&v.c2w(), x, y);
-                let z = v.depth[row * 200 + col];
-                match truth {
-                    Some(t) if z > 0.0 => {
-                        hits += 1;
-                        assert!(
-                            (f64::from(z) - t).abs() < 1e-5 * t,
-                            "({row},{col}) {z} vs {t}"
-                        );
-                        // And the pinhole render sees the same point where OpenCV's
-                        // undistortion sends the pixel.
-                        let (u, w) = (k[0][0] * x + k[0][2], k[1][1] * y + k[1][2]);
-                        let (c, r) = (u.floor() as isize, w.floor() as isize);
-                        if (1..199).contains(&c)
-                            && (1..149).contains(&r)
-                            && p.inside(r as usize, c as usize)
-                        {
-                            let there = f64::from(p.depth[r as usize * 200 + c as usize]);
-                            if (there - t).abs() < 0.02 * t {
-                                agree += 1;
-                            }
-                        }
+                let (x, y) = v.ray(row, col);
+                let Some(t) = box_depth(&v.c2w(), x, y) else {
+                    continue;
+                };
+                let (u, w) = (k[0][0] * x + k[0][2], k[1][1] * y + k[1][2]);
+                let (c, r) = (u.floor() as isize, w.floor() as isize);
+                if v.depth[row * 200 + col] > 0.0
+                    && (1..199).contains(&c)
+                    && (1..149).contains(&r)
+                    && p.inside(r as usize, c as usize)
+                {
+                    let there = f64::from(p.depth[r as usize * 200 + c as usize]);
+                    if (there - t).abs() < 0.02 * t {
+                        agree += 1;
                     }
-                    None if z == 0.0 => {}
-                    // Coverage may differ only along the silhouette.
-                    _ => assert!(!v.inside(row, col), "({row},{col}) {z} vs {truth:?}"),
                 }
             }
         }
         assert!(hits > 1000 && agree * 10 > hits * 8, "{agree}/{hits}");
+    }
+}
+
+/// A fixed rig of three cameras around the box, `size` pixels, field of view `fov_y`, with
+/// `lens`.
+fn lens_rig(size: &str, fov_y: &str, lens: &str) -> String {
+    format!(
+        "{size}, fov_y: {fov_y}, distortion: #{{ {lens} }}, fixed: [#{{ position: [4.0, -3.0, 2.0] }}, #{{ position: [-3.5, -2.0, -1.0] }}, #{{ position: [0.5, 4.0, 3.0] }}]"
+    )
+}
+
+#[test]
+fn an_exact_zoom_out_past_the_lens_fold_is_refused_and_within_it_every_pixel_has_its_ray() {
+    // k1 = −0.19 at 60° on a square image: the lens is one-to-one out to a distorted radius
+    // of about 0.88, just past the clean corners (0.816); zooming out to 0.8 would show it out
+    // to 1.02.
+    let lens = "k1: -0.19, p1: 0.002, p2: -0.0015";
+    let rig = lens_rig("width: 96, height: 96", "deg(60)", lens);
+    let warp = |zoom: &str| {
+        format!(
+            "augment: #{{ copies: 2, operations: [#{{ op: \"warp\", zoom: {zoom}, rotation: [-3.0, 3.0], shift_x: [-0.002, 0.002], shift_y: 0.0, probability: 1.0 }}] }},"
+        )
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let refused = write(dir.path(), "r.rhai", box_recipe(&rig, &warp("0.8")));
+    let output = run(&refused, &dir.path().join("out"), &[]);
+    let text = common::stderr(&output);
+    assert!(!output.status.success(), "{text}");
+    for part in [
+        "operations[0] (warp).zoom = 0.8",
+        "k1 = -0.19",
+        "no ray",
+        "r.rhai:1:1",
+    ] {
+        assert!(text.contains(part), "{part}: {text}");
+    }
+    assert!(!dir.path().join("out").exists());
+    // Zoomed out a little only (and turned, and shifted): every pixel of every copy has the
+    // ray of the camera written with it.
+    let recipe = box_recipe(&rig, &warp("[1.0, 1.2]"));
+    let (_dir, out) = render(&recipe, &[]);
+    for view in 0..3 {
+        for copy in [None, Some(0), Some(1)] {
+            let v = load(&out, view, copy);
+            assert!(assert_depth_is_the_box_through_the_written_lens(&v) > 300);
+        }
+    }
+}
+
+#[test]
+fn image_space_warps_of_a_decentred_lens_are_reproduced_by_the_written_camera() {
+    // Tangential distortion turns with the picture: the copy's written K, pose and lens must
+    // send each surface point where the warp moved its pixel.
+    let lens = "k1: -0.12, p1: 0.01, p2: -0.01";
+    let operations = "operations: [#{ op: \"warp\", zoom: [0.95, 1.1], rotation: [0.7, 2.5], shift_x: [-0.05, 0.05], shift_y: 0.03, probability: 1.0 }]";
+    let camera = lens_rig("width: 100, height: 80", "0.9", lens);
+    let (_dirs, warped, rendered) = both_modes(&camera, operations);
+    for view in 0..3 {
+        let clean = load(&warped, view, None);
+        for copy in [0, 1] {
+            let w = load(&warped, view, Some(copy));
+            // Both modes write one camera: the exact render is through it.
+            assert_eq!(
+                w.json["camera"],
+                load(&rendered, view, Some(copy)).json["camera"]
+            );
+            let sim = &w.json["augmentation"]["operations"][0];
+            let number = |v: &Value| v.as_f64().unwrap();
+            let (s, a) = (number(&sim["zoom"]), number(&sim["angle"]));
+            let (c, t) = (&sim["centre"], &sim["shift"]);
+            let mut checked = 0;
+            for row in 0..80 {
+                for col in 0..100 {
+                    let Some(p) = clean.point_through_lens(row, col) else {
+                        continue;
+                    };
+                    let (x, y) = (
+                        col as f64 + 0.5 - number(&c[0]),
+                        row as f64 + 0.5 - number(&c[1]),
+                    );
+                    let moved = [
+                        s * (a.cos() * x - a.sin() * y) + number(&c[0]) + number(&t[0]),
+                        s * (a.sin() * x + a.cos() * y) + number(&c[1]) + number(&t[1]),
+                    ];
+                    let projected = w.project_through_lens(p);
+                    let off = (projected[0] - moved[0]).hypot(projected[1] - moved[1]);
+                    assert!(off < 1e-6, "view {view} copy {copy}: {off} px");
+                    checked += 1;
+                }
+            }
+            assert!(checked > 100, "{checked}");
+        }
     }
 }
 
@@ -351,6 +463,21 @@ fn degenerate_rigs_are_clear_errors_at_the_recipe() {
             "fixed: [#{ position: [0.0, 0.0, 3.0] }]",
             "each view is one fixed camera",
         ),
+        (
+            "orbit: #{ sweep: 0.0 }",
+            "sweep = 0 puts all 3 views at one azimuth",
+        ),
+        ("orbit: #{ sweep: deg(720) }", "whole number of turns"),
+        // The box's centre is the origin: a camera there, looking at the default target (the
+        // centre), or a flight line whose middle view stands there.
+        (
+            "fixed: [#{ position: [0.0, 0.0, 0.0] }, #{ position: [1.0, 0.0, 3.0] }, #{ position: [2.0, 0.0, 3.0] }]",
+            "dataset.camera.fixed[0] stands at (0, 0, 0), the very point it aims at",
+        ),
+        (
+            "line: #{ from: [-3.0, 0.0, 0.0], to: [3.0, 0.0, 0.0] }",
+            "dataset.camera.line, view 1, stands at (0, 0, 0)",
+        ),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let path = write(
@@ -361,9 +488,207 @@ fn degenerate_rigs_are_clear_errors_at_the_recipe() {
         let output = run(&path, &dir.path().join("out"), &[]);
         let text = common::stderr(&output);
         assert!(
-            !output.status.success() && text.contains(expected),
+            !output.status.success() && text.contains(expected) && text.contains("r.rhai:1:1"),
             "{camera}: {text}"
         );
+        assert!(!text.contains("NaN"), "{text}");
         assert!(!dir.path().join("out").exists());
+    }
+}
+
+#[test]
+fn augmentation_and_camera_options_are_checked_by_name() {
+    let op = |fields: &str| format!("augment: #{{ copies: 1, operations: [{fields}] }},");
+    for (camera, augment, expected) in [
+        (
+            "",
+            op("#{ op: \"erase\", count: 1, area: 0.1, aspect: 1.0, fil: \"noise\", probability: 1.0 }"),
+            "unknown option `dataset.augment.operations[0] (erase).fil`; did you mean `fill`?",
+        ),
+        (
+            "",
+            op("#{ op: \"noise\", model: \"gaussian\", sigma: 0.02, units: \"fraction\", probability: 1.0 }"),
+            "unknown option `dataset.augment.operations[0] (noise).units`; did you mean `unit`?",
+        ),
+        (
+            "",
+            "augment: #{ copies: 1, operations: #{ op: \"gamma\", gamma: 1.0, probability: 1.0 } },".into(),
+            "dataset.augment.operations = #{",
+        ),
+        (
+            "",
+            op("#{ op: \"gamma\", gamma: 1.0, probability: [0.1, 0.2] }"),
+            "dataset.augment.operations[0] (gamma).probability = [0.1, 0.2] (array) must be a number",
+        ),
+        (
+            "",
+            op("#{ op: \"jpeg\", quality: 50.0, probability: 1.0 }, #{ op: \"gamma\", gamma: 100.0, probability: 1.0 }"),
+            "dataset.augment.operations[1] (gamma).gamma = 100 must lie within [0.05, 20]",
+        ),
+        (
+            "",
+            op("#{ op: \"gama\", gamma: 1.0, probability: 1.0 }"),
+            "did you mean \"gamma\"?",
+        ),
+        (
+            "",
+            op("#{ op: \"erase\", count: [0.2, 0.8], area: 0.1, aspect: 1.0, probability: 1.0 }"),
+            "(erase).count = [0.2, 0.8] holds no whole number",
+        ),
+        (
+            "",
+            op("#{ op: \"jpeg\", quality: [20.2, 20.8], probability: 1.0 }"),
+            "(jpeg).quality = [20.2, 20.8] holds no whole number",
+        ),
+        (
+            "",
+            op("#{ op: \"blur\", kind: \"gausian\", sigma: 1.0, probability: 1.0 }"),
+            "did you mean \"gaussian\"?",
+        ),
+        (
+            "",
+            op("#{ op: \"warp\", zoom: 1.1, probability: 1.0 }"),
+            "missing option `dataset.augment.operations[0] (warp).rotation`",
+        ),
+        (
+            "",
+            "augment: #{ copies: 1, mode: \"imag\" },".into(),
+            "did you mean \"image\"?",
+        ),
+        (
+            "stereo: #{ baseline: 0.2, toein: 0.1 },",
+            String::new(),
+            "unknown option `dataset.camera.stereo.toein`; did you mean `toe_in`?",
+        ),
+        (
+            "distortion: #{ k_1: -0.1 },",
+            String::new(),
+            "unknown option `dataset.camera.distortion.k_1`; did you mean `k1`?",
+        ),
+        (
+            "orbit: #{ swep: 1.0 },",
+            String::new(),
+            "unknown option `dataset.camera.orbit.swep`; did you mean `sweep`?",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = write(
+            dir.path(),
+            "r.rhai",
+            box_recipe(&format!("{camera} width: 32, height: 32"), &augment),
+        );
+        let output = run(&path, &dir.path().join("out"), &[]);
+        let text = common::stderr(&output);
+        assert!(
+            !output.status.success() && text.contains(expected) && text.contains("r.rhai:1:1"),
+            "{expected}: {text}"
+        );
+    }
+}
+
+#[test]
+fn stereo_copies_record_the_relative_pose_they_are_written_with() {
+    for mode in ["exact", "image"] {
+        let recipe = box_recipe(
+            "width: 96, height: 72, pitch: [0.2, 0.7], stereo: #{ baseline: 0.3, toe_in: 0.04 }",
+            &format!(
+                "augment: #{{ copies: 2, mode: \"{mode}\", operations: [#{{ op: \"warp\", zoom: [0.9, 1.1], rotation: [-1.0, 1.0], shift_x: [-0.05, 0.05], shift_y: 0.0, probability: 1.0 }}] }},"
+            ),
+        );
+        let (_dir, out) = render(&recipe, &[]);
+        for pair in 0..3 {
+            for copy in [None, Some(0), Some(1)] {
+                let (l, r) = (load(&out, 2 * pair, copy), load(&out, 2 * pair + 1, copy));
+                // w2c_right · c2w_left from the two poses written.
+                let (w2c, c2w) = (r.w2c(), l.c2w());
+                let truth: [[f64; 4]; 4] = std::array::from_fn(|i| {
+                    std::array::from_fn(|j| (0..4).map(|k| w2c[i][k] * c2w[k][j]).sum())
+                });
+                for v in [&l, &r] {
+                    let written: [[f64; 4]; 4] =
+                        matrix(&v.json["camera"]["stereo"]["right_from_left"]);
+                    for i in 0..4 {
+                        for j in 0..4 {
+                            assert!(
+                                (written[i][j] - truth[i][j]).abs() < 1e-9,
+                                "{mode} pair {pair} copy {copy:?}: {written:?} vs {truth:?}"
+                            );
+                        }
+                    }
+                }
+                // One warp per pair: both eyes' copies have one K and stay a rigid pair, the
+                // right eye one baseline from the left.
+                assert_eq!(l.json["camera"]["K"], r.json["camera"]["K"]);
+                let t = [truth[0][3], truth[1][3], truth[2][3]];
+                assert!(((t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt() - 0.3).abs() < 1e-9);
+            }
+        }
+    }
+}
+
+#[test]
+fn pixels_without_a_source_stay_black_under_every_photometric_operation() {
+    let recipe = box_recipe(
+        "width: 80, height: 60",
+        "augment: #{ copies: 2, mode: \"image\", operations: [
+            #{ op: \"warp\", zoom: 0.6, rotation: [-0.5, 0.5], shift_x: 0.0, shift_y: 0.0, probability: 1.0 },
+            #{ op: \"colour_jitter\", brightness: 1.2, contrast: 0.5, saturation: 1.0, hue: 0.0, probability: 1.0 },
+            #{ op: \"noise\", model: \"gaussian\", sigma: 20.0, probability: 1.0 },
+            #{ op: \"blur\", kind: \"gaussian\", sigma: 2.0, probability: 1.0 },
+            #{ op: \"erase\", count: 3, area: [0.2, 0.3], aspect: [0.5, 2.0], fill: \"noise\", probability: 1.0 },
+            #{ op: \"jpeg\", quality: 20, probability: 1.0 }] },",
+    );
+    let (_dir, out) = render(&recipe, &[]);
+    for view in 0..3 {
+        for copy in [0, 1] {
+            let (_, _, _, valid) = read_png(&view_path(&out, 0, view, Some(copy), "valid.png"));
+            let (_, _, _, rgb) = read_png(&view_path(&out, 0, view, Some(copy), "rgb.png"));
+            let invalid = valid.iter().filter(|&&v| v == 0).count();
+            assert!(invalid > 1000, "{invalid}");
+            for (k, &v) in valid.iter().enumerate() {
+                if v == 0 {
+                    assert_eq!(
+                        rgb[3 * k..3 * k + 3],
+                        [0, 0, 0],
+                        "view {view} copy {copy} pixel {k}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_a1_recipe_writes_the_masks_its_augmented_copies_need() {
+    let recipe = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/a1_beams.rhai");
+    for (augment, extra) in [
+        ("none", &[][..]),
+        ("paper", &["erased"][..]),
+        ("paper_image", &["erased", "valid"][..]),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("a1");
+        let set = format!("augment={augment}");
+        let args = ["--set", "samples=1", "--set", "views=1", "--set", &set];
+        ok(run(&recipe, &out, &args));
+        let copies: &[Option<u32>] = if augment == "none" {
+            &[None]
+        } else {
+            &[None, Some(0)]
+        };
+        for &copy in copies {
+            let files = &read_json(&view_path(&out, 0, 0, copy, "json"))["files"];
+            let mut written: Vec<&str> = files
+                .as_object()
+                .unwrap()
+                .keys()
+                .map(|k| k.as_str())
+                .collect();
+            written.sort_unstable();
+            let mut expected = vec!["depth", "mask", "rgb"];
+            expected.extend(extra);
+            expected.sort_unstable();
+            assert_eq!(written, expected, "{augment} {copy:?}");
+        }
     }
 }

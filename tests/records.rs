@@ -183,9 +183,11 @@ fn field_reference(records: &[(&str, Value)]) -> String {
     let mut seen = BTreeSet::new();
     let mut queue = VecDeque::new();
     for (title, schema) in records {
-        let tag = resolve(schema, &schema["properties"]["schema"])["enum"][0]
-            .as_str()
-            .unwrap_or_default();
+        let tags = resolve(schema, &schema["properties"]["schema"]);
+        let tag = tag_value(tags)
+            .or_else(|| tags["oneOf"].as_array()?.first().and_then(tag_value))
+            .and_then(Value::as_str)
+            .expect("a record's schema tag has one current value");
         out += &format!("#### {title} (`{tag}`)\n\n");
         out += &describe(schema, schema, &mut queue);
         while let Some(name) = queue.pop_front() {

@@ -408,6 +408,67 @@ fn once_writes_a_sheet_whose_columns_agree() {
     assert!(surface > 100 && background > 100, "{surface} {background}");
 }
 
+/// `watch --once` of `recipe` at a longer side of 32 px: the sheet's (width, height, pixels).
+fn sheet_of(recipe: &Path, out: &Path) -> (usize, usize, Vec<u8>) {
+    let output = Command::new(BIN)
+        .arg("watch")
+        .arg(recipe)
+        .args(["--once", "--size", "32", "--out"])
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{output:?}");
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(out).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut data = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut data).unwrap();
+    (info.width as usize, info.height as usize, data)
+}
+
+#[test]
+fn once_shows_each_augmented_copy_as_a_row_after_its_view() {
+    let (dir, recipe) = project();
+    let clean = sheet_of(&recipe, &dir.path().join("clean.png"));
+    let augmented = RECIPE.replace(
+        "    scene: |rng|",
+        "    augment: #{ copies: 2, operations: [#{ op: \"warp\", zoom: [1.2, 1.5], rotation: [0.3, 1.0], shift_x: 0.0, shift_y: 0.0, probability: 1.0 }] },\n    scene: |rng|",
+    );
+    assert_ne!(augmented, RECIPE);
+    std::fs::write(&recipe, augmented).unwrap();
+    let (width, height, data) = sheet_of(&recipe, &dir.path().join("augmented.png"));
+    // Rows: 2 samples × 2 views × (the clean view and its 2 copies), cells 32 × 24.
+    let (h, sep) = (24, shmgen::preview::SEPARATOR as usize);
+    let rows = 12;
+    assert_eq!((width, height), (clean.0, rows * h + (rows - 1) * sep));
+    // The RGB cell of row `r` (depth colours span the whole sheet, so only RGB compares
+    // across sheets).
+    let rgb = |data: &[u8], width: usize, r: usize| -> Vec<u8> {
+        (0..h)
+            .flat_map(|y| {
+                let start = 3 * width * (r * (h + sep) + y);
+                data[start..start + 3 * 32].to_vec()
+            })
+            .collect()
+    };
+    for view in 0..4 {
+        // The clean view first, as the sheet without augmentation shows it; then its copies,
+        // each turned and zoomed differently.
+        let first = rgb(&data, width, 3 * view);
+        assert!(
+            first == rgb(&clean.2, width, view),
+            "view {view}: not the clean view"
+        );
+        let (a, b) = (
+            rgb(&data, width, 3 * view + 1),
+            rgb(&data, width, 3 * view + 2),
+        );
+        assert!(
+            a != first && b != first && a != b,
+            "view {view}: copies alike"
+        );
+    }
+}
+
 #[test]
 fn once_fails_on_a_broken_recipe() {
     let (_dir, recipe) = project();

@@ -70,11 +70,13 @@ pub enum BlurSpec {
 }
 
 impl BlurSpec {
-    /// Checks every range; the error names the parameter and its value.
-    pub fn validate(&self) -> Result<(), String> {
+    /// Checks every range; the error names the parameter by its path under `at` and shows
+    /// its value.
+    pub fn validate(&self, at: &str) -> Result<(), String> {
+        let field = |name: &str| format!("{at}.{name}");
         let probability = match self {
             BlurSpec::Gaussian { sigma, probability } => {
-                check_range("blur.sigma", sigma, 0.0, 50.0)?;
+                check_range(&field("sigma"), sigma, 0.0, 50.0)?;
                 probability
             }
             BlurSpec::Motion {
@@ -82,19 +84,19 @@ impl BlurSpec {
                 angle,
                 probability,
             } => {
-                check_range("blur.length", length, 0.0, 200.0)?;
-                check_range("blur.angle", angle, -f64::MAX, f64::MAX)?;
+                check_range(&field("length"), length, 0.0, 200.0)?;
+                check_range(&field("angle"), angle, -f64::MAX, f64::MAX)?;
                 probability
             }
             BlurSpec::Defocus {
                 radius,
                 probability,
             } => {
-                check_range("blur.radius", radius, 0.0, 100.0)?;
+                check_range(&field("radius"), radius, 0.0, 100.0)?;
                 probability
             }
         };
-        check_probability("blur", *probability)
+        check_probability(at, *probability)
     }
 
     /// Draws one view's blur, or `None` when the probability says skip.
@@ -378,7 +380,7 @@ fn kernel_row(out: &mut [u8], y: usize, padded: &Padded, sums: &[u32], k: &Kerne
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::augment::{on_threads, test_image, test_stream};
+    use crate::augment::{assert_frequency, assert_uniform, on_threads, test_image, test_stream};
 
     fn impulse(w: usize, h: usize) -> Vec<u8> {
         let mut img = vec![0u8; w * h * 3];
@@ -539,7 +541,7 @@ mod tests {
             angle: Range::Span([0.0, 3.0]),
             probability: 1.0,
         };
-        spec.validate().unwrap();
+        spec.validate("blur").unwrap();
         let Some(Blur::Motion { length, angle }) = spec.draw(&mut s) else {
             panic!("not a motion blur");
         };
@@ -548,6 +550,48 @@ mod tests {
             radius: Range::Fixed(-1.0),
             probability: 1.0,
         };
-        assert!(bad.validate().unwrap_err().contains("blur.radius"));
+        assert!(bad.validate("blur").unwrap_err().contains("blur.radius"));
+    }
+
+    #[test]
+    fn each_kind_draws_its_parameters_from_the_declared_ranges() {
+        let mut s = test_stream("blur draws");
+        let n = 4000;
+        let gaussian = BlurSpec::Gaussian {
+            sigma: Range::Span([0.5, 2.0]),
+            probability: 0.4,
+        };
+        let sigmas: Vec<f64> = (0..n)
+            .filter_map(|_| match gaussian.draw(&mut s)? {
+                Blur::Gaussian { sigma } => Some(sigma),
+                other => panic!("{other:?}"),
+            })
+            .collect();
+        assert_frequency(sigmas.len(), n, 0.4, "blur.probability");
+        assert_uniform(&sigmas, (0.5, 2.0), "blur.sigma");
+        let motion = BlurSpec::Motion {
+            length: Range::Span([3.0, 12.0]),
+            angle: Range::Span([-1.0, 3.0]),
+            probability: 1.0,
+        };
+        let (lengths, angles): (Vec<f64>, Vec<f64>) = (0..n)
+            .map(|_| match motion.draw(&mut s) {
+                Some(Blur::Motion { length, angle }) => (length, angle),
+                other => panic!("{other:?}"),
+            })
+            .unzip();
+        assert_uniform(&lengths, (3.0, 12.0), "blur.length");
+        assert_uniform(&angles, (-1.0, 3.0), "blur.angle");
+        let defocus = BlurSpec::Defocus {
+            radius: Range::Span([1.0, 3.0]),
+            probability: 1.0,
+        };
+        let radii: Vec<f64> = (0..n)
+            .map(|_| match defocus.draw(&mut s) {
+                Some(Blur::Defocus { radius }) => radius,
+                other => panic!("{other:?}"),
+            })
+            .collect();
+        assert_uniform(&radii, (1.0, 3.0), "blur.radius");
     }
 }

@@ -19,7 +19,7 @@
 //! torchvision skips a range that is the single identity value.
 
 use super::draw::{Range, check_probability, check_range, happens};
-use super::{apply_table, rgb_pixels};
+use super::{apply_table, picture, rgb_pixels};
 use crate::seeds::Stream;
 use serde::{Deserialize, Serialize};
 
@@ -97,13 +97,18 @@ impl ColourJitterSpec {
         }
     }
 
-    /// Checks every range; the error names the parameter and its value.
-    pub fn validate(&self) -> Result<(), String> {
-        check_range("colour_jitter.brightness", &self.brightness, 0.0, f64::MAX)?;
-        check_range("colour_jitter.contrast", &self.contrast, 0.0, f64::MAX)?;
-        check_range("colour_jitter.saturation", &self.saturation, 0.0, f64::MAX)?;
-        check_range("colour_jitter.hue", &self.hue, -0.5, 0.5)?;
-        check_probability("colour_jitter", self.probability)
+    /// Checks every range; the error names the parameter by its path under `at` and shows
+    /// its value.
+    pub fn validate(&self, at: &str) -> Result<(), String> {
+        for (field, range) in [
+            ("brightness", &self.brightness),
+            ("contrast", &self.contrast),
+            ("saturation", &self.saturation),
+        ] {
+            check_range(&format!("{at}.{field}"), range, 0.0, f64::MAX)?;
+        }
+        check_range(&format!("{at}.hue"), &self.hue, -0.5, 0.5)?;
+        check_probability(at, self.probability)
     }
 
     /// Draws the jitter of one view, or `None` when the probability says skip.
@@ -127,12 +132,20 @@ impl ColourJitterSpec {
 }
 
 /// Applies `jitter` in place to an sRGB8 image (3 bytes a pixel, row-major).
-pub fn colour_jitter(rgb: &mut [u8], width: usize, height: usize, jitter: &ColourJitter) {
+/// `valid` (one byte a pixel, 0 = no picture there, as a warp's border) keeps pixels without
+/// picture out of the mean that contrast blends towards; None: every pixel is picture.
+pub fn colour_jitter(
+    rgb: &mut [u8],
+    width: usize,
+    height: usize,
+    jitter: &ColourJitter,
+    valid: Option<&[u8]>,
+) {
     rgb_pixels(rgb, width, height);
     for op in jitter.order {
         match op {
             ColourOp::Brightness if jitter.brightness != 1.0 => brightness(rgb, jitter.brightness),
-            ColourOp::Contrast if jitter.contrast != 1.0 => contrast(rgb, jitter.contrast),
+            ColourOp::Contrast if jitter.contrast != 1.0 => contrast(rgb, jitter.contrast, valid),
             ColourOp::Saturation if jitter.saturation != 1.0 => saturation(rgb, jitter.saturation),
             ColourOp::Hue if jitter.hue != 0.0 => hue(rgb, jitter.hue),
             _ => {}
@@ -161,10 +174,12 @@ pub fn brightness(rgb: &mut [u8], factor: f64) {
     apply_table(rgb, &std::array::from_fn(|v| blend(v as u8, 0.0, r, rest)));
 }
 
-/// `adjust_contrast`: blend with the mean gray level of the image.
-pub fn contrast(rgb: &mut [u8], factor: f64) {
-    let pixels = rgb.len() / 3;
-    let sum: u64 = rgb.chunks_exact(3).map(|p| u64::from(gray(p))).sum();
+/// `adjust_contrast`: blend with the mean gray level of the image (of its `valid` pixels,
+/// when given: see [`colour_jitter`]).
+pub fn contrast(rgb: &mut [u8], factor: f64, valid: Option<&[u8]>) {
+    let (sum, pixels) = (picture(rgb, valid)).fold((0u64, 0u64), |(sum, n), p| {
+        (sum + u64::from(gray(p)), n + 1)
+    });
     let mean = (sum as f64 / pixels.max(1) as f64) as f32;
     let (r, rest) = weights(factor);
     apply_table(rgb, &std::array::from_fn(|v| blend(v as u8, mean, r, rest)));
@@ -236,7 +251,7 @@ fn hsv_to_rgb(h: f32, s: f32, v: f32) -> [f32; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::augment::{test_image, test_stream};
+    use crate::augment::{assert_uniform, test_image, test_stream};
 
     /// The torchvision formulas written out by hand in double precision for one pixel; the
     /// f32 implementation must agree to the 8-bit level.
@@ -259,7 +274,7 @@ mod tests {
         assert_eq!(b, [250, 125, 62, 12, 25, 37]);
 
         let mut c = px;
-        contrast(&mut c, 0.5);
+        contrast(&mut c, 0.5, None);
         let mean = 0.5 * (gray0 + gray1);
         assert_eq!(c, px.map(|v| by_hand_blend(f64::from(v), mean, 0.5)));
 
@@ -299,10 +314,14 @@ mod tests {
     fn identity_parameters_leave_the_image_unchanged() {
         let original = test_image(31, 17, "identity");
         let mut img = original.clone();
-        colour_jitter(&mut img, 31, 17, &ColourJitter::IDENTITY);
+        colour_jitter(&mut img, 31, 17, &ColourJitter::IDENTITY, None);
         assert_eq!(img, original);
         // The formulas themselves are exact at their identity, not only skipped.
-        for op in [brightness, contrast, saturation] {
+        for op in [
+            brightness,
+            |i: &mut [u8], f| contrast(i, f, None),
+            saturation,
+        ] {
             let mut img = original.clone();
             op(&mut img, 1.0);
             assert_eq!(img, original);
@@ -329,10 +348,11 @@ mod tests {
             8,
             8,
             &jitter([Brightness, Contrast, Saturation, Hue]),
+            None,
         );
         let mut by_hand = original.clone();
         brightness(&mut by_hand, 1.4);
-        contrast(&mut by_hand, 0.6);
+        contrast(&mut by_hand, 0.6, None);
         assert_eq!(a, by_hand);
         let mut b = original.clone();
         colour_jitter(
@@ -340,6 +360,7 @@ mod tests {
             8,
             8,
             &jitter([Contrast, Brightness, Saturation, Hue]),
+            None,
         );
         assert_ne!(a, b);
     }
@@ -348,7 +369,7 @@ mod tests {
     fn draws_follow_the_spec() {
         let mut s = test_stream("jitter");
         let spec = ColourJitterSpec::paper();
-        spec.validate().unwrap();
+        spec.validate("colour_jitter").unwrap();
         let mut first = [0u32; 4];
         for _ in 0..4000 {
             let j = spec.draw(&mut s).unwrap();
@@ -369,6 +390,59 @@ mod tests {
             hue: Range::Fixed(0.7),
             ..spec
         };
-        assert!(bad.validate().unwrap_err().contains("colour_jitter.hue"));
+        assert!(
+            bad.validate("colour_jitter")
+                .unwrap_err()
+                .contains("colour_jitter.hue")
+        );
+    }
+
+    #[test]
+    fn every_factor_is_uniform_in_its_range_and_every_order_equally_likely() {
+        let mut s = test_stream("jitter draws");
+        let spec = ColourJitterSpec {
+            brightness: Range::Span([0.8, 1.2]),
+            contrast: Range::Span([0.5, 1.5]),
+            saturation: Range::Span([0.0, 2.0]),
+            hue: Range::Span([-0.1, 0.3]),
+            probability: 1.0,
+        };
+        let n = 6000;
+        let drawn: Vec<ColourJitter> = (0..n).map(|_| spec.draw(&mut s).unwrap()).collect();
+        let of = |f: fn(&ColourJitter) -> f64| drawn.iter().map(f).collect::<Vec<f64>>();
+        assert_uniform(&of(|j| j.brightness), (0.8, 1.2), "brightness");
+        assert_uniform(&of(|j| j.contrast), (0.5, 1.5), "contrast");
+        assert_uniform(&of(|j| j.saturation), (0.0, 2.0), "saturation");
+        assert_uniform(&of(|j| j.hue), (-0.1, 0.3), "hue");
+        // The 24 orders, each expected n/24 times: Pearson's χ² with 23 degrees of freedom
+        // stays below 49.7 (its 0.1 % critical value).
+        let mut counts = std::collections::BTreeMap::new();
+        for j in &drawn {
+            *counts.entry(j.order.map(|op| op as u8)).or_insert(0u32) += 1;
+        }
+        assert_eq!(counts.len(), 24);
+        let expected = f64::from(n) / 24.0;
+        let chi2: f64 = (counts.values())
+            .map(|&c| (f64::from(c) - expected).powi(2) / expected)
+            .sum();
+        assert!(chi2 < 49.7, "χ² = {chi2}: {counts:?}");
+    }
+
+    #[test]
+    fn contrast_blends_towards_the_mean_of_the_picture_alone() {
+        // A grey picture beside pixels without picture (black, valid 0): the mean it blends
+        // towards is the picture's grey, so a contrast change leaves the picture as it is.
+        let mut rgb = [[100u8; 3], [100; 3], [0; 3], [0; 3]].concat();
+        let valid = [255, 255, 0, 0];
+        contrast(&mut rgb, 0.5, Some(&valid));
+        // torchvision's gray of (100, 100, 100) is 99 (its weights sum to 0.9999).
+        assert_eq!(&rgb[..6], &[by_hand_blend(100.0, 99.0, 0.5); 6]);
+        let mut all = [[100u8; 3], [100; 3], [0; 3], [0; 3]].concat();
+        contrast(&mut all, 0.5, None);
+        assert_eq!(
+            all[0],
+            by_hand_blend(100.0, 49.5, 0.5),
+            "black pulls the mean down"
+        );
     }
 }

@@ -39,8 +39,8 @@ impl Range {
         libm::exp(stream.uniform(libm::log(lo), libm::log(hi)))
     }
 
-    /// An integer uniform over the integers in [lo, hi] (bounds rounded inwards; lo when the
-    /// range holds none); always one draw.
+    /// An integer uniform over the integers in [lo, hi] (bounds rounded inwards; specs check
+    /// with [`check_integers`] that there is one); always one draw.
     pub fn draw_integer(&self, stream: &mut Stream) -> i64 {
         let (lo, hi) = self.bounds();
         let (lo, hi) = (lo.ceil() as i64, hi.floor() as i64);
@@ -51,11 +51,13 @@ impl Range {
 /// Implements `validate` and `draw` for the spec of an operation with one drawn parameter:
 /// `spec`'s `field` is a [`Range`] within `bounds`, its draw becomes `params`' `field`.
 macro_rules! one_parameter_spec {
-    ($spec:ident, $params:ident { $field:ident }, $name:literal, $bounds:expr) => {
+    ($spec:ident, $params:ident { $field:ident }, $bounds:expr) => {
         impl $spec {
-            /// Checks the range and probability; the error names the parameter and its value.
-            pub fn validate(&self) -> Result<(), String> {
-                super::draw::check_one($name, &self.$field, $bounds, self.probability)
+            /// Checks the range and probability; the error names the parameter by its path
+            /// under `at` (the operation's place in the recipe) and shows its value.
+            pub fn validate(&self, at: &str) -> Result<(), String> {
+                let field = stringify!($field);
+                super::draw::check_one(at, field, &self.$field, $bounds, self.probability)
             }
 
             /// Draws one view's parameters, or `None` when the probability says skip.
@@ -75,39 +77,74 @@ pub fn happens(stream: &mut Stream, probability: f64) -> bool {
     stream.unit() < probability
 }
 
-/// Checks that `range` is ordered, finite and within [min, max]; the error names `name`.
-pub fn check_range(name: &str, range: &Range, min: f64, max: f64) -> Result<(), String> {
-    let (lo, hi) = range.bounds();
-    if !(lo.is_finite() && hi.is_finite()) || lo > hi {
-        return Err(format!("{name} = [{lo}, {hi}] must be finite with lo ≤ hi"));
+impl std::fmt::Display for Range {
+    /// As a recipe writes it: one number, or `[lo, hi]`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Range::Fixed(x) => write!(f, "{x}"),
+            Range::Span([lo, hi]) => write!(f, "[{lo}, {hi}]"),
+        }
     }
-    if lo < min || hi > max {
-        return Err(format!(
-            "{name} = [{lo}, {hi}] must lie within [{min}, {max}]"
-        ));
-    }
-    Ok(())
 }
 
-/// Checks the spec of a one-parameter operation: its range `name` ("op.field") within
-/// `bounds` and the probability of the operation.
+/// Checks that `range` is ordered, finite and within [min, max] (an infinite or ±f64::MAX
+/// bound is no bound); the error names `name` and shows the range as written.
+pub fn check_range(name: &str, range: &Range, min: f64, max: f64) -> Result<(), String> {
+    let (lo, hi) = range.bounds();
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Err(format!("{name} = {range} must be finite"));
+    }
+    if lo > hi {
+        return Err(format!(
+            "{name} = {range}: the low end exceeds the high end"
+        ));
+    }
+    let (bounded_below, bounded_above) = (min > -f64::MAX, max < f64::MAX);
+    if lo >= min && hi <= max {
+        return Ok(());
+    }
+    Err(match (bounded_below, bounded_above) {
+        (true, true) => format!("{name} = {range} must lie within [{min}, {max}]"),
+        (true, false) => format!("{name} = {range} must be ≥ {min}"),
+        _ => format!("{name} = {range} must be ≤ {max}"),
+    })
+}
+
+/// Checks that a range drawn as an integer holds at least one whole number: rounding its
+/// bounds inwards must not cross (otherwise every draw would be one made-up value).
+pub fn check_integers(name: &str, range: &Range) -> Result<(), String> {
+    let (lo, hi) = range.bounds();
+    if lo.ceil() <= hi.floor() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{name} = {range} holds no whole number; give whole bounds such as [{}, {}]",
+            lo.floor(),
+            hi.ceil()
+        ))
+    }
+}
+
+/// Checks the spec of a one-parameter operation at `at`: its range `field` within `bounds`
+/// and the probability of the operation.
 pub fn check_one(
-    name: &str,
+    at: &str,
+    field: &str,
     range: &Range,
     bounds: [f64; 2],
     probability: f64,
 ) -> Result<(), String> {
-    check_range(name, range, bounds[0], bounds[1])?;
-    check_probability(name.split('.').next().unwrap_or(name), probability)
+    check_range(&format!("{at}.{field}"), range, bounds[0], bounds[1])?;
+    check_probability(at, probability)
 }
 
-/// Checks that a probability lies in [0, 1]; the error names `name`.
-pub fn check_probability(name: &str, probability: f64) -> Result<(), String> {
+/// Checks that the probability of the operation at `at` lies in [0, 1].
+pub fn check_probability(at: &str, probability: f64) -> Result<(), String> {
     if (0.0..=1.0).contains(&probability) {
         Ok(())
     } else {
         Err(format!(
-            "{name}.probability = {probability} must lie within [0, 1]"
+            "{at}.probability = {probability} must lie within [0, 1]"
         ))
     }
 }
@@ -177,6 +214,22 @@ mod tests {
         assert!(check_range("x", &Range::Fixed(f64::NAN), 0.0, 10.0).is_err());
         assert!(check_probability("jpeg", 1.5).unwrap_err().contains("1.5"));
         assert!(check_probability("jpeg", 0.5).is_ok());
+        // A fixed value is shown as written, one-sided bounds as one-sided.
+        let one = check_range("gamma", &Range::Fixed(-1.0), 0.0, f64::MAX).unwrap_err();
+        assert_eq!(one, "gamma = -1 must be ≥ 0");
+    }
+
+    #[test]
+    fn an_integer_range_must_hold_a_whole_number() {
+        let err = check_integers("erase.count", &Range::Span([0.2, 0.8])).unwrap_err();
+        assert!(err.contains("[0.2, 0.8] holds no whole number"), "{err}");
+        for fine in [
+            Range::Span([0.2, 1.0]),
+            Range::Fixed(3.0),
+            Range::Span([1.5, 2.5]),
+        ] {
+            assert!(check_integers("n", &fine).is_ok(), "{fine}");
+        }
     }
 
     #[test]

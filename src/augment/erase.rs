@@ -11,8 +11,8 @@
 //! Note: torchvision's ratio is height over width; the 3DGEN paper calls its 0.08–0.3 range
 //! "width/height", but `aspect` here is always h/w as in torchvision.
 
-use super::draw::{Range, check_probability, check_range, happens};
-use super::rgb_pixels;
+use super::draw::{Range, check_integers, check_probability, check_range, happens};
+use super::{picture, rgb_pixels};
 use crate::seeds::{Scope, Stream};
 use serde::{Deserialize, Serialize};
 
@@ -103,12 +103,14 @@ impl ErasingSpec {
         }
     }
 
-    /// Checks every range; the error names the parameter and its value.
-    pub fn validate(&self) -> Result<(), String> {
-        check_range("erasing.count", &self.count, 0.0, 1000.0)?;
-        check_range("erasing.area", &self.area, f64::MIN_POSITIVE, 1.0)?;
-        check_range("erasing.aspect", &self.aspect, 1e-3, 1e3)?;
-        check_probability("erasing", self.probability)
+    /// Checks every range (the count must hold a whole number); the error names the
+    /// parameter by its path under `at` and shows its value.
+    pub fn validate(&self, at: &str) -> Result<(), String> {
+        check_range(&format!("{at}.count"), &self.count, 0.0, 1000.0)?;
+        check_integers(&format!("{at}.count"), &self.count)?;
+        check_range(&format!("{at}.area"), &self.area, f64::MIN_POSITIVE, 1.0)?;
+        check_range(&format!("{at}.aspect"), &self.aspect, 1e-3, 1e3)?;
+        check_probability(at, self.probability)
     }
 
     /// Draws the erasing of one `width` × `height` view, or `None` when the probability says
@@ -169,11 +171,18 @@ impl Erasing {
 }
 
 /// Erases the rectangles of `erasing` in an sRGB8 image in place and returns the erased
-/// mask (one byte a pixel, 255 = erased, 0 = kept).
-pub fn erase(rgb: &mut [u8], width: usize, height: usize, erasing: &Erasing) -> Vec<u8> {
+/// mask (one byte a pixel, 255 = erased, 0 = kept). A mean fill is the mean of the `valid`
+/// pixels (0 = no picture there, as a warp's border; None: every pixel).
+pub fn erase(
+    rgb: &mut [u8],
+    width: usize,
+    height: usize,
+    erasing: &Erasing,
+    valid: Option<&[u8]>,
+) -> Vec<u8> {
     rgb_pixels(rgb, width, height);
     let mut mask = vec![0u8; width * height];
-    let mean = mean_colour(rgb);
+    let mean = mean_colour(rgb, valid);
     for (k, rect) in erasing.rects.iter().enumerate() {
         let mut noise = match erasing.fill {
             Filled::Noise { seed } => Some(NoiseBytes::new(seed, k)),
@@ -197,15 +206,18 @@ pub fn erase(rgb: &mut [u8], width: usize, height: usize, erasing: &Erasing) -> 
     mask
 }
 
-/// The mean of each channel, rounded to the nearest level.
-pub fn mean_colour(rgb: &[u8]) -> [u8; 3] {
-    let pixels = (rgb.len() / 3).max(1) as u64;
+/// The mean of each channel over the `valid` pixels (every pixel when None), rounded to the
+/// nearest level; black when there are none.
+pub fn mean_colour(rgb: &[u8], valid: Option<&[u8]>) -> [u8; 3] {
     let mut sums = [0u64; 3];
-    for p in rgb.chunks_exact(3) {
+    let mut pixels = 0u64;
+    for p in picture(rgb, valid) {
+        pixels += 1;
         for (s, &v) in sums.iter_mut().zip(p) {
             *s += u64::from(v);
         }
     }
+    let pixels = pixels.max(1);
     sums.map(|s| ((2 * s + pixels) / (2 * pixels)) as u8)
 }
 
@@ -318,14 +330,14 @@ mod tests {
             let erasing = spec.draw(&mut test_stream("erase mask"), w, h).unwrap();
             assert_eq!(erasing.rects.len(), 3);
             let mut img = original.clone();
-            let mask = erase(&mut img, w, h, &erasing);
+            let mask = erase(&mut img, w, h, &erasing, None);
             let inside = |i: u32, j: u32| {
                 erasing.rects.iter().any(|r| {
                     (r.top..r.top + r.height).contains(&i)
                         && (r.left..r.left + r.width).contains(&j)
                 })
             };
-            let mean = mean_colour(&original);
+            let mean = mean_colour(&original, None);
             for (k, (&m, (out, inp))) in mask
                 .iter()
                 .zip(img.chunks_exact(3).zip(original.chunks_exact(3)))
@@ -356,9 +368,9 @@ mod tests {
             fill: Filled::Noise { seed: 5 },
         };
         let mut a = vec![0u8; w * h * 3];
-        erase(&mut a, w, h, &erasing);
+        erase(&mut a, w, h, &erasing, None);
         let mut b = vec![9u8; w * h * 3];
-        erase(&mut b, w, h, &erasing);
+        erase(&mut b, w, h, &erasing, None);
         assert_eq!(a[..3 * 199], b[..3 * 199]);
         let n = 199 * 199 * 3;
         let mean = a
@@ -370,12 +382,18 @@ mod tests {
 
     #[test]
     fn the_paper_spec_validates_and_bad_values_are_named() {
-        ErasingSpec::paper().validate().unwrap();
+        ErasingSpec::paper().validate("erase").unwrap();
         let bad = ErasingSpec {
             aspect: Range::Span([0.0, 0.3]),
             ..ErasingSpec::paper()
         };
-        assert!(bad.validate().unwrap_err().contains("erasing.aspect"));
-        assert_eq!(mean_colour(&[0, 10, 255, 1, 11, 254]), [1, 11, 255]);
+        assert!(bad.validate("erase").unwrap_err().contains("erase.aspect"));
+        assert_eq!(mean_colour(&[0, 10, 255, 1, 11, 254], None), [1, 11, 255]);
+        // Pixels without picture are left out of the mean.
+        let valid = [255, 0];
+        assert_eq!(
+            mean_colour(&[0, 10, 255, 1, 11, 254], Some(&valid)),
+            [0, 10, 255]
+        );
     }
 }

@@ -26,7 +26,7 @@
 //!   upsampling. Its rayon workers split the work by component and row and write
 //!   each to its own place, so the result does not depend on the thread count either.
 
-use super::draw::{Range, check_one, happens};
+use super::draw::{Range, check_integers, check_one, happens};
 use super::rgb_pixels;
 use crate::seeds::Stream;
 use serde::{Deserialize, Serialize};
@@ -51,9 +51,11 @@ pub struct JpegSpec {
 }
 
 impl JpegSpec {
-    /// Checks the range and probability; the error names the parameter and its value.
-    pub fn validate(&self) -> Result<(), String> {
-        check_one("jpeg.quality", &self.quality, QUALITY, self.probability)
+    /// Checks the range (which must hold a whole quality) and probability; the error names
+    /// the parameter by its path under `at` and shows its value.
+    pub fn validate(&self, at: &str) -> Result<(), String> {
+        check_one(at, "quality", &self.quality, QUALITY, self.probability)?;
+        check_integers(&format!("{at}.quality"), &self.quality)
     }
 
     /// Draws one view's quality, or `None` when the probability says skip.
@@ -162,7 +164,7 @@ mod tests {
             quality: Range::Span([30.0, 35.0]),
             probability: 1.0,
         };
-        spec.validate().unwrap();
+        spec.validate("jpeg").unwrap();
         let mut seen = [false; 6];
         for _ in 0..300 {
             seen[usize::from(spec.draw(&mut s).unwrap().quality - 30)] = true;
@@ -172,6 +174,6 @@ mod tests {
             quality: Range::Fixed(0.0),
             probability: 1.0,
         };
-        assert!(bad.validate().unwrap_err().contains("jpeg.quality"));
+        assert!(bad.validate("jpeg").unwrap_err().contains("jpeg.quality"));
     }
 }

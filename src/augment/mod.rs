@@ -55,6 +55,14 @@ fn rgb_pixels(rgb: &[u8], width: usize, height: usize) {
     );
 }
 
+/// The pixels (3 bytes each) of an sRGB8 image that hold picture: those `valid` marks
+/// non-zero (a warp leaves pixels without a source at 0), or every pixel when None.
+fn picture<'a>(rgb: &'a [u8], valid: Option<&'a [u8]>) -> impl Iterator<Item = &'a [u8]> {
+    (rgb.chunks_exact(3).enumerate())
+        .filter(move |(k, _)| valid.is_none_or(|v| v[*k] != 0))
+        .map(|(_, p)| p)
+}
+
 /// Maps every byte through a 256-entry table.
 fn apply_table(bytes: &mut [u8], table: &[u8; 256]) {
     for v in bytes.iter_mut() {
@@ -66,6 +74,62 @@ fn apply_table(bytes: &mut [u8], table: &[u8; 256]) {
 #[cfg(test)]
 fn test_stream(name: &str) -> crate::seeds::Stream {
     crate::seeds::Stream::new(0, crate::seeds::Scope::Sample(0), name)
+}
+
+/// Checks that `values` (at least 1000 draws) follow the uniform distribution on [lo, hi]:
+/// all inside, mean and variance within four standard errors of (lo + hi)/2 and
+/// (hi − lo)²/12, and the Kolmogorov–Smirnov distance below its 0.1 % critical value 1.95/√n.
+#[cfg(test)]
+fn assert_uniform(values: &[f64], (lo, hi): (f64, f64), what: &str) {
+    let n = values.len() as f64;
+    assert!(n >= 1000.0, "{what}: only {n} draws");
+    assert!(
+        values.iter().all(|v| (lo..=hi).contains(v)),
+        "{what}: a draw outside [{lo}, {hi}]"
+    );
+    let width = hi - lo;
+    let mean = values.iter().sum::<f64>() / n;
+    let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
+    // Standard errors: σ/√n for the mean; for the variance of a uniform, √((μ₄ − σ⁴)/n) with
+    // μ₄ = w⁴/80 and σ⁴ = w⁴/144.
+    let mean_error = width / (12.0 * n).sqrt();
+    let variance_error = width * width * ((1.0 / 80.0 - 1.0 / 144.0) / n).sqrt();
+    assert!(
+        (mean - 0.5 * (lo + hi)).abs() < 4.0 * mean_error,
+        "{what}: mean {mean} of U[{lo}, {hi}]"
+    );
+    assert!(
+        (variance - width * width / 12.0).abs() < 4.0 * variance_error,
+        "{what}: variance {variance} of U[{lo}, {hi}]"
+    );
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let distance = sorted
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let cdf = (v - lo) / width;
+            (cdf - i as f64 / n)
+                .abs()
+                .max((((i + 1) as f64) / n - cdf).abs())
+        })
+        .fold(0.0, f64::max);
+    assert!(
+        distance < 1.95 / n.sqrt(),
+        "{what}: Kolmogorov–Smirnov distance {distance} from U[{lo}, {hi}]"
+    );
+}
+
+/// Checks that `hits` of `n` trials is within four binomial standard deviations of n·p.
+#[cfg(test)]
+fn assert_frequency(hits: usize, n: usize, p: f64, what: &str) {
+    let (hits, n) = (hits as f64, n as f64);
+    let sd = (n * p * (1.0 - p)).sqrt();
+    assert!(
+        (hits - n * p).abs() <= 4.0 * sd,
+        "{what}: {hits} of {n}, expected {}",
+        n * p
+    );
 }
 
 /// `op` run in a pool of `threads` threads.

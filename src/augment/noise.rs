@@ -72,7 +72,8 @@ pub enum SigmaUnit {
 pub enum NoiseSpec {
     /// Additive Gaussian noise on the encoded values.
     Gaussian {
-        /// Range of the standard deviation, in `unit`s, ≥ 0.
+        /// Range of the standard deviation, in `unit`s: within [0, 255] levels, or [0, 1] as
+        /// a fraction.
         sigma: Range,
         /// Unit of `sigma`: 8-bit levels (default) or a fraction of full scale.
         #[serde(default)]
@@ -92,19 +93,28 @@ pub enum NoiseSpec {
 }
 
 impl NoiseSpec {
-    /// Checks every range; the error names the parameter and its value.
-    pub fn validate(&self) -> Result<(), String> {
+    /// Checks every range; the error names the parameter by its path under `at` and shows
+    /// its value.
+    pub fn validate(&self, at: &str) -> Result<(), String> {
         match self {
             NoiseSpec::Gaussian {
-                sigma, probability, ..
+                sigma,
+                unit,
+                probability,
             } => {
-                check_range("noise.sigma", sigma, 0.0, 255.0)?;
-                check_probability("noise", *probability)
+                // At most full scale, in the unit given.
+                let most = if *unit == SigmaUnit::Fraction {
+                    1.0
+                } else {
+                    255.0
+                };
+                check_range(&format!("{at}.sigma"), sigma, 0.0, most)?;
+                check_probability(at, *probability)
             }
             NoiseSpec::PoissonGaussian { a, b, probability } => {
-                check_range("noise.a", a, 0.0, 1.0)?;
-                check_range("noise.b", b, 0.0, 1.0)?;
-                check_probability("noise", *probability)
+                check_range(&format!("{at}.a"), a, 0.0, 1.0)?;
+                check_range(&format!("{at}.b"), b, 0.0, 1.0)?;
+                check_probability(at, *probability)
             }
         }
     }
@@ -206,7 +216,7 @@ fn poisson_gaussian_row(values: &mut [u8], a: f64, b: f64, normals: &mut Normals
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::augment::{on_threads, test_stream};
+    use crate::augment::{assert_frequency, assert_uniform, on_threads, test_stream};
 
     fn moments(values: impl Iterator<Item = f64>) -> (f64, f64) {
         let (mut n, mut sum, mut sum2) = (0.0, 0.0, 0.0);
@@ -286,7 +296,7 @@ mod tests {
             unit: SigmaUnit::Fraction,
             probability: 1.0,
         };
-        spec.validate().unwrap();
+        spec.validate("noise").unwrap();
         let drawn = spec.draw(&mut s).unwrap();
         assert_eq!(
             drawn.model,
@@ -299,6 +309,56 @@ mod tests {
             b: Range::Fixed(-1.0),
             probability: 1.0,
         };
-        assert!(pg.validate().unwrap_err().contains("noise.b"));
+        assert!(pg.validate("noise").unwrap_err().contains("noise.b"));
+    }
+
+    /// The σ of drawn Gaussian noise.
+    fn sigma(noise: &Noise) -> f64 {
+        match noise.model {
+            NoiseModel::Gaussian { sigma } => sigma,
+            NoiseModel::PoissonGaussian { .. } => panic!("not Gaussian: {noise:?}"),
+        }
+    }
+
+    #[test]
+    fn drawn_parameters_follow_the_declared_ranges_and_probabilities() {
+        let mut s = test_stream("noise draws");
+        let n = 4000;
+        let draws = |spec: NoiseSpec, s: &mut Stream| -> Vec<Noise> {
+            (0..n).filter_map(|_| spec.draw(s)).collect()
+        };
+        let gaussian = |sigma: [f64; 2], unit, probability| NoiseSpec::Gaussian {
+            sigma: Range::Span(sigma),
+            unit,
+            probability,
+        };
+        let levels = draws(gaussian([2.0, 8.0], SigmaUnit::Levels, 0.5), &mut s);
+        assert_frequency(levels.len(), n, 0.5, "noise.probability");
+        let sigmas: Vec<f64> = levels.iter().map(sigma).collect();
+        assert_uniform(&sigmas, (2.0, 8.0), "noise.sigma in levels");
+        // A fraction of full scale is drawn uniformly in its own unit, recorded in levels.
+        let fraction = draws(gaussian([0.01, 0.03], SigmaUnit::Fraction, 1.0), &mut s);
+        let fractions: Vec<f64> = fraction.iter().map(|d| sigma(d) / 255.0).collect();
+        assert_uniform(&fractions, (0.01, 0.03), "noise.sigma as a fraction");
+        let pg = draws(
+            NoiseSpec::PoissonGaussian {
+                a: Range::Span([0.001, 0.01]),
+                b: Range::Span([1e-5, 1e-4]),
+                probability: 1.0,
+            },
+            &mut s,
+        );
+        let (a, b): (Vec<f64>, Vec<f64>) = pg
+            .iter()
+            .map(|d| match d.model {
+                NoiseModel::PoissonGaussian { a, b } => (a, b),
+                NoiseModel::Gaussian { .. } => panic!("not Poisson–Gaussian"),
+            })
+            .unzip();
+        assert_uniform(&a, (0.001, 0.01), "noise.a");
+        assert_uniform(&b, (1e-5, 1e-4), "noise.b");
+        // Every noise field has a seed of its own.
+        let seeds: std::collections::BTreeSet<u64> = pg.iter().map(|d| d.seed).collect();
+        assert_eq!(seeds.len(), pg.len());
     }
 }

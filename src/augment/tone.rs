@@ -30,7 +30,7 @@ pub struct ExposureSpec {
     pub probability: f64,
 }
 
-one_parameter_spec!(ExposureSpec, Exposure { stops }, "exposure.stops", STOPS);
+one_parameter_spec!(ExposureSpec, Exposure { stops }, STOPS);
 
 /// Multiplies the linear light of an sRGB8 image by 2^stops, in place.
 pub fn exposure(rgb: &mut [u8], width: usize, height: usize, params: &Exposure) {
@@ -58,7 +58,7 @@ pub struct GammaSpec {
     pub probability: f64,
 }
 
-one_parameter_spec!(GammaSpec, Gamma { gamma }, "gamma.gamma", GAMMA);
+one_parameter_spec!(GammaSpec, Gamma { gamma }, GAMMA);
 
 /// torchvision's `adjust_gamma` (gain 1) in place: x ← x^γ on values scaled to [0, 1], back
 /// to 8 bits as `convert_image_dtype` does, trunc(x · 255.999).
@@ -88,12 +88,7 @@ pub struct VignetteSpec {
     pub probability: f64,
 }
 
-one_parameter_spec!(
-    VignetteSpec,
-    Vignette { strength },
-    "vignette.strength",
-    STRENGTH
-);
+one_parameter_spec!(VignetteSpec, Vignette { strength }, STRENGTH);
 
 /// Relative illumination at ρ (distance from the image centre over the half-diagonal):
 /// cos⁴ of the field angle, (1 + c·ρ²)⁻², with c chosen so that the corners (ρ = 1) keep
@@ -126,7 +121,7 @@ pub fn vignette(rgb: &mut [u8], width: usize, height: usize, params: &Vignette) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::augment::{test_image, test_stream};
+    use crate::augment::{assert_frequency, assert_uniform, test_image, test_stream};
 
     #[test]
     fn exposure_scales_linear_light_by_two_to_the_stops() {
@@ -190,7 +185,7 @@ mod tests {
             stops: Range::Span([-1.0, 0.5]),
             probability: 0.5,
         };
-        spec.validate().unwrap();
+        spec.validate("exposure").unwrap();
         let drawn: Vec<_> = (0..4000).filter_map(|_| spec.draw(&mut s)).collect();
         assert!((1850..2150).contains(&drawn.len()), "{}", drawn.len());
         assert!(drawn.iter().all(|e| (-1.0..0.5).contains(&e.stops)));
@@ -198,11 +193,44 @@ mod tests {
             gamma: Range::Fixed(0.0),
             probability: 1.0,
         };
-        assert!(g.validate().unwrap_err().contains("gamma.gamma"));
+        assert!(g.validate("gamma").unwrap_err().contains("gamma.gamma"));
         let v = VignetteSpec {
             strength: Range::Span([0.1, 0.3]),
             probability: 1.0,
         };
         assert!((0.1..0.3).contains(&v.draw(&mut s).unwrap().strength));
+    }
+
+    #[test]
+    fn drawn_values_follow_the_declared_ranges_and_probabilities() {
+        let mut s = test_stream("tone draws");
+        let n = 5000;
+        let exposure = ExposureSpec {
+            stops: Range::Span([-1.0, 0.5]),
+            probability: 0.3,
+        };
+        let gamma = GammaSpec {
+            gamma: Range::Span([0.8, 1.25]),
+            probability: 0.7,
+        };
+        let vignette = VignetteSpec {
+            strength: Range::Span([0.1, 0.5]),
+            probability: 1.0,
+        };
+        let stops: Vec<f64> = (0..n)
+            .filter_map(|_| exposure.draw(&mut s).map(|e| e.stops))
+            .collect();
+        assert_frequency(stops.len(), n, 0.3, "exposure.probability");
+        assert_uniform(&stops, (-1.0, 0.5), "exposure.stops");
+        let gammas: Vec<f64> = (0..n)
+            .filter_map(|_| gamma.draw(&mut s).map(|g| g.gamma))
+            .collect();
+        assert_frequency(gammas.len(), n, 0.7, "gamma.probability");
+        assert_uniform(&gammas, (0.8, 1.25), "gamma.gamma");
+        let strengths: Vec<f64> = (0..n)
+            .filter_map(|_| vignette.draw(&mut s).map(|v| v.strength))
+            .collect();
+        assert_eq!(strengths.len(), n);
+        assert_uniform(&strengths, (0.1, 0.5), "vignette.strength");
     }
 }

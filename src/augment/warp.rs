@@ -18,7 +18,10 @@
 //! X′_cam = R_z(θ)·X_cam with R_z(θ) = [[R(θ), 0], [0, 1]], which keeps every Z. Hence
 //! f′ = s·f, p′ = s·R(θ)(p − c) + c + t, planar depth values unchanged, and the new pose
 //! w2c′ = R_z(θ)·w2c (c2w′ = c2w·R_z(θ)ᵀ): the camera's own x axis turns towards its −y
-//! axis by θ. A zoom or shift alone is exact with fx ≠ fy too; a rotation needs fx = fy.
+//! axis by θ. A zoom or shift alone is exact with fx ≠ fy too; a rotation needs fx = fy. With
+//! lens distortion the same K′ holds (the principal point is also the distortion centre, and
+//! moves with the picture); the lens, seen from the turned camera, has its tangential
+//! coefficients turned by θ, which the caller applies (the pipeline's moved camera).
 //!
 //! Sampling: each output pixel centre is mapped back into the input. A pixel whose source
 //! point lies outside [0, W) × [0, H) is invalid: black in RGB, 0 in every label layer, 0 in
@@ -360,13 +363,14 @@ impl WarpSpec {
         }
     }
 
-    /// Checks every range; the error names the parameter and its value.
-    pub fn validate(&self) -> Result<(), String> {
-        check_range("warp.zoom", &self.zoom, 0.05, 20.0)?;
-        check_range("warp.rotation", &self.rotation, -1e3, 1e3)?;
-        check_range("warp.shift_x", &self.shift_x, -1.0, 1.0)?;
-        check_range("warp.shift_y", &self.shift_y, -1.0, 1.0)?;
-        check_probability("warp", self.probability)
+    /// Checks every range; the error names the parameter by its path under `at` and shows
+    /// its value.
+    pub fn validate(&self, at: &str) -> Result<(), String> {
+        check_range(&format!("{at}.zoom"), &self.zoom, 0.05, 20.0)?;
+        check_range(&format!("{at}.rotation"), &self.rotation, -1e3, 1e3)?;
+        check_range(&format!("{at}.shift_x"), &self.shift_x, -1.0, 1.0)?;
+        check_range(&format!("{at}.shift_y"), &self.shift_y, -1.0, 1.0)?;
+        check_probability(at, self.probability)
     }
 
     /// Draws the warp of one `width` × `height` view, or `None` when the probability says skip.
@@ -395,10 +399,11 @@ pub struct CropSpec {
 }
 
 impl CropSpec {
-    /// Checks the range and probability; the error names the parameter and its value.
-    pub fn validate(&self) -> Result<(), String> {
-        check_range("crop.size", &self.size, 1e-3, 1.0)?;
-        check_probability("crop", self.probability)
+    /// Checks the range and probability; the error names the parameter by its path under
+    /// `at` and shows its value.
+    pub fn validate(&self, at: &str) -> Result<(), String> {
+        check_range(&format!("{at}.size"), &self.size, 1e-3, 1.0)?;
+        check_probability(at, self.probability)
     }
 
     /// Draws the crop of one `width` × `height` view as the similarity that resizes it, or
@@ -426,7 +431,7 @@ impl CropSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::augment::{on_threads, test_image, test_stream};
+    use crate::augment::{assert_frequency, assert_uniform, on_threads, test_image, test_stream};
     use std::f64::consts::FRAC_PI_2;
 
     fn close(a: [f64; 2], b: [f64; 2], tol: f64) -> bool {
@@ -620,7 +625,7 @@ mod tests {
             shift_x: Range::Span([-0.1, 0.1]),
             ..WarpSpec::paper()
         };
-        spec.validate().unwrap();
+        spec.validate("warp").unwrap();
         let drawn: Vec<Similarity> = (0..4000)
             .filter_map(|_| spec.draw(&mut s, 960, 480))
             .collect();
@@ -632,15 +637,39 @@ mod tests {
                 .all(|d| d.shift[0].abs() <= 96.0 && d.shift[1] == 0.0)
         );
         assert!(drawn.iter().all(|d| d.centre == [480.0, 240.0]));
-        let mean_angle = drawn.iter().map(|d| d.angle).sum::<f64>() / 4000.0;
-        assert!(
-            (mean_angle - std::f64::consts::PI).abs() < 0.1,
-            "{mean_angle}"
-        );
+        let of = |f: fn(&Similarity) -> f64| drawn.iter().map(f).collect::<Vec<f64>>();
+        assert_uniform(&of(|d| d.zoom), (0.8, 1.2), "warp.zoom");
+        let tau = std::f64::consts::TAU;
+        assert_uniform(&of(|d| d.angle), (0.0, tau), "warp.rotation");
+        assert_uniform(&of(|d| d.shift[0] / 960.0), (-0.1, 0.1), "warp.shift_x");
         let bad = WarpSpec {
             zoom: Range::Fixed(0.0),
             ..spec
         };
-        assert!(bad.validate().unwrap_err().contains("warp.zoom"));
+        assert!(bad.validate("warp").unwrap_err().contains("warp.zoom"));
+    }
+
+    #[test]
+    fn crop_sizes_and_places_follow_the_declared_distribution() {
+        let spec = CropSpec {
+            size: Range::Span([0.5, 0.9]),
+            probability: 0.6,
+        };
+        let (w, h) = (640.0, 480.0);
+        let mut s = test_stream("crop draws");
+        let n = 5000;
+        let drawn: Vec<Similarity> = (0..n).filter_map(|_| spec.draw(&mut s, 640, 480)).collect();
+        assert_frequency(drawn.len(), n, 0.6, "crop.probability");
+        let sizes: Vec<f64> = drawn.iter().map(|d| 1.0 / d.zoom).collect();
+        assert_uniform(&sizes, (0.5, 0.9), "crop.size");
+        // The window's top-left corner is uniform over the places that keep it inside: as a
+        // fraction of the room left, uniform in [0, 1].
+        let place = |axis: usize, side: f64| -> Vec<f64> {
+            (drawn.iter())
+                .map(|d| d.centre[axis] / (side - side / d.zoom))
+                .collect()
+        };
+        assert_uniform(&place(0, w), (0.0, 1.0), "crop left");
+        assert_uniform(&place(1, h), (0.0, 1.0), "crop top");
     }
 }

@@ -15,6 +15,33 @@
 
 use serde::Serialize;
 
+/// Why a lens leaves some pixels without a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LensFault {
+    /// It stops being one-to-one at this distorted radius (normalised).
+    Folds {
+        /// The distorted radius it is one-to-one out to.
+        at: f64,
+    },
+    /// Its inverse fails at this distorted point (normalised).
+    NoInverse {
+        /// The point.
+        at: (f64, f64),
+    },
+}
+
+impl std::fmt::Display for LensFault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LensFault::Folds { at } => write!(f, "is one-to-one only out to {at:.3}"),
+            LensFault::NoInverse { at: (x, y) } => write!(
+                f,
+                "has no inverse at the distorted point ({x:.3}, {y:.3}) (coefficients far beyond any real lens')"
+            ),
+        }
+    }
+}
+
 /// Brown–Conrady coefficients, in OpenCV's order and meaning (all zero: a pinhole camera).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Distortion {
@@ -59,13 +86,20 @@ impl Distortion {
         (self.distort(x, y), [[dxx, dxy], [dyx, dyy]])
     }
 
-    /// Undistorted normalised coordinates whose distortion is (x_d, y_d), by Newton's method
-    /// from (x_d, y_d); None when it does not converge (the lens folds the image there).
+    /// Undistorted normalised coordinates whose distortion is (x_d, y_d): Newton's method from
+    /// (x_d, y_d), and where that does not converge, the same solution followed out from the
+    /// centre (where the inverse is the identity) in small steps. None when neither converges:
+    /// the lens folds the image there, and (x_d, y_d) has no ray.
     pub fn undistort(&self, xd: f64, yd: f64) -> Option<(f64, f64)> {
         if self.is_none() {
             return Some((xd, yd));
         }
-        let (mut x, mut y) = (xd, yd);
+        self.newton((xd, yd), (xd, yd))
+            .or_else(|| self.continued(xd, yd))
+    }
+
+    /// Newton's method on distort(x, y) = `target` from `start`, to full precision.
+    fn newton(&self, (xd, yd): (f64, f64), (mut x, mut y): (f64, f64)) -> Option<(f64, f64)> {
         for _ in 0..50 {
             let ((fx, fy), [[a, b], [c, d]]) = self.with_jacobian(x, y);
             let (ex, ey) = (fx - xd, fy - yd);
@@ -83,49 +117,107 @@ impl Distortion {
         None
     }
 
-    /// Checks that the distortion maps the frame one-to-one: along every direction the
-    /// distorted radius must grow with the undistorted radius up to the farthest corner of
-    /// the image (`reach`, in normalised distorted units), and each pixel must invert. The
-    /// message names the coefficients.
-    pub fn validate(&self, reach: f64) -> Result<(), String> {
+    /// The inverse at (x_d, y_d) by continuation along the segment from the centre: each
+    /// step's solution starts Newton's method for the next, so it stays on the one-to-one
+    /// branch even where a start at (x_d, y_d) would not converge.
+    fn continued(&self, xd: f64, yd: f64) -> Option<(f64, f64)> {
+        const STEPS: u32 = 32;
+        (1..=STEPS).try_fold((0.0, 0.0), |at, step| {
+            let t = f64::from(step) / f64::from(STEPS);
+            self.newton((t * xd, t * yd), at)
+        })
+    }
+
+    /// How far out (distorted radius, normalised units) the lens maps the image one-to-one,
+    /// when that is short of `reach` (the farthest point a camera images, with a 5 % margin):
+    /// along each of 64 directions the distorted radius must grow with the undistorted one
+    /// until it passes 1.05 × `reach`. None when it does along every direction.
+    pub fn fold_within(&self, reach: f64) -> Option<f64> {
         if self.is_none() {
-            return Ok(());
+            return None;
         }
-        let coefficients = [self.k1, self.k2, self.p1, self.p2, self.k3];
-        if coefficients.iter().any(|c| !c.is_finite()) {
-            return Err(format!(
-                "dataset.camera.distortion {coefficients:?} must be finite"
-            ));
-        }
-        let folds = || {
-            Err(format!(
-                "dataset.camera.distortion k1 = {}, k2 = {}, p1 = {}, p2 = {}, k3 = {} folds the image before its corners (distorted radius {reach:.3}): the lens model is not one-to-one there; use smaller coefficients",
-                self.k1, self.k2, self.p1, self.p2, self.k3
-            ))
-        };
-        for direction in 0..64 {
+        let step = 1e-3 * reach.max(1e-3);
+        let limit = 1.05 * reach;
+        let folds = (0..64).filter_map(|direction| {
             let angle = std::f64::consts::TAU * f64::from(direction) / 64.0;
-            let (c, s) = (angle.cos(), angle.sin());
-            let mut previous = 0.0;
-            let mut r: f64 = 0.0;
-            // Walk outwards until the distorted radius passes the corners with a margin.
-            loop {
-                r += 1e-3 * reach.max(1e-3);
+            let (s, c) = angle.sin_cos();
+            let (mut r, mut reached) = (0.0f64, 0.0f64);
+            // Walk outwards until the distorted radius passes the limit, or stops growing.
+            while reached <= limit {
+                r += step;
                 let (xd, yd) = self.distort(r * c, r * s);
                 let rd = xd.hypot(yd);
-                if !(rd > previous) {
-                    return folds();
+                if !(rd > reached) || r > 1e3 * reach.max(1.0) {
+                    return Some(reached);
                 }
-                previous = rd;
-                if rd > 1.05 * reach {
-                    break;
-                }
-                if r > 1e3 * reach.max(1.0) {
-                    return folds();
-                }
+                reached = rd;
             }
+            None
+        });
+        folds.reduce(f64::min)
+    }
+
+    /// What keeps some distorted point within `reach` (normalised units; the 5 % margin of
+    /// [`Distortion::fold_within`] included) from having a ray, if anything: the lens folds,
+    /// or, with coefficients far beyond any real lens' (k1 = 10³⁰, say), floating point
+    /// leaves its inverse nothing to converge to. The inverse is tried on 64 directions × 32
+    /// radii and must reproduce each point.
+    pub fn fault_within(&self, reach: f64) -> Option<LensFault> {
+        if let Some(at) = self.fold_within(reach) {
+            return Some(LensFault::Folds { at });
         }
-        Ok(())
+        if self.is_none() {
+            return None;
+        }
+        let limit = 1.05 * reach;
+        let points = (0..64).flat_map(|direction| {
+            let (s, c) = (std::f64::consts::TAU * f64::from(direction) / 64.0).sin_cos();
+            (1..=32).map(move |k| {
+                (
+                    limit * c * f64::from(k) / 32.0,
+                    limit * s * f64::from(k) / 32.0,
+                )
+            })
+        });
+        let misses = |&(xd, yd): &(f64, f64)| match self.undistort(xd, yd) {
+            None => true,
+            Some((x, y)) => {
+                let (u, v) = self.distort(x, y);
+                (u - xd).hypot(v - yd) > 1e-12 * (1.0 + xd.hypot(yd))
+            }
+        };
+        points
+            .filter(misses)
+            .map(|at| LensFault::NoInverse { at })
+            .next()
+    }
+
+    /// The lens of a camera turned about its optical axis by `angle` (the turn of
+    /// [`Camera`](super::Camera) an image-plane rotation R(θ) makes, x towards y), seen in the
+    /// turned camera's axes: D′(x) = R(θ)·D(R(θ)ᵀx). The radial part commutes with rotations;
+    /// the tangential part is |x|²q + 2(q·x)x with q = (p2, p1), which turns as a vector:
+    /// q′ = R(θ)q.
+    pub fn turned(&self, angle: f64) -> Distortion {
+        // libm, as the warp's own rotation: the same bits on every CPU.
+        let (s, c) = libm::sincos(angle);
+        Distortion {
+            p2: c * self.p2 - s * self.p1,
+            p1: s * self.p2 + c * self.p1,
+            ..*self
+        }
+    }
+
+    /// The coefficients as messages show them.
+    pub fn describe(&self) -> String {
+        let n = crate::words::number;
+        format!(
+            "k1 = {}, k2 = {}, p1 = {}, p2 = {}, k3 = {}",
+            n(self.k1),
+            n(self.k2),
+            n(self.p1),
+            n(self.p2),
+            n(self.k3)
+        )
     }
 }
 
@@ -181,19 +273,85 @@ mod tests {
     }
 
     #[test]
-    fn a_folding_lens_is_refused_and_a_usual_one_accepted() {
-        assert!(lens().validate(0.8).is_ok());
-        // Strong barrel: the distorted radius r(1 − 0.8 r²) peaks at r = 0.65 (0.43).
+    fn a_folding_lens_is_found_and_a_usual_one_accepted() {
+        assert_eq!(lens().fold_within(0.8), None);
+        // Strong barrel: the distorted radius r(1 − 0.8 r²) peaks at r = 1/√2.4 (0.430).
         let folding = Distortion {
             k1: -0.8,
             ..Distortion::default()
         };
-        assert!(folding.validate(0.3).is_ok());
-        assert!(
-            folding
-                .validate(0.6)
-                .unwrap_err()
-                .contains("folds the image")
-        );
+        assert_eq!(folding.fold_within(0.3), None);
+        let peak = (1.0 / 2.4f64).sqrt() * (1.0 - 0.8 / 2.4);
+        let fold = folding.fold_within(0.6).unwrap();
+        assert!((fold - peak).abs() < 1e-5, "{fold} vs {peak}");
+    }
+
+    /// Rotates (x, y) by `angle`, x towards y.
+    fn rotate(angle: f64, (x, y): (f64, f64)) -> (f64, f64) {
+        let (s, c) = angle.sin_cos();
+        (c * x - s * y, s * x + c * y)
+    }
+
+    #[test]
+    fn a_lens_whose_inverse_fails_in_floating_point_is_found() {
+        // Pincushion so strong that the undistorted radius of a corner is about 10⁻¹⁰: the
+        // lens is monotone, but nothing converges to full precision.
+        let absurd = Distortion {
+            k1: 1e30,
+            ..Distortion::default()
+        };
+        assert_eq!(absurd.fold_within(0.8), None);
+        assert!(matches!(
+            absurd.fault_within(0.8),
+            Some(LensFault::NoInverse { .. })
+        ));
+        assert_eq!(lens().fault_within(0.8), None);
+    }
+
+    #[test]
+    fn a_turned_lens_is_the_lens_seen_from_the_turned_camera() {
+        let d = lens();
+        for angle in [0.3, -1.9, 2.7] {
+            let turned = d.turned(angle);
+            for (x, y) in [(0.31, -0.2), (-0.5, 0.44), (0.05, 0.6)] {
+                // The point seen at (x, y) by the turned camera is at Rᵀ(x, y) for the
+                // original one; its image, turned back into the new axes, must match.
+                let (u, v) = d.distort(rotate(-angle, (x, y)).0, rotate(-angle, (x, y)).1);
+                let want = rotate(angle, (u, v));
+                let got = turned.distort(x, y);
+                assert!((got.0 - want.0).abs() < 1e-15 && (got.1 - want.1).abs() < 1e-15);
+            }
+        }
+    }
+
+    #[test]
+    fn every_pixel_of_a_lens_at_the_fold_limit_inverts() {
+        // Barrel lenses whose fold lies just past the corners (the margin the checks keep),
+        // with decentering: each pixel's inverse exists and reproduces it.
+        for (k1, p1, p2) in [(-0.195, 0.0, 0.0), (-0.3, 4e-3, -3e-3), (0.4, -2e-3, 1e-3)] {
+            let d = Distortion {
+                k1,
+                p1,
+                p2,
+                ..Distortion::default()
+            };
+            // The largest corner reach the check accepts for this lens, to 1 %.
+            let mut reach = 0.05;
+            while d.fault_within(reach * 1.01).is_none() && reach < 3.0 {
+                reach *= 1.01;
+            }
+            let n = 120;
+            for i in 0..=n {
+                for j in 0..=n {
+                    let (xd, yd) = (
+                        reach * (2.0 * f64::from(j) / f64::from(n) - 1.0) / 2f64.sqrt(),
+                        reach * (2.0 * f64::from(i) / f64::from(n) - 1.0) / 2f64.sqrt(),
+                    );
+                    let (x, y) = d.undistort(xd, yd).expect("an inverse");
+                    let (u, v) = d.distort(x, y);
+                    assert!((u - xd).abs() < 1e-13 && (v - yd).abs() < 1e-13, "{k1}");
+                }
+            }
+        }
     }
 }

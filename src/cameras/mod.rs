@@ -1,14 +1,19 @@
-//! Pinhole cameras: intrinsics, poses, and the distributions views are drawn from.
+//! Cameras: intrinsics with Brown–Conrady lens distortion, poses, and the rigs views are
+//! drawn from.
 //!
-//! Owns: K, the camera-to-world pose in OpenCV axes (x right, y down, z forward), the
-//! conversions users need (world-to-camera, OpenGL/nerfstudio axes), ray directions through
-//! pixel centres (pixel (i, j) has its centre at (j + 0.5, i + 0.5)), and sampling poses on a
-//! sphere or band around a target. Must not touch: meshes, tracing or files.
+//! Owns: K and the lens (OpenCV's model, inverted exactly so that each pixel's ray is the one
+//! that distorts onto it, and checked one-to-one over every frame that is rendered), the
+//! camera-to-world pose in OpenCV axes (x right, y down, z forward), the conversions users
+//! need (world-to-camera, OpenGL/nerfstudio axes), ray directions through pixel centres (pixel
+//! (i, j) has its centre at (j + 0.5, i + 0.5)), and the rigs ([`CameraRig`]): poses on a
+//! sphere or band, fixed inspection cameras, orbits and flight lines, drawn fields of view,
+//! principal points and lenses, stereo pairs, and the checks that refuse degenerate ones.
+//! Must not touch: meshes, tracing or files.
 
 mod distortion;
 mod rig;
 
-pub use distortion::Distortion;
+pub use distortion::{Distortion, LensFault};
 pub use rig::{
     CameraRig, Distance, DistortionRanges, FixedCamera, MIN_FOV, Orbit, Poses, Stereo, ViewDraw,
     orbit_camera,
@@ -74,10 +79,33 @@ impl Intrinsics {
 
     /// Direction in camera axes through image point (u, v) (pixel units), unit z: through
     /// the undistorted point whose image is (u, v) when the lens distorts.
+    ///
+    /// Panics where the lens has no inverse: every camera that is rendered has passed
+    /// [`Intrinsics::check_lens`] (a lens one-to-one past its corners), so there is none
+    /// inside its frame, and a made-up ray would write a wrong label without a word.
     pub fn ray_through(&self, u: f64, v: f64) -> DVec3 {
         let (xd, yd) = ((u - self.cx) / self.fx, (v - self.cy) / self.fy);
-        let (x, y) = self.distortion.undistort(xd, yd).unwrap_or((xd, yd));
+        let Some((x, y)) = self.distortion.undistort(xd, yd) else {
+            panic!(
+                "no ray through ({u}, {v}): the lens {} has no inverse there, yet the camera was checked one-to-one out to its corners",
+                self.distortion.describe()
+            )
+        };
         DVec3::new(x, y, 1.0)
+    }
+
+    /// Checks that the lens maps this camera's whole frame one-to-one, so that every pixel
+    /// has a ray ([`Distortion::fault_within`] out to the farthest corner).
+    pub fn check_lens(&self) -> Result<(), String> {
+        let reach = self.corner_reach();
+        match self.distortion.fault_within(reach) {
+            None => Ok(()),
+            Some(fault) => Err(format!(
+                "the lens {} {fault}, but this camera's corners reach a distorted radius of {reach:.3} (normalised; with a 5 % margin, {:.3}): its outer pixels would have no ray",
+                self.distortion.describe(),
+                1.05 * reach
+            )),
+        }
     }
 
     /// Pixel coordinates (u, v) of a point in camera axes (z > 0), distorted by the lens.

@@ -4,7 +4,7 @@
 //! field of view, principal point and lens distortion from ranges, and be the left eye of a
 //! stereo pair.
 
-use super::{Camera, Distortion, Intrinsics};
+use super::{Camera, Distortion, Intrinsics, LensFault};
 use crate::seeds::Stream;
 use glam::{DMat3, DVec3};
 use serde::Serialize;
@@ -240,11 +240,63 @@ impl CameraRig {
     /// ranges (extreme coefficients) are checked at the widest field of view.
     fn validate_lens(&self) -> Result<(), String> {
         let d = &self.distortion;
+        let ranges = [d.k1, d.k2, d.p1, d.p2, d.k3];
+        if ranges.iter().flatten().any(|c| !c.is_finite()) {
+            return Err(format!(
+                "dataset.camera.distortion {ranges:?} must be finite"
+            ));
+        }
+        let reach = self.frame_reach(1.0, 0.0);
+        let Some((lens, fault)) = self.worst_fault(reach) else {
+            return Ok(());
+        };
+        let what = match fault {
+            LensFault::Folds { .. } => "folds the image before its corners",
+            LensFault::NoInverse { .. } => "cannot be inverted out to the image's corners",
+        };
+        Err(format!(
+            "dataset.camera.distortion {} {what}: they reach a distorted radius of {reach:.3} (normalised; with a 5 % margin, {:.3}), but the lens model {fault}; use smaller coefficients",
+            lens.describe(),
+            1.05 * reach
+        ))
+    }
+
+    /// Checks that every lens the ranges can draw also maps one-to-one the wider frame an
+    /// exact geometric augmentation renders (`what`, as the recipe names it): a zoom down to
+    /// `zoom` and shifts of up to `shift` (fractions of the width and height) show the lens
+    /// beyond the clean frame's corners, and a pixel past the lens's fold has no ray.
+    pub fn validate_widened(&self, zoom: f64, shift: [f64; 2], what: &str) -> Result<(), String> {
+        let shift = (shift[0] * f64::from(self.width)).hypot(shift[1] * f64::from(self.height));
+        let reach = self.frame_reach(zoom, shift);
+        match self.worst_fault(reach) {
+            None => Ok(()),
+            Some((lens, fault)) => Err(format!(
+                "{what} widens the frame an exact copy renders to a distorted radius of {reach:.3} (normalised; with a 5 % margin, {:.3}), but the lens dataset.camera.distortion {} {fault}: the outer pixels would have no ray. Zoom out less, shift less, use a milder lens, or mode: \"image\" (which warps the rendered images instead)",
+                1.05 * reach,
+                lens.describe()
+            )),
+        }
+    }
+
+    /// The farthest a camera of this rig images from its principal point, in normalised
+    /// distorted units, when an exact augmentation zooms by `zoom` and shifts by up to `shift`
+    /// pixels. The new camera's pixel q sees what the clean camera sees at the warp's source
+    /// point p, at the same normalised distance from the principal point c (the warp only
+    /// turns it), and |p − c| ≤ (|q − centre| + |shift|)/zoom + |c − centre|: at the widest
+    /// field of view (the shortest focal length) that is the half-diagonal plus the shift,
+    /// over the zoomed focal length, plus the largest principal-point offset.
+    fn frame_reach(&self, zoom: f64, shift: f64) -> f64 {
         let widest = self.lens(self.fov_y[1], [0.0; 2], Distortion::default());
-        let offsets = self.principal_offset;
-        let reach = widest.corner_reach()
-            + offsets.iter().flatten().fold(0.0f64, |m, o| m.max(o.abs())) / widest.fy;
-        for corner in 0..32u32 {
+        let half_diagonal = 0.5 * f64::from(self.width).hypot(f64::from(self.height));
+        let [x, y] = self.principal_offset.map(|r| r[0].abs().max(r[1].abs()));
+        (half_diagonal + shift) / (zoom * widest.fy) + x.hypot(y) / widest.fy
+    }
+
+    /// The first lens at a corner of the coefficient ranges that leaves a point within
+    /// `reach` without a ray, with why.
+    fn worst_fault(&self, reach: f64) -> Option<(Distortion, LensFault)> {
+        let d = &self.distortion;
+        (0..32u32).find_map(|corner| {
             let at = |range: [f64; 2], bit: u32| range[((corner >> bit) & 1) as usize];
             let lens = Distortion {
                 k1: at(d.k1, 0),
@@ -253,9 +305,8 @@ impl CameraRig {
                 p2: at(d.p2, 3),
                 k3: at(d.k3, 4),
             };
-            lens.validate(reach)?;
-        }
-        Ok(())
+            lens.fault_within(reach).map(|fault| (lens, fault))
+        })
     }
 
     fn validate_poses(&self, views: u32) -> Result<(), String> {
@@ -284,7 +335,12 @@ impl CameraRig {
                 }
                 distance_ok(distance)
             }
-            Poses::Orbit { distance, .. } => distance_ok(distance),
+            Poses::Orbit {
+                distance, sweep, ..
+            } => {
+                distance_ok(distance)?;
+                orbit_views_apart(*sweep, views)
+            }
             Poses::Fixed { cameras } => {
                 if cameras.len() != views as usize {
                     return Err(format!(
@@ -392,11 +448,18 @@ impl CameraRig {
             k3: pick(stream, d.k3),
         };
         let intrinsics = self.lens(fov_y, offset, lens);
+        // The ranges' extremes were checked; this is the lens actually drawn.
+        intrinsics
+            .check_lens()
+            .map_err(|e| format!("dataset.camera.distortion: {e}"))?;
         let (eye, target, roll, on_sphere) = place(&intrinsics);
         let jitter = self.jitter(stream);
         let aim = target + jitter;
         let outward = eye - aim;
         let distance = outward.length();
+        if distance == 0.0 {
+            return Err(self.on_its_aim(pose, eye));
+        }
         // On the sphere the angles are the ones drawn; elsewhere they describe the pose.
         let (yaw, pitch) = on_sphere.map_or(
             (
@@ -430,6 +493,30 @@ impl CameraRig {
             ));
         }
         Ok((camera, draw))
+    }
+
+    /// Why pose `pose`, standing at `eye`, is no camera: it stands on the point it aims at.
+    /// Names the rig's camera and where that point came from (a default target is the
+    /// centre of the structure's bounding sphere, known only once the sample is built).
+    fn on_its_aim(&self, pose: u32, eye: DVec3) -> String {
+        let (who, target) = match &self.poses {
+            Poses::Fixed { cameras } => {
+                let i = pose as usize % cameras.len();
+                (format!("dataset.camera.fixed[{i}]"), cameras[i].target)
+            }
+            Poses::Line { target, .. } => (format!("dataset.camera.line, view {pose},"), *target),
+            _ => (format!("dataset.camera, view {pose},"), None),
+        };
+        let why = match target {
+            None => {
+                "the centre of this sample's structures, the default target; give it a `target` away from where it stands"
+            }
+            Some(_) => "its target",
+        };
+        let [x, y, z] = eye.to_array().map(crate::words::number);
+        format!(
+            "{who} stands at ({x}, {y}, {z}), the very point it aims at ({why}): a camera there has no direction to look"
+        )
     }
 
     /// Where pose `pose` stands: a function of the intrinsics (framing depends on the field of
@@ -485,8 +572,7 @@ impl CameraRig {
                 sweep,
                 roll,
             } => {
-                let closed = (sweep.abs() - std::f64::consts::TAU).abs() < 1e-12;
-                let yaw = yaw_start + sweep * fraction(closed);
+                let yaw = yaw_start + sweep * fraction(closed_orbit(*sweep));
                 let drawn = drawn_distance(stream, distance);
                 Place::Around(yaw, *pitch, *distance, drawn, *roll)
             }
@@ -548,6 +634,47 @@ impl CameraRig {
             rotation: turn * left.rotation,
             position: left.position + stereo.baseline * left.rotation.x_axis,
         })
+    }
+}
+
+/// Whether a full turn is swept: then the last view stops one step short of the first.
+fn closed_orbit(sweep: f64) -> bool {
+    (sweep.abs() - std::f64::consts::TAU).abs() < 1e-12
+}
+
+/// Checks that no two of an orbit's `views` share an azimuth (to 1e-9 rad): they would be
+/// the same camera, which is no orbit. Views i and j coincide when sweep·(j − i)/steps is a
+/// whole number of turns, so it is enough to look at the gaps from view 0.
+fn orbit_views_apart(sweep: f64, views: u32) -> Result<(), String> {
+    if !sweep.is_finite() {
+        return Err(format!(
+            "dataset.camera.orbit.sweep = {} must be finite (radians)",
+            crate::words::number(sweep)
+        ));
+    }
+    let steps = if closed_orbit(sweep) {
+        views
+    } else {
+        views.saturating_sub(1)
+    };
+    let tau = std::f64::consts::TAU;
+    let same = (1..views).find(|&gap| {
+        let turn = (sweep * f64::from(gap) / f64::from(steps)).rem_euclid(tau);
+        turn.min(tau - turn) < 1e-9
+    });
+    match same {
+        None => Ok(()),
+        Some(_) if sweep == 0.0 => Err(format!(
+            "dataset.camera.orbit.sweep = 0 puts all {views} views at one azimuth: they would be one camera {views} times; sweep an angle (deg(360) for a full circle) or use views: 1"
+        )),
+        Some(1) => Err(format!(
+            "dataset.camera.orbit.sweep = {} puts all {views} views at one azimuth: the step between them is a whole number of turns, so they would be one camera {views} times",
+            crate::words::number(sweep)
+        )),
+        Some(gap) => Err(format!(
+            "dataset.camera.orbit.sweep = {} puts views 0 and {gap} of {views} at the same azimuth (a whole number of turns apart): they would be the same camera; sweep less than a full turn between them",
+            crate::words::number(sweep)
+        )),
     }
 }
 
@@ -792,6 +919,138 @@ mod tests {
             ..CameraRig::default()
         };
         assert!(flat.validate(1).unwrap_err().contains("baseline"));
+        let orbit = |sweep: f64| {
+            with(Poses::Orbit {
+                distance: Distance::Frame { margin: 1.05 },
+                pitch: 0.2,
+                yaw_start: 0.0,
+                sweep,
+                roll: 0.0,
+            })
+        };
+        assert!(
+            orbit(0.0)
+                .validate(3)
+                .unwrap_err()
+                .contains("sweep = 0 puts all 3 views")
+        );
+        assert!(orbit(0.0).validate(1).is_ok());
+        // Two turns over 3 views: each step a whole turn; over 5 views, views 0 and 2 meet.
+        let two_turns = 2.0 * std::f64::consts::TAU;
+        assert!(
+            orbit(two_turns)
+                .validate(3)
+                .unwrap_err()
+                .contains("all 3 views")
+        );
+        assert!(
+            orbit(two_turns)
+                .validate(5)
+                .unwrap_err()
+                .contains("views 0 and 2")
+        );
+        for fine in [std::f64::consts::TAU, -std::f64::consts::TAU, 1.0, 6.0] {
+            assert!(orbit(fine).validate(8).is_ok(), "{fine}");
+        }
+    }
+
+    #[test]
+    fn a_camera_on_the_point_it_aims_at_is_named() {
+        let centre = DVec3::new(0.5, -1.0, 2.0);
+        let fixed = CameraRig {
+            poses: Poses::Fixed {
+                cameras: vec![
+                    FixedCamera {
+                        position: [4.0, 0.0, 2.0],
+                        target: None,
+                        roll: 0.0,
+                    },
+                    FixedCamera {
+                        position: centre.to_array(),
+                        target: None,
+                        roll: 0.0,
+                    },
+                ],
+            },
+            ..CameraRig::default()
+        };
+        let mut s = Stream::new(0, Scope::View(0, 0), "camera");
+        assert!(fixed.draw(&mut s, 0, 2, centre, 1.0).is_ok());
+        let err = fixed.draw(&mut s, 1, 2, centre, 1.0).unwrap_err();
+        assert!(
+            err.starts_with("dataset.camera.fixed[1] stands at (0.5, -1, 2)")
+                && err.contains("give it a `target`"),
+            "{err}"
+        );
+        let line = CameraRig {
+            poses: Poses::Line {
+                from: [-2.0, -1.0, 2.0],
+                to: [3.0, -1.0, 2.0],
+                target: None,
+                roll: 0.0,
+            },
+            ..CameraRig::default()
+        };
+        // Five views 1.25 m apart: view 2 lands on the centre.
+        let err = line.draw(&mut s, 2, 5, centre, 1.0).unwrap_err();
+        assert!(
+            err.starts_with("dataset.camera.line, view 2, stands at"),
+            "{err}"
+        );
+        assert!(line.draw(&mut s, 1, 5, centre, 1.0).is_ok());
+    }
+
+    #[test]
+    fn an_exact_zoom_out_must_keep_the_lens_one_to_one() {
+        // k1 = −0.195 at 60°: one-to-one out to r_d = (2/3)/√(3 · 0.195) = 0.872; the clean
+        // corners reach √2·tan 30° = 0.816, within the 5 % margin only down to zoom 0.984.
+        let rig = CameraRig {
+            width: 64,
+            height: 64,
+            distortion: DistortionRanges {
+                k1: [-0.195; 2],
+                ..DistortionRanges::default()
+            },
+            ..CameraRig::default()
+        };
+        rig.validate(1).unwrap();
+        let err = rig.validate_widened(0.8, [0.0; 2], "zoom 0.8").unwrap_err();
+        assert!(
+            err.starts_with("zoom 0.8 widens") && err.contains("0.872"),
+            "{err}"
+        );
+        assert!(rig.validate_widened(0.99, [0.0; 2], "zoom 0.99").is_ok());
+        // A shift shows the lens beyond the corners too.
+        assert!(rig.validate_widened(1.0, [0.2, 0.0], "shift").is_err());
+        let pinhole = CameraRig::default();
+        assert!(pinhole.validate_widened(0.05, [1.0, 1.0], "any").is_ok());
+    }
+
+    #[test]
+    fn principal_offsets_along_both_axes_move_the_corner_diagonally() {
+        // Offsets of (20, 20) px put the farthest corner (52, 52) px from the principal point
+        // of a 64 × 64 image at 60°, a normalised radius of 1.327: a barrel lens folding at
+        // 1.31 has no ray for it, though each offset alone would stay inside.
+        let k1 = -(2.0 / 3.0 / 1.31f64).powi(2) / 3.0;
+        let corner = 52.0 * 2f64.sqrt() / (32.0 / (std::f64::consts::PI / 6.0).tan());
+        assert!((corner - 1.327).abs() < 1e-3);
+        let rig = |offset: f64| CameraRig {
+            width: 64,
+            height: 64,
+            principal_offset: [[offset; 2], [offset; 2]],
+            distortion: DistortionRanges {
+                k1: [k1; 2],
+                ..DistortionRanges::default()
+            },
+            ..CameraRig::default()
+        };
+        assert!(
+            rig(20.0)
+                .validate(1)
+                .unwrap_err()
+                .contains("folds the image")
+        );
+        assert!(rig(0.0).validate(1).is_ok());
     }
 
     #[test]

@@ -48,6 +48,19 @@ pub fn mask_png(width: u32, height: u32, mask: &[u8]) -> Vec<u8> {
     )
 }
 
+/// 16-bit grey, row-major, whatever the values (depth in millimetres, ids beyond 255); PNG
+/// stores the samples big-endian.
+pub fn grey16_png(width: u32, height: u32, values: &[u16]) -> Vec<u8> {
+    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_be_bytes()).collect();
+    png(
+        width,
+        height,
+        ::png::ColorType::Grayscale,
+        ::png::BitDepth::Sixteen,
+        &bytes,
+    )
+}
+
 /// The largest id a segmentation image holds (a 16-bit PNG).
 pub const MAX_SEGMENTATION_ID: u32 = u16::MAX as u32;
 
@@ -70,14 +83,8 @@ pub fn id_png(width: u32, height: u32, ids: &[u32]) -> anyhow::Result<Vec<u8>> {
             "segmentation id {largest} does not fit a 16-bit PNG (at most {MAX_SEGMENTATION_ID})"
         );
     }
-    let bytes: Vec<u8> = ids.iter().flat_map(|&i| (i as u16).to_be_bytes()).collect();
-    Ok(png(
-        width,
-        height,
-        ::png::ColorType::Grayscale,
-        ::png::BitDepth::Sixteen,
-        &bytes,
-    ))
+    let narrow: Vec<u16> = ids.iter().map(|&i| i as u16).collect();
+    Ok(grey16_png(width, height, &narrow))
 }
 
 /// Planar depth in metres, 0 where no surface was hit.

@@ -19,7 +19,8 @@ mod meshes;
 mod writers;
 
 pub use encode::{
-    DEPTH_CHANNEL, MAX_SEGMENTATION_ID, depth_exr, id_png, mask_png, rgb_png, vector_exr,
+    DEPTH_CHANNEL, MAX_SEGMENTATION_ID, depth_exr, grey16_png, id_png, mask_png, rgb_png,
+    vector_exr,
 };
 pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, write_atomic};
 pub use meshes::{MeshLayer, PointLayer};

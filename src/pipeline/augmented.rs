@@ -4,15 +4,18 @@
 //! bilinearly, labels by nearest neighbour, pixels without a source invalid; normals in camera
 //! axes turn with the camera). Photometric operations then act on the RGB images only (the
 //! loaded and the unloaded one alike, with the same drawn values), in the order the recipe
-//! lists them. Flow is not defined on a warped image: the recipe refuses that combination.
+//! lists them; pixels without a source stay black. Both modes write one camera: the one under
+//! which the moved picture is exact, lens included. Flow is not defined on a warped image:
+//! the recipe refuses that combination.
 
+use super::view::ViewCamera;
 use crate::augment::{
     self, Blur, ColourJitter, Erasing, Exposure, Frame, Gamma, Jpeg, Noise, Pinhole, Similarity,
     Vignette,
 };
 use crate::cameras::Camera;
 use crate::output::{Flow, ViewLayers};
-use crate::scene::{AugmentSpec, NormalsFrame, Operation};
+use crate::scene::{AugmentSpec, DatasetSpec, GeometryMode, NormalsFrame, Operation};
 use crate::seeds::{Scope, Stream};
 use anyhow::{Result, anyhow};
 use glam::{DMat3, DVec3};
@@ -55,22 +58,43 @@ impl Applied {
     }
 }
 
-/// The operations of copy `copy` of view `view` of sample `sample`, drawn from one stream
-/// per (copy, operation): adding an operation never shifts another's values. Operations the
+/// Which copy of which image: sample, camera view, the pose it belongs to (both eyes of a
+/// stereo pair share one pose; otherwise the pose is the view) and the copy.
+#[derive(Clone, Copy, Debug)]
+struct CopyOf {
+    /// Sample index.
+    pub sample: u64,
+    /// Camera view within the sample.
+    pub view: u32,
+    /// The pose of the view: view / 2 in a stereo rig, else the view.
+    pub pose: u32,
+    /// Copy index.
+    pub copy: u32,
+}
+
+/// The operations of one copy, each drawn from its own stream keyed by the copy and by the
+/// operation's kind and how many of that kind come before it in the list ("augment 0 blur
+/// 1": the copy's second blur). So adding, removing or moving operations of other kinds never
+/// changes an operation's draws. A geometric operation draws per pose, so that both eyes of
+/// a stereo pair move alike and stay a rigid pair; the others per view. Operations the
 /// probabilities skip are left out.
-pub fn draw_copy(
+fn draw_copy(
     spec: &AugmentSpec,
     seed: u64,
-    (sample, view, copy): (u64, u32, u32),
+    of: CopyOf,
     (width, height): (u32, u32),
 ) -> Vec<Applied> {
     let (w, h) = (width as usize, height as usize);
+    let mut seen: Vec<&str> = Vec::new();
     spec.operations
         .iter()
-        .enumerate()
-        .filter_map(|(i, op)| {
-            let name = format!("augment {copy} {i}");
-            let stream = &mut Stream::new(seed, Scope::View(sample, view), &name);
+        .filter_map(|op| {
+            let kind = op.name();
+            let occurrence = seen.iter().filter(|k| **k == kind).count();
+            seen.push(kind);
+            let name = format!("augment {} {kind} {occurrence}", of.copy);
+            let at = if op.is_geometric() { of.pose } else { of.view };
+            let stream = &mut Stream::new(seed, Scope::View(of.sample, at), &name);
             match op {
                 Operation::Warp(s) => s.draw(stream, w, h).map(Applied::Warp),
                 Operation::Crop(s) => s.draw(stream, w, h).map(Applied::Crop),
@@ -87,9 +111,43 @@ pub fn draw_copy(
         .collect()
 }
 
+/// The operations drawn for copy `copy` of camera view `view` (whose camera is `drawn`) of
+/// sample `sample`, and the camera its files agree with. Fails when the copy's camera cannot
+/// be made (a rotation of non-square pixels) or, rendered again in exact mode, would have
+/// pixels without a ray.
+pub fn copy_camera(
+    dataset: &DatasetSpec,
+    (sample, view, copy): (u64, u32, u32),
+    drawn: &ViewCamera,
+) -> Result<(Vec<Applied>, Camera)> {
+    let of = CopyOf {
+        sample,
+        view,
+        pose: drawn.stereo.map_or(view, |(pose, _)| pose),
+        copy,
+    };
+    let size = (dataset.camera.width, dataset.camera.height);
+    let operations = draw_copy(&dataset.augment, dataset.seed, of, size);
+    let camera = match operations.iter().find_map(Applied::geometry) {
+        Some(sim) => moved_camera(&drawn.camera, &sim)?,
+        None => return Ok((operations, drawn.camera)),
+    };
+    if dataset.augment.mode == GeometryMode::Exact {
+        camera.intrinsics.check_lens().map_err(|e| {
+            anyhow!("sample {sample}, view {view}, copy {copy}: dataset.augment moves the camera, and {e}")
+        })?;
+    }
+    Ok((operations, camera))
+}
+
 /// The camera that sees the picture `camera` sees, moved by the pixel similarity `sim`:
 /// K′ with f′ = s·f and p′ = s·R(θ)(p − c) + c + t, the camera turned about its optical axis
-/// by θ (c2w′ = c2w·R_z(θ)ᵀ). Exact for a pinhole; a lens distortion is kept as it is.
+/// by θ (c2w′ = c2w·R_z(θ)ᵀ), and the lens seen from the turned axes (its tangential
+/// coefficients turn with the picture; see [`Distortion::turned`]). The distortion centre is
+/// the principal point, which the similarity moves with the picture, so every pixel of the
+/// moved picture is exactly the projection through the new camera, for any lens.
+///
+/// [`Distortion::turned`]: crate::cameras::Distortion::turned
 pub fn moved_camera(camera: &Camera, sim: &Similarity) -> Result<Camera> {
     let k = camera.intrinsics;
     let moved = sim
@@ -103,11 +161,20 @@ pub fn moved_camera(camera: &Camera, sim: &Similarity) -> Result<Camera> {
     let mut intrinsics = k;
     (intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy) =
         (moved.fx, moved.fy, moved.cx, moved.cy);
+    intrinsics.distortion = k.distortion.turned(sim.angle);
     Ok(Camera {
         intrinsics,
-        rotation: camera.rotation * optical_axis_turn(sim).transpose(),
-        position: camera.position,
+        ..turned_camera(camera, sim)
     })
+}
+
+/// `camera` turned about its optical axis as the similarity `sim` turns the picture:
+/// c2w′ = c2w·R_z(θ)ᵀ (the intrinsics left as they are).
+pub fn turned_camera(camera: &Camera, sim: &Similarity) -> Camera {
+    Camera {
+        rotation: camera.rotation * optical_axis_turn(sim).transpose(),
+        ..*camera
+    }
 }
 
 /// R_z(θ) of the similarity: the turn about the optical axis taking camera-axis vectors of
@@ -170,8 +237,11 @@ impl<'a> AugmentedView<'a> {
             Some(sim) => augment::warp_rgb(rgb, self.frame(), sim),
             None => rgb.to_vec(),
         };
+        let valid = self
+            .warp
+            .map(|sim| augment::warp_validity(self.frame(), &sim));
         // The operations are validated; an encoder failing in memory is a bug.
-        self.photometric(&mut rgb)
+        self.photometric(&mut rgb, valid.as_deref())
             .expect("photometric augmentations of a valid image");
         rgb
     }
@@ -189,13 +259,17 @@ impl<'a> AugmentedView<'a> {
         }
     }
 
-    fn photometric(&self, rgb: &mut [u8]) -> Result<(), String> {
+    /// The photometric operations, in order, on the (warped) RGB image. `valid` marks the
+    /// pixels a warp gave a source: statistics (contrast's mean, a mean fill) leave the
+    /// others out, and they are black again at the end, whatever noise, blur or JPEG put
+    /// there.
+    fn photometric(&self, rgb: &mut [u8], valid: Option<&[u8]>) -> Result<(), String> {
         let (w, h) = self.base.size();
         let (w, h) = (w as usize, h as usize);
         for op in self.operations {
             match op {
                 Applied::Warp(_) | Applied::Crop(_) => {}
-                Applied::ColourJitter(p) => augment::colour_jitter(rgb, w, h, p),
+                Applied::ColourJitter(p) => augment::colour_jitter(rgb, w, h, p, valid),
                 Applied::Exposure(p) => augment::exposure(rgb, w, h, p),
                 Applied::Gamma(p) => augment::gamma(rgb, w, h, p),
                 Applied::Vignette(p) => augment::vignette(rgb, w, h, p),
@@ -203,9 +277,14 @@ impl<'a> AugmentedView<'a> {
                 Applied::Blur(p) => augment::blur(rgb, w, h, p),
                 Applied::Jpeg(p) => augment::jpeg(rgb, w, h, p)?,
                 Applied::Erase(p) => {
-                    augment::erase(rgb, w, h, p);
+                    augment::erase(rgb, w, h, p, valid);
                 }
             }
+        }
+        for (pixel, _) in
+            (rgb.chunks_exact_mut(3).zip(valid.into_iter().flatten())).filter(|(_, v)| **v == 0)
+        {
+            pixel.fill(0);
         }
         Ok(())
     }
@@ -304,5 +383,105 @@ impl ViewLayers for AugmentedView<'_> {
     fn rest_depth(&self) -> &[f32] {
         self.rest_depth
             .get_or_init(|| self.moved(self.base.rest_depth().to_vec()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::augment::{BlurSpec, ExposureSpec, GammaSpec, NoiseSpec, Range, SigmaUnit};
+    use crate::scene::WarpSpec;
+
+    fn with(operations: &[Operation]) -> AugmentSpec {
+        AugmentSpec {
+            copies: 1,
+            operations: operations.to_vec(),
+            ..AugmentSpec::default()
+        }
+    }
+
+    /// What copy `copy` of view `view` (pose `pose`) draws under `spec`, by kind.
+    fn drawn(spec: &AugmentSpec, view: u32, pose: u32, copy: u32) -> Vec<(&'static str, Applied)> {
+        let of = CopyOf {
+            sample: 5,
+            view,
+            pose,
+            copy,
+        };
+        let kind = |a: &Applied| match a {
+            Applied::Warp(_) => "warp",
+            Applied::Gamma(_) => "gamma",
+            Applied::Noise(_) => "noise",
+            Applied::Exposure(_) => "exposure",
+            Applied::Blur(_) => "blur",
+            _ => "other",
+        };
+        draw_copy(spec, 11, of, (64, 48))
+            .into_iter()
+            .map(|a| (kind(&a), a))
+            .collect()
+    }
+
+    #[test]
+    fn an_operation_draws_the_same_whatever_other_kinds_are_listed_around_it() {
+        let gamma = Operation::Gamma(GammaSpec {
+            gamma: Range::Span([0.5, 2.0]),
+            probability: 0.5,
+        });
+        let noise = Operation::Noise(NoiseSpec::Gaussian {
+            sigma: Range::Span([1.0, 9.0]),
+            unit: SigmaUnit::Levels,
+            probability: 0.5,
+        });
+        let exposure = Operation::Exposure(ExposureSpec {
+            stops: Range::Span([-1.0, 1.0]),
+            probability: 0.5,
+        });
+        let blur = Operation::Blur(BlurSpec::Defocus {
+            radius: Range::Span([1.0, 2.0]),
+            probability: 1.0,
+        });
+        let alone = with(&[gamma.clone(), noise.clone()]);
+        // Others added before, between and after, and the two swapped.
+        let crowded = with(&[exposure, noise, blur, gamma]);
+        let only = |list: Vec<(&'static str, Applied)>| -> Vec<(&'static str, Applied)> {
+            list.into_iter()
+                .filter(|(k, _)| ["gamma", "noise"].contains(k))
+                .collect()
+        };
+        let (mut seen, mut differ) = (0, 0);
+        for copy in 0..200 {
+            let mut a = only(drawn(&alone, 0, 0, copy));
+            let mut b = only(drawn(&crowded, 0, 0, copy));
+            a.sort_by_key(|(k, _)| *k);
+            b.sort_by_key(|(k, _)| *k);
+            assert_eq!(a, b, "copy {copy}");
+            seen += a.len();
+            differ += usize::from(drawn(&alone, 0, 0, copy) != drawn(&alone, 0, 0, copy + 1));
+        }
+        // Both operations were drawn often, and copies differ from one another.
+        assert!(seen > 150 && differ > 150, "{seen} {differ}");
+    }
+
+    #[test]
+    fn both_eyes_of_a_pair_draw_one_geometry_and_their_own_photometry() {
+        let spec = with(&[
+            Operation::Warp(WarpSpec::paper()),
+            Operation::Noise(NoiseSpec::Gaussian {
+                sigma: Range::Span([1.0, 9.0]),
+                unit: SigmaUnit::Levels,
+                probability: 1.0,
+            }),
+        ]);
+        for pose in 0..20 {
+            let (left, right) = (
+                drawn(&spec, 2 * pose, pose, 0),
+                drawn(&spec, 2 * pose + 1, pose, 0),
+            );
+            assert_eq!(left[0], right[0], "the warp of pose {pose}");
+            assert_ne!(left[1], right[1], "each eye's own noise");
+        }
+        // Unpaired views keep their own geometry.
+        assert_ne!(drawn(&spec, 0, 0, 0)[0], drawn(&spec, 1, 1, 0)[0]);
     }
 }

@@ -2,9 +2,10 @@
 //! structs: the one place their fields are defined. Their JSON Schemas (`docs/schema/`) are
 //! generated from these types.
 
-use super::augmented::Applied;
+use super::augmented::{Applied, turned_camera};
 use super::finite::check_finite;
 use super::view::{Eye, ViewCamera};
+use crate::augment::Similarity;
 use crate::build::{BackdropDraw, BuiltSample, LightDraw};
 use crate::cameras::{Camera, CameraRig, Distortion, ViewDraw, rows4};
 use crate::materials::MaterialDraw;
@@ -162,6 +163,14 @@ pub struct ViewFacts<'a> {
     pub augmentation: Option<AugmentationRecord<'a>>,
 }
 
+impl ViewFacts<'_> {
+    /// The similarity of the copy's geometric operation, if it has one.
+    fn geometry(&self) -> Option<Similarity> {
+        let operations = self.augmentation.as_ref()?.operations;
+        operations.iter().find_map(Applied::geometry)
+    }
+}
+
 /// Where the random values of a view came from: streams derived from the run seed, a scope
 /// (sample, or sample and view) and a name.
 #[derive(Serialize, schemars::JsonSchema)]
@@ -285,7 +294,10 @@ pub struct StereoRecord {
     /// Turn of the right eye towards the left eye's axis, radians (0: rectified pair).
     pub toe_in: f64,
     /// Row-major 4 × 4 taking a point from the left eye's OpenCV camera frame to the right
-    /// eye's: [x_right, 1] = right_from_left · [x_left, 1].
+    /// eye's, as the two views (or the two copies with this copy index) are written:
+    /// [x_right, 1] = right_from_left · [x_left, 1] = w2c_right · c2w_left. A copy's geometric
+    /// operation is drawn once per pair and turns both eyes alike, so a turned pair is still
+    /// rigid, with this relative pose.
     pub right_from_left: [[f64; 4]; 4],
 }
 
@@ -625,7 +637,7 @@ impl<'a> SampleRecord<'a> {
                 target: facts.drawn.draw.aim,
                 distortion: k.distortion,
                 drawn: facts.drawn.draw,
-                stereo: stereo_record(rig, facts.drawn, view),
+                stereo: stereo_record(rig, facts.drawn, view, facts.geometry()),
             },
             depth: DepthConvention {
                 kind: DepthKind::PlanarZ,
@@ -695,11 +707,22 @@ fn normals_convention(frame: NormalsFrame) -> VectorConvention {
     }
 }
 
-/// The pair of a stereo view: the right eye's pose relative to the left's.
-fn stereo_record(rig: &CameraRig, drawn: &ViewCamera, view: u32) -> Option<StereoRecord> {
+/// The pair of a stereo view: the right eye's pose relative to the left's, as written. The
+/// geometric operation of a copy (`moved_by`) is drawn once per pose, so it turns both eyes'
+/// copies alike: the pair stays rigid and its relative pose is that of the turned cameras.
+fn stereo_record(
+    rig: &CameraRig,
+    drawn: &ViewCamera,
+    view: u32,
+    moved_by: Option<Similarity>,
+) -> Option<StereoRecord> {
     let (stereo, (pair, eye)) = (rig.stereo?, drawn.stereo?);
     let left = drawn.left.unwrap_or(drawn.camera);
     let right = rig.right_eye(&left)?;
+    let (left, right) = match moved_by {
+        Some(sim) => (turned_camera(&left, &sim), turned_camera(&right, &sim)),
+        None => (left, right),
+    };
     Some(StereoRecord {
         pair,
         eye,

@@ -2,7 +2,7 @@
 //! writers, render each view, hand the view's layers to the per-view writers, and stage their
 //! files with the view's record.
 
-use super::augmented::{Applied, AugmentedView, draw_copy, moved_camera};
+use super::augmented::{Applied, AugmentedView, copy_camera};
 use super::finite::check_finite;
 use super::geometry::SampleGeometry;
 use super::record::{AugmentationRecord, SampleRecord, ViewFacts, json_bytes};
@@ -29,8 +29,13 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<BuiltSample> {
         check_finite(labels)
             .map_err(|e| recipe.locate(&e.to_string(), structure.declared_at(), &context))?;
     }
+    let cameras = format!("while drawing the cameras of sample {index}");
+    let at_dataset = |e: anyhow::Error| recipe.locate_dataset(&e.to_string(), &cameras);
     for view in 0..recipe.dataset.cameras_per_sample() {
-        view_camera(&recipe.dataset, &sample, view)?;
+        let drawn = view_camera(&recipe.dataset, &sample, view).map_err(at_dataset)?;
+        for copy in 0..recipe.dataset.augment.copies {
+            copy_camera(&recipe.dataset, (index, view, copy), &drawn).map_err(at_dataset)?;
+        }
     }
     check_segmentation(recipe, &sample)?;
     Ok(sample)
@@ -78,7 +83,6 @@ pub fn for_each_image(
 ) -> Result<()> {
     let (dataset, sample) = (renderer.dataset(), renderer.sample());
     let augment = &dataset.augment;
-    let size = (dataset.camera.width, dataset.camera.height);
     let drawn = view_camera(dataset, sample, view)?;
     let clean = renderer.view_with(view, drawn.camera, drawn);
     if augment.keep_clean {
@@ -93,13 +97,8 @@ pub fn for_each_image(
         each(&clean, None, facts)?;
     }
     for copy in 0..augment.copies {
-        let ids = (sample.index, view, copy);
-        let operations = draw_copy(augment, dataset.seed, ids, size);
+        let (operations, camera) = copy_camera(dataset, (sample.index, view, copy), &drawn)?;
         let geometry = operations.iter().find_map(Applied::geometry);
-        let camera = match &geometry {
-            Some(sim) => moved_camera(&drawn.camera, sim)?,
-            None => drawn.camera,
-        };
         // Exact geometry renders the moved camera; image mode warps the clean render.
         let rendered;
         let (base, warp) = match (augment.mode, geometry) {

@@ -8,7 +8,7 @@ use crate::cameras::{CameraRig, Distance, DistortionRanges, FixedCamera, Poses, 
 use crate::output::{DEFAULT_OUTPUTS, output_names};
 use crate::scene::{
     AugmentSpec, Background, DEFAULT_POINTS, DatasetSpec, GeometryMode, ImageRecord, LightSpec,
-    NormalsFrame, OUTDOOR_AMBIENT, Operation, Outputs, SkyGradient, SkySpec, SunSpec,
+    NormalsFrame, OUTDOOR_AMBIENT, Operation, Outputs, SkyGradient, SkySpec, SourceSite, SunSpec,
 };
 use crate::seeds::Stream;
 use crate::words::number as number_shown;
@@ -22,6 +22,9 @@ use std::sync::{Arc, Mutex};
 pub struct Dataset {
     pub spec: DatasetSpec,
     pub scene: FnPtr,
+    /// Where `dataset(...)` was called: errors found once samples are built (a camera that
+    /// stands on its target) point there.
+    pub site: SourceSite,
 }
 
 /// Recipe parameters: values from `--set name=value`, and the resolved value of every
@@ -61,7 +64,7 @@ pub fn register(
     engine.register_fn(
         "dataset",
         move |ctx: NativeCallContext, map: Map| -> Fallible<Dataset> {
-            let dataset = dataset(map, &images)?;
+            let dataset = dataset(map, &images, super::diagnostics::call_site(&ctx))?;
             check_scene(&ctx, &dataset.scene)?;
             Ok(dataset)
         },
@@ -144,7 +147,7 @@ fn parse_override(name: &str, text: &str, default: &Dynamic) -> Fallible<Dynamic
     }
 }
 
-fn dataset(map: Map, files: &RecipeFiles) -> OptResult<Dataset> {
+fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset> {
     let mut o = Options::new(map, "dataset");
     let name = o.string("name", "dataset")?;
     let seed = o.unsigned("seed", 0)?;
@@ -156,7 +159,7 @@ fn dataset(map: Map, files: &RecipeFiles) -> OptResult<Dataset> {
         None => LightSpec::default(),
     };
     let antialias = o.flag("antialias", true)?;
-    let augment = augment(o.take("augment"))?;
+    let augment = super::augment_api::augment(o.take("augment"))?;
     let outputs = outputs(o.take("outputs"))?;
     check_flow_warps(&outputs, &augment)?;
     let normals = normals_frame(o.string("normals", "camera")?)?;
@@ -170,6 +173,7 @@ fn dataset(map: Map, files: &RecipeFiles) -> OptResult<Dataset> {
         Some(c) => camera(c, views)?,
         None => CameraRig::default(),
     };
+    augment.validate_with(&camera)?;
     let scene = o.required("scene")?;
     let scene = scene
         .try_cast::<FnPtr>()
@@ -191,6 +195,7 @@ fn dataset(map: Map, files: &RecipeFiles) -> OptResult<Dataset> {
             points,
         },
         scene,
+        site,
     })
 }
 
@@ -212,67 +217,6 @@ fn check_scene(ctx: &NativeCallContext, scene: &FnPtr) -> OptResult<()> {
             if *n == 1 { "" } else { "s" }
         )),
     }
-}
-
-/// `augment: "paper"`, `"none"`, or `#{ copies, keep_clean, mode, operations: [#{ op, ... }] }`
-/// (see `scene::Operation` for the operations and their ranges).
-fn augment(value: Option<Dynamic>) -> OptResult<AugmentSpec> {
-    let spec = match value {
-        None => AugmentSpec::default(),
-        Some(v) if v.is_string() => match v.to_string().as_str() {
-            "none" => AugmentSpec::default(),
-            "paper" => AugmentSpec::paper(),
-            "paper_image" => AugmentSpec {
-                mode: GeometryMode::Image,
-                ..AugmentSpec::paper()
-            },
-            other => {
-                return Err(format!(
-                    "dataset.augment = \"{}\": expected \"paper\", \"paper_image\", \"none\" or a map like #{{ copies: 1, operations: [...] }}",
-                    crate::words::clip(other, 80)
-                ));
-            }
-        },
-        Some(v) => {
-            let map = v
-                .try_cast::<Map>()
-                .ok_or("dataset.augment must be \"paper\", \"none\" or a map")?;
-            let mut o = Options::new(map, "dataset.augment");
-            let copies = o.integer("copies", 1, 0, 1000)? as u32;
-            let keep_clean = o.flag("keep_clean", true)?;
-            let mode = match o.string("mode", "exact")?.as_str() {
-                "exact" => GeometryMode::Exact,
-                "image" => GeometryMode::Image,
-                other => {
-                    return Err(format!(
-                        "dataset.augment.mode = \"{}\": expected \"exact\" (change the camera and render) or \"image\" (warp the rendered images)",
-                        crate::words::clip(other, 80)
-                    ));
-                }
-            };
-            let list = o.take("operations").unwrap_or_default();
-            let operations = match list.try_cast::<Array>() {
-                None => Vec::new(),
-                Some(items) => items
-                    .iter()
-                    .enumerate()
-                    .map(|(i, item)| {
-                        rhai::serde::from_dynamic::<Operation>(item)
-                            .map_err(|e| format!("dataset.augment.operations[{i}]: {e}"))
-                    })
-                    .collect::<OptResult<Vec<_>>>()?,
-            };
-            o.finish()?;
-            AugmentSpec {
-                copies,
-                keep_clean,
-                mode,
-                operations,
-            }
-        }
-    };
-    spec.validate()?;
-    Ok(spec)
 }
 
 /// `outputs: ["rgb", "depth", ...]`: names of writers (see `output::WRITERS`).

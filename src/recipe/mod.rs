@@ -11,6 +11,7 @@
 
 mod access;
 mod api;
+mod augment_api;
 mod beam_api;
 mod diagnostics;
 mod engine;
@@ -49,6 +50,8 @@ pub struct Recipe {
     engine: Engine,
     ast: AST,
     scene: FnPtr,
+    /// Where the recipe calls `dataset(...)`.
+    dataset_site: SourceSite,
     sources: Arc<Sources>,
 }
 
@@ -97,7 +100,7 @@ impl Recipe {
             .eval_ast_with_scope(&mut Scope::new(), &ast)
             .map_err(|e| RecipeError::eval(&e, &label, &sources, None))?;
         let type_name = result.type_name().to_string();
-        let Some(Dataset { spec, scene }) = result.try_cast::<Dataset>() else {
+        let Some(Dataset { spec, scene, site }) = result.try_cast::<Dataset>() else {
             return Err(RecipeError::plain(format!(
                 "{label}: the recipe must end with `dataset(#{{ ... }})` as its last expression (it produced {type_name})"
             )));
@@ -121,6 +124,7 @@ impl Recipe {
             engine: sample_engine,
             ast,
             scene,
+            dataset_site: site,
             sources: sources.clone(),
         };
         // Parameters may also be declared inside the scene function: draw one scene before
@@ -171,6 +175,12 @@ impl Recipe {
             Some(site) => RecipeError::at(message, site, &self.sources, Some(context)),
             None => RecipeError::plain(format!("{}: {message} ({context})", self.label)),
         }
+    }
+
+    /// An error found in the dataset's settings once a sample exists (its cameras against its
+    /// structures), shown at the recipe's `dataset(...)` call.
+    pub fn locate_dataset(&self, message: &str, context: &str) -> RecipeError {
+        self.locate(message, Some(&self.dataset_site), context)
     }
 
     /// The files this recipe was built from so far, for a watcher: the recipe, the modules it

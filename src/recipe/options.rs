@@ -68,7 +68,16 @@ impl Options {
         }
     }
 
-    fn path(&self, key: &str) -> String {
+    /// The same options under another name: a list item once its kind is known.
+    pub fn renamed(self, context: impl Into<String>) -> Options {
+        Options {
+            context: context.into(),
+            ..self
+        }
+    }
+
+    /// The full name of option `key`, as messages show it.
+    pub fn path(&self, key: &str) -> String {
         if self.context.is_empty() {
             key.to_string()
         } else {
@@ -181,32 +190,55 @@ impl Options {
     /// A range `[lo, hi]` (lo ≤ hi), or a single number meaning `[x, x]`.
     pub fn range(&mut self, key: &'static str, default: [f64; 2]) -> OptResult<[f64; 2]> {
         let path = self.path(key);
-        let Some(v) = self.take(key) else {
-            return Ok(default);
+        self.take(key)
+            .map_or(Ok(default), |v| range(&v, &path).map(|(r, _)| r))
+    }
+
+    /// A required range: `[lo, hi]` (lo ≤ hi) or a single number, and whether it was written
+    /// as one number.
+    pub fn required_range(&mut self, key: &'static str) -> OptResult<([f64; 2], bool)> {
+        let path = self.path(key);
+        range(&self.required(key)?, &path)
+    }
+
+    /// A required number.
+    pub fn required_number(&mut self, key: &'static str) -> OptResult<f64> {
+        let path = self.path(key);
+        number(&self.required(key)?, &path)
+    }
+
+    /// One of the words `choices` (`default` when left out); a typo gets the nearest word.
+    pub fn choice(
+        &mut self,
+        key: &'static str,
+        choices: &[&'static str],
+        default: Option<&'static str>,
+    ) -> OptResult<&'static str> {
+        let path = self.path(key);
+        let given = match (self.take(key), default) {
+            (None, Some(word)) => return Ok(word),
+            (None, None) => return Err(format!("missing option `{path}`")),
+            (Some(v), _) => v,
         };
-        let r = if let Some(arr) = v.clone().try_cast::<rhai::Array>() {
-            match arr.as_slice() {
-                [lo, hi] => [number(lo, &path)?, number(hi, &path)?],
-                _ => {
-                    return Err(format!(
-                        "{path} = {} must be a number or a range [low, high]",
-                        shown(&v)
-                    ));
-                }
-            }
-        } else {
-            let x = number(&v, &path)?;
-            [x, x]
-        };
-        if r[0] <= r[1] {
-            Ok(r)
-        } else {
-            Err(format!(
-                "{path} = [{}, {}]: the low end exceeds the high end",
-                number_shown(r[0]),
-                number_shown(r[1])
-            ))
+        let word = given
+            .clone()
+            .into_immutable_string()
+            .map_err(|t| format!("{path} = {} ({t}) must be a string", shown(&given)))?;
+        if let Some(&known) = choices.iter().find(|c| **c == word.as_str()) {
+            return Ok(known);
         }
+        let hint = crate::words::nearest(&word, choices)
+            .map(|k| format!("; did you mean \"{k}\"?"))
+            .unwrap_or_default();
+        Err(format!(
+            "{path} = \"{}\" is not one of {}{hint}",
+            clip(&word, MAX_SHOWN_CHARS),
+            choices
+                .iter()
+                .map(|c| format!("\"{c}\""))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
     }
 
     /// A point `[x, y, z]` (metres), if given.
@@ -257,6 +289,34 @@ impl Options {
             "unknown option `{}`{hint} (known: {})",
             self.path(key),
             known.join(", ")
+        ))
+    }
+}
+
+/// A range `[lo, hi]` (lo ≤ hi) or a single number meaning `[x, x]`, and whether it was one
+/// number.
+fn range(v: &Dynamic, path: &str) -> OptResult<([f64; 2], bool)> {
+    let (r, single) = if let Some(arr) = v.clone().try_cast::<rhai::Array>() {
+        match arr.as_slice() {
+            [lo, hi] => ([number(lo, path)?, number(hi, path)?], false),
+            _ => {
+                return Err(format!(
+                    "{path} = {} must be a number or a range [low, high]",
+                    shown(v)
+                ));
+            }
+        }
+    } else {
+        let x = number(v, path)?;
+        ([x, x], true)
+    };
+    if r[0] <= r[1] {
+        Ok((r, single))
+    } else {
+        Err(format!(
+            "{path} = [{}, {}]: the low end exceeds the high end",
+            number_shown(r[0]),
+            number_shown(r[1])
         ))
     }
 }

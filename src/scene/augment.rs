@@ -1,10 +1,12 @@
 //! The augmented copies a dataset writes of every view, as declared: how many, whether the
 //! clean view is kept, how geometric operations act, and the operations with their ranges.
 
-use crate::augment::{
-    BlurSpec, ColourJitterSpec, CropSpec, ErasingSpec, ExposureSpec, GammaSpec, JpegSpec,
-    NoiseSpec, VignetteSpec, WarpSpec,
+// The specs are re-exported: recipes build them, and read nothing else from `augment`.
+pub use crate::augment::{
+    BlurSpec, ColourJitterSpec, CropSpec, ErasingSpec, ExposureSpec, Fill, GammaSpec, JpegSpec,
+    NoiseSpec, Range, SigmaUnit, VignetteSpec, WarpSpec,
 };
+use crate::cameras::CameraRig;
 use serde::{Deserialize, Serialize};
 
 /// The augmented copies of every view.
@@ -67,22 +69,53 @@ impl Operation {
         matches!(self, Operation::Warp(_) | Operation::Crop(_))
     }
 
-    /// Checks the ranges; the error names the parameter and its value.
-    pub fn validate(&self) -> Result<(), String> {
+    /// Its `op` name in a recipe.
+    pub fn name(&self) -> &'static str {
         match self {
-            Operation::Warp(s) => s.validate(),
-            Operation::Crop(s) => s.validate(),
-            Operation::ColourJitter(s) => s.validate(),
-            Operation::Exposure(s) => s.validate(),
-            Operation::Gamma(s) => s.validate(),
-            Operation::Vignette(s) => s.validate(),
-            Operation::Noise(s) => s.validate(),
-            Operation::Blur(s) => s.validate(),
-            Operation::Jpeg(s) => s.validate(),
-            Operation::Erase(s) => s.validate(),
+            Operation::Warp(_) => "warp",
+            Operation::Crop(_) => "crop",
+            Operation::ColourJitter(_) => "colour_jitter",
+            Operation::Exposure(_) => "exposure",
+            Operation::Gamma(_) => "gamma",
+            Operation::Vignette(_) => "vignette",
+            Operation::Noise(_) => "noise",
+            Operation::Blur(_) => "blur",
+            Operation::Jpeg(_) => "jpeg",
+            Operation::Erase(_) => "erase",
+        }
+    }
+
+    /// Checks the ranges; the error names the parameter by its path under `at` (the
+    /// operation's place in the recipe) and shows its value.
+    pub fn validate(&self, at: &str) -> Result<(), String> {
+        match self {
+            Operation::Warp(s) => s.validate(at),
+            Operation::Crop(s) => s.validate(at),
+            Operation::ColourJitter(s) => s.validate(at),
+            Operation::Exposure(s) => s.validate(at),
+            Operation::Gamma(s) => s.validate(at),
+            Operation::Vignette(s) => s.validate(at),
+            Operation::Noise(s) => s.validate(at),
+            Operation::Blur(s) => s.validate(at),
+            Operation::Jpeg(s) => s.validate(at),
+            Operation::Erase(s) => s.validate(at),
         }
     }
 }
+
+/// Every operation's `op` name, for suggestions when a recipe misspells one.
+pub const OPERATION_NAMES: [&str; 10] = [
+    "warp",
+    "crop",
+    "colour_jitter",
+    "exposure",
+    "gamma",
+    "vignette",
+    "noise",
+    "blur",
+    "jpeg",
+    "erase",
+];
 
 impl Default for AugmentSpec {
     /// No augmentation: the clean views only.
@@ -115,13 +148,17 @@ impl AugmentSpec {
 
     /// Checks the operations and their combination: at most one geometric operation.
     pub fn validate(&self) -> Result<(), String> {
-        for op in &self.operations {
-            op.validate()?;
+        for (i, op) in self.operations.iter().enumerate() {
+            op.validate(&operation_path(i, op.name()))?;
         }
-        if self.operations.iter().filter(|o| o.is_geometric()).count() > 1 {
-            return Err(
-                "dataset.augment: at most one geometric operation (warp or crop) per copy".into(),
-            );
+        let geometric: Vec<String> = (self.operations.iter().enumerate())
+            .filter(|(_, op)| op.is_geometric())
+            .map(|(i, op)| operation_path(i, op.name()))
+            .collect();
+        if let [first, second, ..] = geometric.as_slice() {
+            return Err(format!(
+                "{first} and {second}: at most one geometric operation (warp or crop) per copy"
+            ));
         }
         if self.copies == 0 && !self.keep_clean {
             return Err(
@@ -132,8 +169,42 @@ impl AugmentSpec {
         Ok(())
     }
 
+    /// Checks the operations against the cameras they act on: an exact warp that zooms out
+    /// or shifts renders the lens beyond the clean frame's corners, where it must still be
+    /// one-to-one (see [`CameraRig::validate_widened`]).
+    pub fn validate_with(&self, rig: &CameraRig) -> Result<(), String> {
+        if self.copies == 0 || self.mode != GeometryMode::Exact {
+            return Ok(());
+        }
+        for (i, op) in self.operations.iter().enumerate() {
+            let Operation::Warp(warp) = op else { continue };
+            if warp.probability == 0.0 {
+                continue;
+            }
+            let farthest = |r: &Range| r.bounds().0.abs().max(r.bounds().1.abs());
+            let (zoom, shift) = (
+                warp.zoom.bounds().0,
+                [farthest(&warp.shift_x), farthest(&warp.shift_y)],
+            );
+            let what = format!(
+                "{}.zoom = {} with shifts up to ({}, {})",
+                operation_path(i, op.name()),
+                warp.zoom,
+                shift[0],
+                shift[1]
+            );
+            rig.validate_widened(zoom, shift, &what)?;
+        }
+        Ok(())
+    }
+
     /// Views written per camera view: the clean one if kept, and the copies.
     pub fn per_view(&self) -> u32 {
         self.copies + u32::from(self.keep_clean)
     }
+}
+
+/// Where operation `i` (named `op`) sits in a recipe, as messages name it.
+pub fn operation_path(i: usize, op: &str) -> String {
+    format!("dataset.augment.operations[{i}] ({op})")
 }

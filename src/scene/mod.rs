@@ -12,7 +12,11 @@ mod beam;
 mod light;
 
 pub use assembly::{AssemblySpec, Bending, LabelledPattern, ShapeSpec};
-pub use augment::{AugmentSpec, GeometryMode, Operation};
+pub use augment::{
+    AugmentSpec, BlurSpec, ColourJitterSpec, CropSpec, ErasingSpec, ExposureSpec, Fill, GammaSpec,
+    GeometryMode, JpegSpec, NoiseSpec, OPERATION_NAMES, Operation, Range, SigmaUnit, VignetteSpec,
+    WarpSpec, operation_path,
+};
 pub use beam::{BeamSpec, Tessellation};
 pub use light::{
     Background, ImageRecord, LightSpec, OUTDOOR_AMBIENT, SkyGradient, SkySpec, SunSpec,

@@ -108,16 +108,22 @@ pub fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
 
-/// 8-bit PNG through the `png` crate: (width, height, channels, samples).
-pub fn read_png(path: &Path) -> (usize, usize, usize, Vec<u8>) {
+/// A PNG through the `png` crate: its frame information and bytes.
+fn decode_png(path: &Path) -> (png::OutputInfo, Vec<u8>) {
     let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut reader = png::Decoder::new(std::io::BufReader::new(file))
         .read_info()
         .unwrap();
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
     let info = reader.next_frame(&mut buf).unwrap();
-    assert_eq!(info.bit_depth, png::BitDepth::Eight);
     buf.truncate(info.buffer_size());
+    (info, buf)
+}
+
+/// 8-bit PNG through the `png` crate: (width, height, channels, samples).
+pub fn read_png(path: &Path) -> (usize, usize, usize, Vec<u8>) {
+    let (info, buf) = decode_png(path);
+    assert_eq!(info.bit_depth, png::BitDepth::Eight);
     let (w, h) = (info.width as usize, info.height as usize);
     (w, h, buf.len() / (w * h), buf)
 }
@@ -237,19 +243,22 @@ impl View {
         ["k1", "k2", "p1", "p2", "k3"].map(|k| d[k].as_f64().unwrap())
     }
 
-    /// The world point pixel (row, col) sees, back-projected with the written K, lens and pose:
-    /// the pixel undistorted by OpenCV's model.
+    /// The undistorted normalised coordinates of pixel (row, col)'s centre, through the
+    /// written K and lens with OpenCV's undistortion.
+    pub fn ray(&self, row: usize, col: usize) -> (f64, f64) {
+        let k = self.k();
+        let (xd, yd) = (
+            (col as f64 + 0.5 - k[0][2]) / k[0][0],
+            (row as f64 + 0.5 - k[1][2]) / k[1][1],
+        );
+        undistort(&self.lens(), xd, yd)
+    }
+
+    /// The world point pixel (row, col) sees, back-projected with the written K, lens and pose.
     pub fn point_through_lens(&self, row: usize, col: usize) -> Option<[f64; 3]> {
         let z = f64::from(self.depth[row * self.width + col]);
-        (z > 0.0).then(|| {
-            let k = self.k();
-            let (xd, yd) = (
-                (col as f64 + 0.5 - k[0][2]) / k[0][0],
-                (row as f64 + 0.5 - k[1][2]) / k[1][1],
-            );
-            let (x, y) = undistort(&self.lens(), xd, yd);
-            transform(&self.c2w(), [x * z, y * z, z])
-        })
+        let (x, y) = self.ray(row, col);
+        (z > 0.0).then(|| transform(&self.c2w(), [x * z, y * z, z]))
     }
 
     /// Where world point `p` projects through the written pose, lens and K.
@@ -335,4 +344,51 @@ pub fn render(recipe: &str, extra: &[&str]) -> (tempfile::TempDir, std::path::Pa
     let out = dir.path().join("out");
     ok(run(&path, &out, extra));
     (dir, out)
+}
+
+/// `scripts/quickstart.rhai` run into `dir/name` with `--set` values such as `samples=2`.
+pub fn quickstart(dir: &Path, name: &str, sets: &[&str]) -> PathBuf {
+    let recipe = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/quickstart.rhai");
+    let out = dir.join(name);
+    let mut extra = Vec::new();
+    for set in sets {
+        extra.extend(["--set", set]);
+    }
+    ok(run(&recipe, &out, &extra));
+    out
+}
+
+/// Every file `manifest.jsonl` of dataset `out` lists, in its order.
+pub fn manifest_files(out: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(out.join("manifest.jsonl")).unwrap();
+    text.lines()
+        .flat_map(|line| {
+            let v: serde_json::Value = serde_json::from_str(line).unwrap();
+            v["files"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|f| f.as_str().unwrap().to_string())
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// A 16-bit grey PNG through the `png` crate: (width, height, samples).
+pub fn read_png16(path: &Path) -> (usize, usize, Vec<u16>) {
+    let (info, buf) = decode_png(path);
+    assert_eq!(
+        (info.bit_depth, info.color_type),
+        (png::BitDepth::Sixteen, png::ColorType::Grayscale)
+    );
+    let values = buf
+        .chunks_exact(2)
+        .map(|b| u16::from_be_bytes([b[0], b[1]]))
+        .collect();
+    (info.width as usize, info.height as usize, values)
+}
+
+/// `shmgen ARGS...`.
+pub fn shmgen(args: &[&std::ffi::OsStr]) -> Output {
+    Command::new(BIN).args(args).output().unwrap()
 }

@@ -48,6 +48,31 @@ pub fn import_mesh(path: &std::path::Path, options: ImportOptions) -> Result<Imp
     import_unnamed(path, options).map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// What a mesh or point-cloud file holds.
+pub enum Surface {
+    /// Triangles (any format, or a PLY with faces), checked as [`import_mesh`] checks them.
+    Mesh(Imported),
+    /// Points alone: a PLY without faces (or with none listed). Every point is finite.
+    Points(Vec<glam::DVec3>),
+}
+
+/// Reads a mesh as [`import_mesh`] does, except that a PLY without faces is a point cloud.
+pub fn import_surface(path: &Path) -> Result<Surface, String> {
+    let named = |e: String| format!("{}: {e}", path.display());
+    if format_of(path).map_err(named)? != Format::Ply {
+        return import_mesh(path, ImportOptions::default()).map(Surface::Mesh);
+    }
+    check_file_size(path).map_err(named)?;
+    let builder = ply::read_points_or_mesh(path).map_err(named)?;
+    if builder.mesh.triangles.is_empty() {
+        validate::check_finite(&builder.mesh.positions).map_err(named)?;
+        return Ok(Surface::Points(builder.mesh.positions));
+    }
+    finish(builder, ImportOptions::default())
+        .map(Surface::Mesh)
+        .map_err(named)
+}
+
 /// Binary little-endian PLY with float64 vertex x, y, z and uint32 vertex_indices, so that export → import is exact.
 pub fn export_ply(mesh: &Mesh) -> Vec<u8> {
     let header = format!(

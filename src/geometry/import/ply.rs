@@ -13,6 +13,15 @@ use glam::DVec3;
 use super::validate::{Builder, check_triangle_count};
 
 pub(super) fn read(path: &Path) -> Result<Builder, String> {
+    read_with(path, false)
+}
+
+/// A mesh, or a point cloud: a file without a `face` element gives vertices only.
+pub(super) fn read_points_or_mesh(path: &Path) -> Result<Builder, String> {
+    read_with(path, true)
+}
+
+fn read_with(path: &Path, points_ok: bool) -> Result<Builder, String> {
     use ply_rs_bw::parser::{Parser, Reader};
     use ply_rs_bw::ply::DefaultElement;
 
@@ -22,17 +31,22 @@ pub(super) fn read(path: &Path) -> Result<Builder, String> {
     let header = parser
         .read_header(&mut reader)
         .map_err(|e| format!("bad PLY header: {e}"))?;
-    let faces = header
-        .elements
-        .get("face")
-        .ok_or("bad PLY header: no 'face' element")?;
+    let faces = header.elements.get("face");
+    if faces.is_none() && !points_ok {
+        return Err("bad PLY header: no 'face' element".into());
+    }
     let vertices = header
         .elements
         .get("vertex")
         .ok_or("bad PLY header: no 'vertex' element")?;
     // Every face yields at least one triangle, so the header count bounds the work up front.
-    check_triangle_count(faces.count as u64)?;
-    let index_name = ply_index_property(faces)?;
+    let index_name = match faces {
+        Some(faces) => {
+            check_triangle_count(faces.count as u64)?;
+            ply_index_property(faces)?
+        }
+        None => "",
+    };
     for axis in ["x", "y", "z"] {
         match vertices.properties.get(axis).map(|p| &p.data_type) {
             Some(ply_rs_bw::ply::PropertyType::Scalar(_)) => {}

@@ -101,7 +101,7 @@ impl Builder {
 pub(super) fn finish(builder: Builder, options: ImportOptions) -> Result<Imported, String> {
     let mut warnings = builder.repair_warnings();
     let mut mesh = builder.mesh;
-    check_finite(&mesh)?;
+    check_finite(&mesh.positions)?;
     let dropped = drop_degenerate(&mut mesh);
     if dropped > 0 {
         warnings.push(format!(
@@ -121,12 +121,9 @@ pub(super) fn finish(builder: Builder, options: ImportOptions) -> Result<Importe
     Ok(Imported { mesh, warnings })
 }
 
-fn check_finite(mesh: &Mesh) -> Result<(), String> {
-    match mesh.positions.iter().position(|p| !p.is_finite()) {
-        Some(i) => Err(format!(
-            "vertex {i} is not finite: {}",
-            show(mesh.positions[i])
-        )),
+pub(super) fn check_finite(points: &[DVec3]) -> Result<(), String> {
+    match points.iter().position(|p| !p.is_finite()) {
+        Some(i) => Err(format!("vertex {i} is not finite: {}", show(points[i]))),
         None => Ok(()),
     }
 }

@@ -1,0 +1,386 @@
+//! Reading a finished dataset: `run.json`, the manifest, the views and per-sample files it
+//! lists, each view's camera, and the decoders of the files a view holds.
+//!
+//! Owns: deciding whether a folder is a finished shmgen dataset, and listing what it holds,
+//! for the commands that read datasets (`export`, `eval`). Must not touch: anything on disk
+//! (it only reads), recipes, rendering, or how datasets are written (`output` owns the layout
+//! and the writing; this module reads what `manifest.jsonl` lists rather than guessing names).
+
+mod camera;
+mod read;
+
+pub use camera::Camera;
+pub use read::{GreyImage, Layer, read_exr, read_grey_png};
+
+use anyhow::{Context, Result, bail};
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::fs;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+
+/// The version tag of `run.json` this reader understands.
+pub const RUN_SCHEMA: &str = "shmgen.run/1";
+
+/// A finished dataset: every sample of `run.json` is in the manifest and every file listed
+/// there exists.
+pub struct Dataset {
+    root: PathBuf,
+    /// `run.json`, as parsed.
+    pub run: Value,
+    /// The samples, in index order (0, 1, …).
+    pub samples: Vec<Sample>,
+}
+
+/// One sample: its views (clean and augmented copies) and its per-sample files (meshes).
+pub struct Sample {
+    /// Sample index.
+    pub index: u64,
+    /// Its views in file-name order: view 0, its copies `a0`, `a1`, …, view 1, ….
+    pub views: Vec<View>,
+    /// Files of the whole sample (`{sample:06}.mesh.ply`, …), relative to the root, sorted.
+    pub files: Vec<String>,
+}
+
+/// One view (or augmented copy of a view) and the files it has.
+#[derive(Clone, Debug)]
+pub struct View {
+    /// Sample index.
+    pub sample: u64,
+    /// View index.
+    pub view: u32,
+    /// Augmented copy index, None for the clean view.
+    pub copy: Option<u32>,
+    /// The file-name stem shared by its files, e.g. `000003_01` or `000003_01a0`; WebDataset's
+    /// key (no dots).
+    pub stem: String,
+    /// Its files relative to the dataset root, sorted by name (the record `…json` included).
+    pub files: Vec<String>,
+}
+
+/// The one of `files` of `kind`.
+fn of_kind<'a>(files: &'a [String], kind: &str) -> Option<&'a str> {
+    files
+        .iter()
+        .find(|f| kind_of(f) == Some(kind))
+        .map(String::as_str)
+}
+
+impl View {
+    /// The file of `kind` (`rgb.png`, `depth.exr`, `json`, …), relative to the root.
+    pub fn file(&self, kind: &str) -> Option<&str> {
+        of_kind(&self.files, kind)
+    }
+
+    /// The folder of its files relative to the root, e.g. `samples/0000`.
+    pub fn folder(&self) -> &str {
+        self.files[0]
+            .rsplit_once('/')
+            .map_or("", |(folder, _)| folder)
+    }
+
+    /// The kinds of its files (`depth.exr`, `json`, …) with their relative paths.
+    pub fn kinds(&self) -> impl Iterator<Item = (&str, &str)> {
+        self.files
+            .iter()
+            .filter_map(|f| kind_of(f).map(|k| (k, f.as_str())))
+    }
+}
+
+impl Sample {
+    /// The per-sample file of `kind` (`mesh.ply`, `rest.ply`, …), relative to the root.
+    pub fn file(&self, kind: &str) -> Option<&str> {
+        of_kind(&self.files, kind)
+    }
+}
+
+/// What follows the first dot of a file name: `depth.exr` of `…/000003_01.depth.exr`.
+pub fn kind_of(relative: &str) -> Option<&str> {
+    let name = relative.rsplit('/').next()?;
+    name.split_once('.').map(|(_, kind)| kind)
+}
+
+/// What a file name in the layout names: a view's file or a whole sample's.
+enum Owner {
+    View {
+        sample: u64,
+        view: u32,
+        copy: Option<u32>,
+    },
+    Sample(u64),
+}
+
+/// Parses a file's stem: `000003` (the sample), `000003_01` (view 1), `000003_01a2` (copy 2).
+fn owner_of(stem: &str) -> Option<Owner> {
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    let Some((sample, rest)) = stem.split_once('_') else {
+        return digits(stem)
+            .then(|| stem.parse().ok().map(Owner::Sample))
+            .flatten();
+    };
+    let (view, copy) = match rest.split_once('a') {
+        Some((view, copy)) => (view, Some(copy)),
+        None => (rest, None),
+    };
+    if !digits(sample) || !digits(view) || copy.is_some_and(|c| !digits(c)) {
+        return None;
+    }
+    Some(Owner::View {
+        sample: sample.parse().ok()?,
+        view: view.parse().ok()?,
+        copy: match copy {
+            Some(c) => Some(c.parse().ok()?),
+            None => None,
+        },
+    })
+}
+
+impl Dataset {
+    /// Opens the dataset at `root`, refusing a folder that is not a shmgen dataset or whose
+    /// manifest does not yet list every sample (a run still going, or stopped).
+    pub fn open(root: &Path) -> Result<Dataset> {
+        if !root.is_dir() {
+            bail!("{}: no such folder", root.display());
+        }
+        let run_path = root.join("run.json");
+        let run: Value = match fs::read(&run_path) {
+            Ok(bytes) => serde_json::from_slice(&bytes).with_context(|| {
+                format!(
+                    "{}: not a shmgen dataset (run.json does not parse)",
+                    root.display()
+                )
+            })?,
+            Err(_) => bail!(
+                "{}: not a shmgen dataset (no run.json; give the folder `shmgen run --out` wrote)",
+                root.display()
+            ),
+        };
+        let schema = run.get("schema").and_then(Value::as_str).unwrap_or("none");
+        if schema != RUN_SCHEMA {
+            bail!(
+                "{}: run.json has schema {schema:?}; this shmgen reads {RUN_SCHEMA:?}",
+                run_path.display()
+            );
+        }
+        let total = run
+            .pointer("/dataset/samples")
+            .and_then(Value::as_u64)
+            .with_context(|| format!("{}: no dataset.samples", run_path.display()))?;
+        let listed = read_manifest(root)?;
+        let missing = (0..total).find(|s| !listed.contains_key(s));
+        if let Some(first) = missing {
+            let present = listed.keys().filter(|&&s| s < total).count();
+            bail!(
+                "{}: the dataset is not finished: manifest.jsonl lists {present} of {total} samples (sample {first} is missing); run `shmgen run` with the same recipe and --out again to finish it",
+                root.display()
+            );
+        }
+        if let Some(extra) = listed.keys().find(|&&s| s >= total) {
+            bail!(
+                "{}: manifest.jsonl lists sample {extra}, but run.json has {total} samples",
+                root.display()
+            );
+        }
+        let mut samples = Vec::with_capacity(listed.len());
+        for (index, files) in listed {
+            samples.push(sample_of(root, index, files)?);
+        }
+        Ok(Dataset {
+            root: root.to_path_buf(),
+            run,
+            samples,
+        })
+    }
+
+    /// The dataset's folder.
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    /// A path relative to the dataset root, made absolute.
+    pub fn path(&self, relative: &str) -> PathBuf {
+        self.root.join(relative)
+    }
+
+    /// Every view of every sample, in sample order.
+    pub fn views(&self) -> impl Iterator<Item = &View> {
+        self.samples.iter().flat_map(|s| s.views.iter())
+    }
+
+    /// The camera of a view, from its record.
+    pub fn camera(&self, view: &View) -> Result<Camera> {
+        let json = view
+            .file("json")
+            .with_context(|| format!("view {} has no record (.json)", view.stem))?;
+        let path = self.path(json);
+        let record: Value = serde_json::from_slice(
+            &fs::read(&path).with_context(|| format!("reading {}", path.display()))?,
+        )
+        .with_context(|| format!("{}: does not parse as JSON", path.display()))?;
+        Camera::from_record(&record).with_context(|| format!("{}", path.display()))
+    }
+
+    /// `dataset.name`, `dataset.seed` and the recipe hash: what identifies the dataset an
+    /// export or evaluation came from (never its path, so outputs do not depend on where the
+    /// dataset lies).
+    pub fn identity(&self) -> Value {
+        serde_json::json!({
+            "name": self.run.pointer("/dataset/name"),
+            "seed": self.run.pointer("/dataset/seed"),
+            "samples": self.samples.len(),
+            "recipe_hash": self.run.pointer("/recipe/hash"),
+        })
+    }
+}
+
+/// Sample index → its files, from every complete line of the manifest.
+fn read_manifest(root: &Path) -> Result<BTreeMap<u64, Vec<String>>> {
+    #[derive(serde::Deserialize)]
+    struct Line {
+        sample: u64,
+        files: Vec<String>,
+    }
+    let path = root.join("manifest.jsonl");
+    let file = fs::File::open(&path).map_err(|_| {
+        anyhow::anyhow!(
+            "{}: the dataset is not finished (no manifest.jsonl)",
+            root.display()
+        )
+    })?;
+    let mut listed = BTreeMap::new();
+    let mut reader = BufReader::new(file);
+    let mut line = String::new();
+    for number in 1.. {
+        line.clear();
+        if reader
+            .read_line(&mut line)
+            .with_context(|| format!("reading {}", path.display()))?
+            == 0
+        {
+            break;
+        }
+        // A line without its newline is a torn append of a run that was killed: not a
+        // finished sample, and never in a finished manifest.
+        let parsed = line
+            .ends_with('\n')
+            .then(|| serde_json::from_str::<Line>(&line).ok())
+            .flatten();
+        let Some(parsed) = parsed else {
+            bail!(
+                "{}: line {number} is incomplete or does not parse; the dataset is not finished (run `shmgen run` again to finish it)",
+                path.display()
+            );
+        };
+        listed.entry(parsed.sample).or_insert(parsed.files);
+    }
+    Ok(listed)
+}
+
+/// Groups a sample's files into its views and its own files, checking each exists.
+fn sample_of(root: &Path, index: u64, mut files: Vec<String>) -> Result<Sample> {
+    files.sort();
+    files.dedup();
+    let mut views: BTreeMap<(u32, Option<u32>), View> = BTreeMap::new();
+    let mut own = Vec::new();
+    for file in files {
+        if file.contains("..") || file.starts_with('/') || file.contains('\\') {
+            bail!("manifest.jsonl: sample {index} lists {file:?}, outside the dataset folder");
+        }
+        if !root.join(&file).is_file() {
+            bail!(
+                "{}: {file} is listed in manifest.jsonl but missing",
+                root.display()
+            );
+        }
+        let name = file.rsplit('/').next().unwrap_or(&file);
+        let stem = name.split('.').next().unwrap_or(name);
+        match owner_of(stem) {
+            Some(Owner::Sample(s)) if s == index => own.push(file),
+            Some(Owner::View { sample, view, copy }) if sample == index => {
+                let entry = views.entry((view, copy)).or_insert_with(|| View {
+                    sample,
+                    view,
+                    copy,
+                    stem: stem.to_string(),
+                    files: Vec::new(),
+                });
+                entry.files.push(file);
+            }
+            _ => bail!(
+                "manifest.jsonl: sample {index} lists {file}, which is not a file of sample {index}"
+            ),
+        }
+    }
+    Ok(Sample {
+        index,
+        views: views.into_values().collect(),
+        files: own,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stems_name_samples_views_and_copies() {
+        assert!(matches!(owner_of("000012"), Some(Owner::Sample(12))));
+        assert!(matches!(
+            owner_of("000012_03"),
+            Some(Owner::View {
+                sample: 12,
+                view: 3,
+                copy: None
+            })
+        ));
+        assert!(matches!(
+            owner_of("1000000_10a2"),
+            Some(Owner::View {
+                sample: 1_000_000,
+                view: 10,
+                copy: Some(2)
+            })
+        ));
+        for bad in ["", "x", "000012_", "000012_03a", "000012_x3", "12_3b1"] {
+            assert!(owner_of(bad).is_none(), "{bad}");
+        }
+        assert_eq!(
+            kind_of("samples/0000/000003_01.depth.exr"),
+            Some("depth.exr")
+        );
+        assert_eq!(kind_of("samples/0000/000003.mesh.ply"), Some("mesh.ply"));
+    }
+
+    fn dataset(dir: &Path, samples: u64, manifest: &str) {
+        fs::write(
+            dir.join("run.json"),
+            format!(r#"{{"schema":"shmgen.run/1","dataset":{{"samples":{samples}}}}}"#),
+        )
+        .unwrap();
+        fs::write(dir.join("manifest.jsonl"), manifest).unwrap();
+    }
+
+    #[test]
+    fn unfinished_and_foreign_folders_are_refused_with_the_reason() {
+        let dir = tempfile::tempdir().unwrap();
+        let err = |d: &Path| format!("{:#}", Dataset::open(d).err().unwrap());
+        assert!(err(dir.path()).contains("no run.json"));
+        fs::write(dir.path().join("run.json"), r#"{"schema":"other/2"}"#).unwrap();
+        assert!(err(dir.path()).contains("\"other/2\""));
+        fs::create_dir_all(dir.path().join("samples/0000")).unwrap();
+        fs::write(dir.path().join("samples/0000/000000_00.json"), "{}").unwrap();
+        fs::write(dir.path().join("samples/0000/000000.mesh.ply"), "").unwrap();
+        let line = r#"{"sample":0,"views":1,"files":["samples/0000/000000_00.json","samples/0000/000000.mesh.ply"]}"#;
+        dataset(dir.path(), 2, &format!("{line}\n"));
+        assert!(err(dir.path()).contains("lists 1 of 2 samples (sample 1 is missing)"));
+        dataset(dir.path(), 1, line);
+        assert!(err(dir.path()).contains("line 1 is incomplete"));
+        dataset(dir.path(), 1, &format!("{line}\n"));
+        let d = Dataset::open(dir.path()).unwrap();
+        assert_eq!(d.samples[0].files, ["samples/0000/000000.mesh.ply"]);
+        assert_eq!(d.samples[0].views[0].stem, "000000_00");
+        assert_eq!(d.samples[0].views[0].folder(), "samples/0000");
+        fs::remove_file(dir.path().join("samples/0000/000000_00.json")).unwrap();
+        assert!(err(dir.path()).contains("000000_00.json is listed in manifest.jsonl but missing"));
+    }
+}

@@ -1,0 +1,156 @@
+//! Finding and reading predictions. PREDICTIONS mirrors the dataset's `samples/` folder (it may
+//! be that folder's parent or the folder itself), with the dataset's file stems:
+//!
+//! - depth: `{stem}.depth.exr` (channel `Z`, or a file's only channel), `{stem}.depth.npy`
+//!   (float32 or float64, shape H×W or H×W×1), `{stem}.depth.png` or `{stem}.depth_mm.png`
+//!   (16-bit grey, millimetres, 0 = no prediction: what `shmgen export --format png16` writes);
+//! - flow: `{stem}.flow.exr` (channels `U`, `V`) or `{stem}.flow.npy` (H×W×2), pixels;
+//! - displacement: `{stem}.displacement.exr` (`X`, `Y`, `Z`) or `.npy` (H×W×3), world metres;
+//! - surfaces: `{sample:06}.ply` (a mesh, or a point cloud when it has no faces) or
+//!   `{sample:06}.obj` (a mesh).
+//!
+//! Two files for the same thing are an error (which one was meant is not ours to guess).
+
+use super::npy;
+use crate::dataset::{View, read_exr, read_grey_png};
+use anyhow::{Context, Result, bail};
+use std::path::{Path, PathBuf};
+
+/// The folder holding predictions in the dataset's `NNNN/` sub-folders.
+pub(super) fn samples_folder(predictions: &Path) -> Result<PathBuf> {
+    if !predictions.is_dir() {
+        bail!("{}: no such folder of predictions", predictions.display());
+    }
+    let inner = predictions.join("samples");
+    Ok(if inner.is_dir() {
+        inner
+    } else {
+        predictions.to_path_buf()
+    })
+}
+
+/// What is predicted per view.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Quantity {
+    Depth,
+    Flow,
+    Displacement,
+}
+
+impl Quantity {
+    /// The EXR channels, which are also the .npy's last axis.
+    pub(super) fn channels(self) -> &'static [&'static str] {
+        match self {
+            Quantity::Depth => &["Z"],
+            Quantity::Flow => &["U", "V"],
+            Quantity::Displacement => &["X", "Y", "Z"],
+        }
+    }
+
+    /// The kinds of file that may hold it.
+    fn kinds(self) -> &'static [&'static str] {
+        match self {
+            Quantity::Depth => &["depth.exr", "depth.npy", "depth.png", "depth_mm.png"],
+            Quantity::Flow => &["flow.exr", "flow.npy"],
+            Quantity::Displacement => &["displacement.exr", "displacement.npy"],
+        }
+    }
+}
+
+/// The one file predicting `quantity` for `view`, if any.
+pub(super) fn find(samples: &Path, view: &View, quantity: Quantity) -> Result<Option<PathBuf>> {
+    let folder = mirrored(samples, view.folder());
+    one_of(
+        quantity
+            .kinds()
+            .iter()
+            .map(|kind| folder.join(format!("{}.{kind}", view.stem))),
+    )
+}
+
+/// The one prediction of the surface of `sample`, whose files are in the dataset's folder
+/// `folder` (`samples/NNNN`).
+pub(super) fn find_surface(samples: &Path, folder: &str, sample: u64) -> Result<Option<PathBuf>> {
+    let folder = mirrored(samples, folder);
+    one_of(["ply", "obj"].map(|ext| folder.join(format!("{sample:06}.{ext}"))))
+}
+
+/// The predictions' counterpart of the dataset's folder `samples/NNNN`.
+fn mirrored(samples: &Path, folder: &str) -> PathBuf {
+    samples.join(folder.strip_prefix("samples/").unwrap_or(folder))
+}
+
+fn one_of(candidates: impl IntoIterator<Item = PathBuf>) -> Result<Option<PathBuf>> {
+    let found: Vec<PathBuf> = candidates.into_iter().filter(|p| p.is_file()).collect();
+    match found.as_slice() {
+        [] => Ok(None),
+        [one] => Ok(Some(one.clone())),
+        [a, b, ..] => bail!(
+            "both {} and {} predict the same thing; keep one",
+            a.display(),
+            b.display()
+        ),
+    }
+}
+
+/// The planes of a prediction file, each `width × height`, as f64.
+pub(super) fn read(
+    path: &Path,
+    quantity: Quantity,
+    width: usize,
+    height: usize,
+) -> Result<Vec<Vec<f64>>> {
+    let names = quantity.channels();
+    let name = path.to_string_lossy();
+    let (w, h, planes) = if name.ends_with(".exr") {
+        let layer = read_exr(path, names)?;
+        let planes = layer
+            .channels
+            .into_iter()
+            .map(|c| c.into_iter().map(f64::from).collect())
+            .collect();
+        (layer.width, layer.height, planes)
+    } else if name.ends_with(".npy") {
+        let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+        let array = npy::parse(&bytes).with_context(|| format!("{}", path.display()))?;
+        let c = names.len();
+        let (h, w) = match (array.shape.as_slice(), c) {
+            ([h, w], 1) => (*h, *w),
+            ([h, w, k], _) if *k == c => (*h, *w),
+            (shape, _) => bail!(
+                "{}: shape {shape:?}; expected (H, W{}) for {quantity:?}",
+                path.display(),
+                if c == 1 {
+                    String::new()
+                } else {
+                    format!(", {c}")
+                }
+            ),
+        };
+        let planes = (0..c)
+            .map(|k| array.values.iter().skip(k).step_by(c).copied().collect())
+            .collect();
+        (w, h, planes)
+    } else {
+        let png = read_grey_png(path)?;
+        if png.bits != 16 {
+            bail!(
+                "{}: an 8-bit PNG cannot hold millimetres; write 16-bit grey",
+                path.display()
+            );
+        }
+        let metres = png
+            .values
+            .iter()
+            .map(|&mm| f64::from(mm) / 1000.0)
+            .collect();
+        (png.width, png.height, vec![metres])
+    };
+    if (w, h) != (width, height) {
+        bail!(
+            "{}: {w}×{h} pixels, the view has {width}×{height}",
+            path.display()
+        );
+    }
+    Ok(planes)
+}

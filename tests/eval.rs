@@ -1,0 +1,591 @@
+//! `shmgen eval` end to end: predictions made here from a dataset's truth by known changes
+//! (identity, a scale, a shift, a constant offset), whose metrics have closed forms computed
+//! here; the same prediction as EXR, .npy and millimetre PNG; meshes and point clouds against a
+//! ground-truth mesh; and the errors a wrong prediction gets.
+
+use serde_json::Value;
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+mod common;
+
+use common::{
+    manifest_files, ok, quickstart, read_exr, read_png, read_png16, shmgen, stderr, view_path,
+};
+
+/// `shmgen eval DATA PREDICTIONS --json … EXTRA`: what it printed and the JSON report.
+fn eval(data: &Path, predictions: &Path, extra: &[&str]) -> (Output, Value) {
+    let json = predictions.with_extension("report.json");
+    let mut args: Vec<&OsStr> = vec![
+        OsStr::new("eval"),
+        data.as_os_str(),
+        predictions.as_os_str(),
+        OsStr::new("--json"),
+        json.as_os_str(),
+    ];
+    args.extend(extra.iter().map(OsStr::new));
+    let output = ok(shmgen(&args));
+    let report = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    (output, report)
+}
+
+fn eval_err(data: &Path, predictions: &Path, extra: &[&str]) -> String {
+    let mut args: Vec<&OsStr> = vec![
+        OsStr::new("eval"),
+        data.as_os_str(),
+        predictions.as_os_str(),
+    ];
+    args.extend(extra.iter().map(OsStr::new));
+    let output = shmgen(&args);
+    assert!(!output.status.success());
+    stderr(&output)
+}
+
+fn f(report: &Value, key: &str) -> f64 {
+    report[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} in {report}"))
+}
+
+fn write_file(path: &Path, bytes: &[u8]) {
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// An EXR of f32 channels through the `exr` crate.
+fn write_exr(path: &Path, w: usize, h: usize, channels: &[(&str, Vec<f32>)]) {
+    use exr::prelude::*;
+    let list: Vec<AnyChannel<FlatSamples>> = channels
+        .iter()
+        .map(|(name, v)| AnyChannel::new(*name, FlatSamples::F32(v.clone())))
+        .collect();
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(SmallVec::from_vec(list)),
+    );
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    Image::from_layer(layer)
+        .write()
+        .non_parallel()
+        .to_file(path)
+        .unwrap();
+}
+
+/// A `.npy` file (format 1.0, C order) laid out by hand from NumPy's NEP 1.
+fn write_npy(path: &Path, descr: &str, shape: &[usize], data: &[u8]) {
+    let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
+    let mut header = format!(
+        "{{'descr': '{descr}', 'fortran_order': False, 'shape': ({}{}), }}",
+        dims.join(", "),
+        if shape.len() == 1 { "," } else { "" }
+    );
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    bytes.extend_from_slice(data);
+    write_file(path, &bytes);
+}
+
+fn write_png(path: &Path, w: usize, h: usize, depth: png::BitDepth, data: &[u8]) {
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    let mut encoder = png::Encoder::new(std::fs::File::create(path).unwrap(), w as u32, h as u32);
+    encoder.set_color(png::ColorType::Grayscale);
+    encoder.set_depth(depth);
+    encoder
+        .write_header()
+        .unwrap()
+        .write_image_data(data)
+        .unwrap();
+}
+
+/// One view's truth, read with the test's own readers.
+struct Truth {
+    stem: String,
+    sample: u64,
+    view: u32,
+    w: usize,
+    h: usize,
+    depth: Vec<f32>,
+    mask: Vec<u8>,
+}
+
+impl Truth {
+    /// Where its prediction of `kind` goes under `predictions/samples/`.
+    fn prediction(&self, predictions: &Path, kind: &str) -> PathBuf {
+        predictions.join(format!("samples/0000/{}.{kind}", self.stem))
+    }
+
+    /// Pixels scored with the structure mask.
+    fn inside(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.depth.len()).filter(|&i| self.mask[i] > 0 && self.depth[i] > 0.0)
+    }
+}
+
+fn truths(data: &Path) -> Vec<Truth> {
+    let mut out = Vec::new();
+    for file in manifest_files(data) {
+        let Some(stem) = file.rsplit('/').next().unwrap().strip_suffix(".depth.exr") else {
+            continue;
+        };
+        let (s, v) = stem.split_once('_').unwrap();
+        let (sample, view) = (s.parse().unwrap(), v.parse().unwrap());
+        let (w, h, _, mask) = read_png(&view_path(data, sample, view, None, "mask.png"));
+        out.push(Truth {
+            stem: stem.to_string(),
+            sample,
+            view,
+            w,
+            h,
+            depth: read_exr(&view_path(data, sample, view, None, "depth.exr")),
+            mask,
+        });
+    }
+    out
+}
+
+/// Mean over images of a per-image statistic of (prediction, truth) over the scored pixels.
+fn per_image(truths: &[Truth], stat: impl Fn(&Truth) -> f64) -> f64 {
+    truths.iter().map(stat).sum::<f64>() / truths.len() as f64
+}
+
+#[test]
+fn depth_metrics_have_their_closed_forms() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=2", "views=2"]);
+    let truths = truths(&data);
+    assert_eq!(truths.len(), 4);
+    let pixels: usize = truths.iter().map(|t| t.inside().count()).sum();
+
+    // The truth itself.
+    let same = dir.path().join("same");
+    for t in &truths {
+        write_exr(
+            &t.prediction(&same, "depth.exr"),
+            t.w,
+            t.h,
+            &[("Z", t.depth.clone())],
+        );
+    }
+    let (_, r) = eval(&data, &same, &[]);
+    for key in ["abs_rel", "sq_rel", "rmse", "rmse_log"] {
+        assert_eq!(f(&r, key), 0.0, "{key}");
+    }
+    for key in ["delta1", "delta2", "delta3"] {
+        assert_eq!(f(&r, key), 1.0, "{key}");
+    }
+    assert_eq!(r["depth_counts"]["images"], 4);
+    assert_eq!(r["depth_counts"]["pixels"], pixels);
+
+    // 1.1 × the truth: AbsRel 0.1, SqRel 0.01·mean d*, RMSE 0.1·RMS(d*), per image.
+    let scaled = dir.path().join("scaled");
+    let times = |t: &Truth| -> Vec<f32> { t.depth.iter().map(|&d| d * 1.1).collect() };
+    for t in &truths {
+        write_exr(
+            &t.prediction(&scaled, "depth.exr"),
+            t.w,
+            t.h,
+            &[("Z", times(t))],
+        );
+    }
+    let (_, r) = eval(&data, &scaled, &[]);
+    let mean_of = |t: &Truth, g: &dyn Fn(f64) -> f64| {
+        t.inside().map(|i| g(f64::from(t.depth[i]))).sum::<f64>() / t.inside().count() as f64
+    };
+    let rms = per_image(&truths, |t| 0.1 * mean_of(t, &|d| d * d).sqrt());
+    let sq_rel = per_image(&truths, |t| 0.01 * mean_of(t, &|d| d));
+    assert!((f(&r, "abs_rel") - 0.1).abs() < 1e-6, "{r}");
+    assert!(
+        (f(&r, "rmse") - rms).abs() < 1e-6 * rms,
+        "{} vs {rms}",
+        f(&r, "rmse")
+    );
+    assert!((f(&r, "sq_rel") - sq_rel).abs() < 1e-6 * sq_rel);
+    assert!((f(&r, "rmse_log") - 1.1f64.ln()).abs() < 1e-6);
+    assert_eq!(f(&r, "delta1"), 1.0);
+
+    // Alignment recovers the 1.1.
+    for align in ["median", "lstsq", "lstsq_shift"] {
+        let (_, a) = eval(&data, &scaled, &["--align", align]);
+        for key in ["abs_rel", "sq_rel", "rmse", "rmse_log"] {
+            assert!(f(&a, key) < 1e-6, "{align}: {key} = {}", f(&a, key));
+        }
+        assert!((f(&a, "align_scale") - 1.0 / 1.1).abs() < 1e-6, "{align}");
+    }
+
+    // The same values as .npy float32 give the same report; float64 gives exactly 0.1.
+    let npy = dir.path().join("npy32");
+    for t in &truths {
+        let bytes: Vec<u8> = times(t).iter().flat_map(|v| v.to_le_bytes()).collect();
+        write_npy(&t.prediction(&npy, "depth.npy"), "<f4", &[t.h, t.w], &bytes);
+    }
+    let (_, n) = eval(&data, &npy, &[]);
+    for key in ["abs_rel", "sq_rel", "rmse", "rmse_log", "delta1"] {
+        assert_eq!(n[key], r[key], "{key}");
+    }
+    let npy64 = dir.path().join("npy64");
+    for t in &truths {
+        let bytes: Vec<u8> = t
+            .depth
+            .iter()
+            .flat_map(|&v| (f64::from(v) * 1.1).to_le_bytes())
+            .collect();
+        write_npy(
+            &t.prediction(&npy64, "depth.npy"),
+            "<f8",
+            &[t.h, t.w, 1],
+            &bytes,
+        );
+    }
+    let (_, n) = eval(&data, &npy64, &[]);
+    assert!((f(&n, "abs_rel") - 0.1).abs() < 1e-12);
+
+    // Millimetre PNGs (the dataset's own depth, exported) agree with EXRs of the same values.
+    let png16 = dir.path().join("png16");
+    let args = ["export", "--format", "png16", "--out"].map(OsStr::new);
+    ok(shmgen(&[
+        args[0],
+        data.as_os_str(),
+        args[1],
+        args[2],
+        args[3],
+        png16.as_os_str(),
+    ]));
+    let (_, p) = eval(&data, &png16, &[]);
+    let as_exr = dir.path().join("mm_exr");
+    for t in &truths {
+        let (_, _, mm) = read_png16(&view_path(&png16, t.sample, t.view, None, "depth_mm.png"));
+        let metres: Vec<f32> = mm.iter().map(|&m| (f64::from(m) / 1000.0) as f32).collect();
+        write_exr(
+            &t.prediction(&as_exr, "depth.exr"),
+            t.w,
+            t.h,
+            &[("Z", metres)],
+        );
+    }
+    let (_, e) = eval(&data, &as_exr, &[]);
+    for key in ["abs_rel", "sq_rel", "rmse", "rmse_log", "delta1"] {
+        assert!((f(&p, key) - f(&e, key)).abs() < 1e-6, "{key}");
+    }
+    // Half a millimetre at most, relative to the depth.
+    let bound = per_image(&truths, |t| mean_of(t, &|d| 0.0005 / d));
+    assert!(f(&p, "abs_rel") > 0.0 && f(&p, "abs_rel") <= bound + 1e-9);
+
+    // A missing view and non-finite predicted pixels are left out, counted and reported.
+    let holes = dir.path().join("holes");
+    for t in &truths[1..] {
+        let mut z = times(t);
+        let first: Vec<usize> = t.inside().take(7).collect();
+        for &i in &first {
+            z[i] = f32::NAN;
+        }
+        write_exr(&t.prediction(&holes, "depth.exr"), t.w, t.h, &[("Z", z)]);
+    }
+    let (o, h) = eval(&data, &holes, &[]);
+    assert_eq!(h["depth_counts"]["missing"], 1);
+    assert_eq!(h["depth_counts"]["excluded_pixels"], 21);
+    assert!(stderr(&o).contains("warning: depth: 1 views have no prediction"));
+    assert!(stderr(&o).contains("warning: depth: 21 predicted pixels left out"));
+}
+
+/// A binary little-endian PLY with double x, y, z and `list uchar int` faces.
+fn ply(vertices: &[[f64; 3]], faces: &[[i32; 3]]) -> Vec<u8> {
+    let mut out = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        vertices.len(),
+        faces.len()
+    )
+    .into_bytes();
+    for v in vertices {
+        for c in v {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for face in faces {
+        out.push(3);
+        for i in face {
+            out.extend_from_slice(&i.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// A grid of n × n vertices over the unit square at height z, two triangles per cell.
+fn grid(n: usize, z: f64) -> (Vec<[f64; 3]>, Vec<[i32; 3]>) {
+    let step = 1.0 / (n - 1) as f64;
+    let vertices = (0..n * n)
+        .map(|k| [(k % n) as f64 * step, (k / n) as f64 * step, z])
+        .collect();
+    let mut faces = Vec::new();
+    for r in 0..n - 1 {
+        for c in 0..n - 1 {
+            let k = (r * n + c) as i32;
+            let n = n as i32;
+            faces.push([k, k + 1, k + n + 1]);
+            faces.push([k, k + n + 1, k + n]);
+        }
+    }
+    (vertices, faces)
+}
+
+/// Adds `file` (relative) to sample `sample`'s line of the manifest, if it is not listed:
+/// what a generator writing that output would have listed.
+fn list_in_manifest(data: &Path, sample: u64, file: &str) {
+    let path = data.join("manifest.jsonl");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = Vec::new();
+    for line in text.lines() {
+        let mut v: Value = serde_json::from_str(line).unwrap();
+        let files = v["files"].as_array_mut().unwrap();
+        if v_sample(line) == sample && !files.iter().any(|f| f == file) {
+            files.push(Value::from(file));
+        }
+        lines.push(serde_json::to_string(&v).unwrap());
+    }
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+}
+
+fn v_sample(line: &str) -> u64 {
+    serde_json::from_str::<Value>(line).unwrap()["sample"]
+        .as_u64()
+        .unwrap()
+}
+
+#[test]
+fn chamfer_and_fscore_have_their_closed_forms() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=1", "views=1"]);
+    // The ground truth: an 11 × 11 grid over the unit square (0.1 m cells).
+    let (vertices, faces) = grid(11, 0.0);
+    write_file(
+        &data.join("samples/0000/000000.mesh.ply"),
+        &ply(&vertices, &faces),
+    );
+    list_in_manifest(&data, 0, "samples/0000/000000.mesh.ply");
+    let surface = |name: &str, file: &str, bytes: Vec<u8>, extra: &[&str]| {
+        let predictions = dir.path().join(name);
+        write_file(&predictions.join("0000").join(file), &bytes);
+        eval(&data, &predictions, extra).1["surface"].clone()
+    };
+    // The mesh itself.
+    let s = surface("itself", "000000.ply", ply(&vertices, &faces), &[]);
+    assert!(
+        f(&s, "chamfer_l1") < 1e-12 && f(&s, "chamfer_l2") < 1e-20,
+        "{s}"
+    );
+    assert_eq!(f(&s, "fscore"), 1.0);
+    // Its own vertices as a point cloud: on the surface (accuracy 0); every point of a cell
+    // is within half its diagonal of a corner.
+    let cloud = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nend_header\n{}",
+        vertices.len(),
+        vertices
+            .iter()
+            .map(|v| format!("{} {} {}\n", v[0], v[1], v[2]))
+            .collect::<String>()
+    );
+    let s = surface("vertices", "000000.ply", cloud.into_bytes(), &[]);
+    assert!(f(&s, "accuracy") < 1e-9, "{s}");
+    let half_diagonal = 0.1 * 2f64.sqrt() / 2.0;
+    assert!(f(&s, "completeness") > 0.0 && f(&s, "completeness") <= half_diagonal);
+    // Shifted by h along the normal: every point is h from the other surface, both ways.
+    let h = 0.02;
+    let (lifted, _) = grid(11, h);
+    for (name, file, bytes) in [
+        ("lifted", "000000.ply", ply(&lifted, &faces)),
+        ("lifted_obj", "000000.obj", obj(&lifted, &faces)),
+    ] {
+        let s = surface(name, file, bytes, &["--fscore-threshold", "0.03"]);
+        assert!((f(&s, "chamfer_l1") - h).abs() < 1e-12, "{s}");
+        assert!((f(&s, "chamfer_l2") - 2.0 * h * h).abs() < 1e-12);
+        assert_eq!(f(&s, "fscore"), 1.0);
+    }
+    let s = surface(
+        "lifted_tight",
+        "000000.ply",
+        ply(&lifted, &faces),
+        &["--fscore-threshold", "0.01"],
+    );
+    assert_eq!(
+        (f(&s, "precision"), f(&s, "recall"), f(&s, "fscore")),
+        (0.0, 0.0, 0.0)
+    );
+}
+
+fn obj(vertices: &[[f64; 3]], faces: &[[i32; 3]]) -> Vec<u8> {
+    let mut out = String::new();
+    for v in vertices {
+        out += &format!("v {} {} {}\n", v[0], v[1], v[2]);
+    }
+    for t in faces {
+        out += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    out.into_bytes()
+}
+
+#[test]
+fn end_point_error_of_a_constant_offset_is_its_norm() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=1", "views=2"]);
+    let truths = truths(&data);
+    let predictions = dir.path().join("predictions");
+    for t in &truths {
+        // Truth written here where the dataset has none yet: some field, valid on the mask.
+        let flow_u: Vec<f32> = (0..t.w * t.h).map(|i| (i % t.w) as f32 * 0.01).collect();
+        let flow_v: Vec<f32> = (0..t.w * t.h).map(|i| -((i / t.w) as f32) * 0.02).collect();
+        let disp: Vec<Vec<f32>> = (0..3)
+            .map(|c| {
+                t.depth
+                    .iter()
+                    .map(|&d| d * 0.001 * (c + 1) as f32)
+                    .collect()
+            })
+            .collect();
+        let file = |kind: &str| format!("samples/0000/{}.{kind}", t.stem);
+        let missing = |kind: &str| {
+            let absent = !data.join(file(kind)).exists();
+            if absent {
+                list_in_manifest(&data, t.sample, &file(kind));
+            }
+            absent
+        };
+        if missing("flow.exr") {
+            let uv = [("U", flow_u), ("V", flow_v)];
+            write_exr(&data.join(file("flow.exr")), t.w, t.h, &uv);
+        }
+        if missing("flow_valid.png") {
+            let path = data.join(file("flow_valid.png"));
+            write_png(&path, t.w, t.h, png::BitDepth::Eight, &t.mask);
+        }
+        if missing("displacement.exr") {
+            let xyz: Vec<(&str, Vec<f32>)> = ["X", "Y", "Z"].into_iter().zip(disp).collect();
+            write_exr(&data.join(file("displacement.exr")), t.w, t.h, &xyz);
+        }
+        let read = |kind: &str, names: &[&str]| -> Vec<Vec<f32>> {
+            use exr::prelude::*;
+            let image = read_first_flat_layer_from_file(
+                data.join(format!("samples/0000/{}.{kind}", t.stem)),
+            )
+            .unwrap();
+            names
+                .iter()
+                .map(|n| {
+                    let c = image
+                        .layer_data
+                        .channel_data
+                        .list
+                        .iter()
+                        .find(|c| c.name == Text::from(*n))
+                        .unwrap();
+                    c.sample_data.values_as_f32().collect()
+                })
+                .collect()
+        };
+        let flow = read("flow.exr", &["U", "V"]);
+        let offset = [3.0f32, 4.0];
+        let shifted: Vec<(&str, Vec<f32>)> = ["U", "V"]
+            .iter()
+            .zip(&flow)
+            .zip(offset)
+            .map(|((n, c), o)| (*n, c.iter().map(|v| v + o).collect()))
+            .collect();
+        write_exr(&t.prediction(&predictions, "flow.exr"), t.w, t.h, &shifted);
+        let disp = read("displacement.exr", &["X", "Y", "Z"]);
+        let offset = [0.001f32, 0.002, 0.002];
+        // Interleaved H × W × 3, as NumPy stores an image of vectors.
+        let bytes: Vec<u8> = (0..t.w * t.h)
+            .flat_map(|i| {
+                let disp = &disp;
+                (0..3).map(move |c| f64::from(disp[c][i]) + f64::from(offset[c]))
+            })
+            .flat_map(|v| v.to_le_bytes())
+            .collect::<Vec<u8>>();
+        write_npy(
+            &t.prediction(&predictions, "displacement.npy"),
+            "<f8",
+            &[t.h, t.w, 3],
+            &bytes,
+        );
+    }
+    let (_, r) = eval(&data, &predictions, &[]);
+    let flow = &r["flow"];
+    assert!(
+        (f(flow, "epe_mean") - 5.0).abs() < 1e-5 && (f(flow, "epe_median") - 5.0).abs() < 1e-5,
+        "{flow}"
+    );
+    let valid: usize = truths
+        .iter()
+        .map(|t| {
+            let (_, _, _, v) =
+                read_png(&data.join(format!("samples/0000/{}.flow_valid.png", t.stem)));
+            v.iter().filter(|&&x| x > 0).count()
+        })
+        .sum();
+    assert_eq!(flow["counts"]["pixels"], valid);
+    let disp = &r["displacement"];
+    assert!((f(disp, "epe_mean") - 0.003).abs() < 1e-7, "{disp}");
+    let seen: usize = truths
+        .iter()
+        .map(|t| t.depth.iter().filter(|&&d| d > 0.0).count())
+        .sum();
+    assert_eq!(disp["counts"]["pixels"], seen);
+    assert!(
+        r["abs_rel"].is_null(),
+        "no depth predicted, no depth metrics"
+    );
+}
+
+#[test]
+fn wrong_predictions_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=1", "views=1"]);
+    let p = dir.path().join("p");
+    std::fs::create_dir(&p).unwrap();
+    assert!(eval_err(&data, &p, &[]).contains("no prediction found"));
+    let stem = p.join("0000/000000_00");
+    write_exr(
+        &stem.with_extension("depth.exr"),
+        4,
+        3,
+        &[("Z", vec![1.0; 12])],
+    );
+    assert!(eval_err(&data, &p, &[]).contains("4×3 pixels, the view has 960×960"));
+    write_npy(
+        &stem.with_extension("depth.npy"),
+        "<f4",
+        &[960, 960],
+        &vec![0; 960 * 960 * 4],
+    );
+    assert!(eval_err(&data, &p, &[]).contains("predict the same thing"));
+    std::fs::remove_file(stem.with_extension("depth.exr")).unwrap();
+    write_npy(
+        &stem.with_extension("depth.npy"),
+        "<i4",
+        &[960, 960],
+        &vec![0; 960 * 960 * 4],
+    );
+    assert!(eval_err(&data, &p, &[]).contains("not float32 or float64"));
+    std::fs::remove_file(stem.with_extension("depth.npy")).unwrap();
+    write_png(
+        &stem.with_extension("depth.png"),
+        960,
+        960,
+        png::BitDepth::Eight,
+        &vec![1; 960 * 960],
+    );
+    assert!(eval_err(&data, &p, &[]).contains("an 8-bit PNG cannot hold millimetres"));
+    assert!(
+        eval_err(&data, &p, &["--align", "mean"])
+            .contains("expected none, median, lstsq or lstsq_shift")
+    );
+    assert!(eval_err(&data, &p, &["--fscore-threshold=-1"]).contains("--fscore-threshold -1"));
+    let unfinished = dir.path().join("empty");
+    std::fs::create_dir(&unfinished).unwrap();
+    assert!(eval_err(&unfinished, &p, &[]).contains("not a shmgen dataset"));
+}

@@ -1,0 +1,496 @@
+//! `shmgen export` end to end: a dataset exported to every format and read back with parsers
+//! written here (transforms.json against the view records, COLMAP's quaternions rebuilt into
+//! rotation matrices, tar shards through the `tar` crate's reader, 16-bit PNG through `png`),
+//! plus the refusals and a killed export.
+
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::ffi::OsStr;
+use std::io::Read;
+use std::path::Path;
+use std::process::Output;
+use std::time::Duration;
+
+mod common;
+
+use common::{
+    hashes, manifest_files, ok, quickstart, read_exr, read_json, read_png16, run, run_limited,
+    shmgen, stderr, view_path, write,
+};
+
+fn export(dataset: &Path, format: &str, out: &Path, extra: &[&str]) -> Output {
+    let mut args: Vec<&OsStr> = vec![
+        OsStr::new("export"),
+        dataset.as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new(format),
+        OsStr::new("--out"),
+        out.as_os_str(),
+    ];
+    args.extend(extra.iter().map(OsStr::new));
+    shmgen(&args)
+}
+
+/// The views of a dataset as its manifest lists them: file stem → files (relative paths).
+fn views(out: &Path) -> BTreeMap<String, Vec<String>> {
+    let mut views: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    for file in manifest_files(out) {
+        let name = file.rsplit('/').next().unwrap();
+        let stem = name.split('.').next().unwrap();
+        if stem.contains('_') {
+            views.entry(stem.to_string()).or_default().push(file);
+        }
+    }
+    views
+}
+
+fn matrix(v: &Value) -> Vec<Vec<f64>> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            r.as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect()
+        })
+        .collect()
+}
+
+/// Sample and view of a stem `SSSSSS_VV[aK]`.
+fn indices(stem: &str) -> (u64, u32, Option<u32>) {
+    let (s, rest) = stem.split_once('_').unwrap();
+    let (v, copy) = match rest.split_once('a') {
+        Some((v, c)) => (v, Some(c.parse().unwrap())),
+        None => (rest, None),
+    };
+    (s.parse().unwrap(), v.parse().unwrap(), copy)
+}
+
+/// Whole millimetres of depth in metres, rounded to nearest: what a millimetre PNG must hold.
+fn millimetres(depth: &[f32]) -> Vec<u16> {
+    depth
+        .iter()
+        .map(|&d| (f64::from(d) * 1000.0).round().min(65535.0) as u16)
+        .collect()
+}
+
+/// Rotation matrix of a unit Hamilton quaternion (w, x, y, z), the textbook formula.
+fn rotation_of(w: f64, x: f64, y: f64, z: f64) -> [[f64; 3]; 3] {
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ],
+        [
+            2.0 * (x * y + w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - w * x),
+        ],
+        [
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
+/// Data lines of a COLMAP text file (comments dropped, empty lines kept).
+fn data_lines(path: &Path) -> Vec<String> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(str::to_string)
+        .collect()
+}
+
+/// Checks a COLMAP model against the records; returns the camera model names used.
+fn check_colmap(data: &Path, scene: &Path, stems: &[&String]) -> Vec<String> {
+    let cameras: BTreeMap<u32, Vec<String>> = data_lines(&scene.join("sparse/0/cameras.txt"))
+        .iter()
+        .map(|l| {
+            let f: Vec<String> = l.split(' ').map(str::to_string).collect();
+            (f[0].parse().unwrap(), f[1..].to_vec())
+        })
+        .collect();
+    let lines = data_lines(&scene.join("sparse/0/images.txt"));
+    assert_eq!(lines.len(), 2 * stems.len(), "two lines per image");
+    let mut models = Vec::new();
+    for (pair, stem) in lines.chunks(2).zip(stems) {
+        assert_eq!(pair[1], "", "no 2-D points");
+        let f: Vec<&str> = pair[0].split(' ').collect();
+        assert_eq!(f.len(), 10);
+        let n: Vec<f64> = f[1..8].iter().map(|x| x.parse().unwrap()).collect();
+        assert_eq!(f[9], format!("{stem}.png"));
+        let (s, v, copy) = indices(stem);
+        let record = read_json(&view_path(data, s, v, copy, "json"));
+        let w2c = matrix(&record["camera"]["w2c_opencv"]);
+        let r = rotation_of(n[0], n[1], n[2], n[3]);
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!((r[i][j] - w2c[i][j]).abs() < 1e-12, "{stem}: R[{i}][{j}]");
+            }
+            assert_eq!(n[4 + i], w2c[i][3], "{stem}: t is w2c's, to the bit");
+        }
+        let camera = &cameras[&f[8].parse::<u32>().unwrap()];
+        let k = matrix(&record["camera"]["K"]);
+        let size = [&record["camera"]["width"], &record["camera"]["height"]].map(|v| v.to_string());
+        assert_eq!(camera[1..3], size);
+        let p: Vec<f64> = camera[3..].iter().map(|x| x.parse().unwrap()).collect();
+        assert_eq!(p[..4], [k[0][0], k[1][1], k[0][2], k[1][2]], "{stem}");
+        if camera[0] != "PINHOLE" {
+            let d = &record["camera"]["distortion"];
+            let c = |n: &str| d[n].as_f64().unwrap();
+            assert_eq!(p[4..8], [c("k1"), c("k2"), c("p1"), c("p2")]);
+            if camera[0] == "FULL_OPENCV" {
+                assert_eq!(p[8..], [c("k3"), 0.0, 0.0, 0.0]);
+            } else {
+                assert_eq!((camera[0].as_str(), p.len(), c("k3")), ("OPENCV", 8, 0.0));
+            }
+        }
+        let image = std::fs::read(scene.join("images").join(f[9])).unwrap();
+        assert_eq!(
+            image,
+            std::fs::read(view_path(data, s, v, copy, "rgb.png")).unwrap()
+        );
+        models.push(camera[0].clone());
+    }
+    assert!(data_lines(&scene.join("sparse/0/points3D.txt")).is_empty());
+    models
+}
+
+/// Checks a nerfstudio scene against the records; returns its camera model and frame stems.
+fn check_nerfstudio(data: &Path, scene: &Path) -> (String, Vec<String>) {
+    let t = read_json(&scene.join("transforms.json"));
+    let mut stems = Vec::new();
+    for frame in t["frames"].as_array().unwrap() {
+        let file = frame["file_path"].as_str().unwrap();
+        let stem = file
+            .strip_prefix("images/")
+            .unwrap()
+            .strip_suffix(".png")
+            .unwrap();
+        let (s, v, copy) = indices(stem);
+        let record = read_json(&view_path(data, s, v, copy, "json"));
+        let camera = &record["camera"];
+        let k = matrix(&camera["K"]);
+        let got = ["fl_x", "fl_y", "cx", "cy"].map(|n| frame[n].as_f64().unwrap());
+        assert_eq!(got, [k[0][0], k[1][1], k[0][2], k[1][2]], "{stem}");
+        assert_eq!(
+            (&frame["w"], &frame["h"]),
+            (&camera["width"], &camera["height"])
+        );
+        // OpenGL axes: the OpenCV camera-to-world with its y and z columns negated.
+        let cv = matrix(&camera["c2w_opencv"]);
+        let gl = matrix(&frame["transform_matrix"]);
+        for i in 0..4 {
+            let sign = [1.0, -1.0, -1.0, 1.0];
+            for j in 0..4 {
+                assert_eq!(
+                    gl[i][j],
+                    cv[i][j] * sign[j],
+                    "{stem}: transform_matrix[{i}][{j}]"
+                );
+            }
+        }
+        if t["camera_model"] == "OPENCV" {
+            for n in ["k1", "k2", "k3", "p1", "p2"] {
+                let expected = camera["distortion"][n].as_f64().unwrap_or(0.0);
+                assert_eq!(frame[n].as_f64().unwrap(), expected, "{stem}: {n}");
+            }
+        }
+        let same = |exported: &str, kind: &str| {
+            assert_eq!(
+                std::fs::read(scene.join(exported)).unwrap(),
+                std::fs::read(view_path(data, s, v, copy, kind)).unwrap(),
+                "{exported}"
+            );
+        };
+        same(file, "rgb.png");
+        same(frame["mask_path"].as_str().unwrap(), "mask.png");
+        let depth = read_exr(&view_path(data, s, v, copy, "depth.exr"));
+        let (_, _, mm) = read_png16(&scene.join(frame["depth_file_path"].as_str().unwrap()));
+        assert_eq!(mm, millimetres(&depth), "{stem}: depth in millimetres");
+        stems.push(stem.to_string());
+    }
+    (t["camera_model"].as_str().unwrap().to_string(), stems)
+}
+
+/// Every tar member of the shards in `dir`, in order: (name, bytes), with its header checked.
+fn shard_members(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut shards: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "tar"))
+        .collect();
+    shards.sort();
+    let mut members = Vec::new();
+    for shard in shards {
+        let mut archive = tar::Archive::new(std::fs::File::open(&shard).unwrap());
+        for entry in archive.entries().unwrap() {
+            let mut entry = entry.unwrap();
+            let h = entry.header();
+            assert_eq!(
+                (
+                    h.mode().unwrap(),
+                    h.uid().unwrap(),
+                    h.gid().unwrap(),
+                    h.mtime().unwrap()
+                ),
+                (0o644, 0, 0, 0)
+            );
+            let name = entry.path().unwrap().to_string_lossy().to_string();
+            let mut bytes = Vec::new();
+            entry.read_to_end(&mut bytes).unwrap();
+            members.push((name, bytes));
+        }
+    }
+    members
+}
+
+#[test]
+fn every_format_holds_the_datasets_files_and_cameras() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=2", "views=3"]);
+    let views = views(&data);
+    assert_eq!(views.len(), 6);
+
+    let ns = dir.path().join("ns");
+    ok(export(&data, "nerfstudio", &ns, &[]));
+    for sample in 0..2u64 {
+        let (model, stems) = check_nerfstudio(&data, &ns.join(format!("{sample:06}")));
+        assert_eq!(model, "PINHOLE");
+        let expected: Vec<String> = (0..3).map(|v| format!("{sample:06}_{v:02}")).collect();
+        assert_eq!(stems, expected);
+    }
+
+    let colmap = dir.path().join("colmap");
+    ok(export(&data, "colmap", &colmap, &[]));
+    for sample in 0..2u64 {
+        let stems: Vec<&String> = views.keys().filter(|k| indices(k).0 == sample).collect();
+        let models = check_colmap(&data, &colmap.join(format!("{sample:06}")), &stems);
+        assert_eq!(models, ["PINHOLE"; 3]);
+    }
+
+    let wds = dir.path().join("wds");
+    ok(export(&data, "webdataset", &wds, &["--shard-size", "4"]));
+    let members = shard_members(&wds);
+    let mut expected = Vec::new();
+    for files in views.values() {
+        let mut files = files.clone();
+        files.sort();
+        for file in files {
+            let name = file.rsplit('/').next().unwrap().to_string();
+            expected.push((name, std::fs::read(data.join(&file)).unwrap()));
+        }
+    }
+    assert!(
+        members == expected,
+        "every file of every view, in key order, byte-identical"
+    );
+    let shards = read_json(&wds.join("export.json"))["shards"].clone();
+    let counts: Vec<u64> = shards
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["views"].as_u64().unwrap())
+        .collect();
+    assert_eq!(counts, [4, 2]);
+    let again = dir.path().join("wds2");
+    ok(export(&data, "webdataset", &again, &["--shard-size", "4"]));
+    assert_eq!(hashes(&wds), hashes(&again), "deterministic shards");
+
+    let png16 = dir.path().join("png16");
+    ok(export(&data, "png16", &png16, &[]));
+    for stem in views.keys() {
+        let (s, v, _) = indices(stem);
+        let depth = read_exr(&view_path(&data, s, v, None, "depth.exr"));
+        let (w, h, mm) = read_png16(&view_path(&png16, s, v, None, "depth_mm.png"));
+        assert_eq!((w, h), (960, 960));
+        assert_eq!(mm, millimetres(&depth), "{stem}");
+    }
+}
+
+/// A box seen through a drawn lens, with one augmented copy of each view.
+const LENS: &str = r#"
+dataset(#{ name: "lens", seed: 3, samples: 1, views: 2, outputs: ["rgb", "depth", "mask"],
+    camera: #{ width: 64, height: 48,
+        distortion: #{ k1: [-0.2, -0.1], k2: 0.02, p1: 0.001, p2: -0.001, k3: [0.0, param("k3", 0.004)] } },
+    augment: #{ copies: 1, operations: [#{ op: "gamma", gamma: [0.8, 1.2], probability: 1.0 }] },
+    scene: |rng| assembly("box", [shape::box(2.0, 1.0, 0.5)]),
+})
+"#;
+
+#[test]
+fn distorted_lenses_and_augmented_copies_export_with_their_cameras() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write(dir.path(), "lens.rhai", LENS);
+    let data = dir.path().join("data");
+    ok(run(&recipe, &data, &[]));
+    let no_k3 = dir.path().join("no_k3");
+    ok(run(&recipe, &no_k3, &["--set", "k3=0.0"]));
+
+    let ns = dir.path().join("ns");
+    ok(export(&data, "nerfstudio", &ns, &[]));
+    let (model, stems) = check_nerfstudio(&data, &ns.join("000000"));
+    assert_eq!(
+        (model.as_str(), stems),
+        ("OPENCV", vec!["000000_00".into(), "000000_01".into()])
+    );
+    let all = dir.path().join("ns_all");
+    ok(export(&data, "nerfstudio", &all, &["--with-copies"]));
+    let (_, stems) = check_nerfstudio(&data, &all.join("000000"));
+    assert_eq!(
+        stems,
+        ["000000_00", "000000_00a0", "000000_01", "000000_01a0"]
+    );
+
+    let colmap = dir.path().join("colmap");
+    ok(export(&data, "colmap", &colmap, &["--with-copies"]));
+    let stems: Vec<String> = ["000000_00", "000000_00a0", "000000_01", "000000_01a0"]
+        .map(String::from)
+        .to_vec();
+    let refs: Vec<&String> = stems.iter().collect();
+    assert_eq!(
+        check_colmap(&data, &colmap.join("000000"), &refs),
+        ["FULL_OPENCV"; 4]
+    );
+    let plain = dir.path().join("colmap_no_k3");
+    ok(export(&no_k3, "colmap", &plain, &[]));
+    let clean = [&stems[0], &stems[2]];
+    assert_eq!(
+        check_colmap(&no_k3, &plain.join("000000"), &clean),
+        ["OPENCV"; 2]
+    );
+
+    let wds = dir.path().join("wds");
+    ok(export(&data, "webdataset", &wds, &[]));
+    let keys: Vec<String> = shard_members(&wds)
+        .into_iter()
+        .map(|(name, _)| name.split('.').next().unwrap().to_string())
+        .collect();
+    let mut runs = keys.clone();
+    runs.dedup();
+    assert_eq!(
+        runs, stems,
+        "each key's members adjacent, copies as keys of their own"
+    );
+}
+
+#[test]
+fn depth_beyond_16_bit_millimetres_saturates_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write(
+        dir.path(),
+        "far.rhai",
+        r#"dataset(#{ name: "far", seed: 1, samples: 1, views: 1, outputs: ["rgb", "depth", "mask"],
+            camera: #{ width: 32, height: 24, fov_y: deg(2), distance: 80.0 },
+            scene: |rng| assembly("box", [shape::box(2.0, 1.0, 0.5)]) })"#,
+    );
+    let data = dir.path().join("data");
+    ok(run(&recipe, &data, &[]));
+    let out = dir.path().join("png16");
+    let done = ok(export(&data, "png16", &out, &[]));
+    let depth = read_exr(&view_path(&data, 0, 0, None, "depth.exr"));
+    let far = depth
+        .iter()
+        .filter(|&&d| f64::from(d) * 1000.0 >= 65535.5)
+        .count();
+    assert!(far > 0);
+    assert!(
+        stderr(&done).contains(&format!("warning: {far} depth pixels beyond 65.535 m")),
+        "{}",
+        stderr(&done)
+    );
+    let (_, _, mm) = read_png16(&view_path(&out, 0, 0, None, "depth_mm.png"));
+    for (d, m) in depth.iter().zip(mm) {
+        assert_eq!(m, if *d == 0.0 { 0 } else { 65535 });
+    }
+    assert_eq!(
+        read_json(&out.join("export.json"))["depth_mm"]["saturated_pixels"],
+        far
+    );
+}
+
+#[test]
+fn unfinished_foreign_and_occupied_folders_are_refused_and_nothing_is_left() {
+    let dir = tempfile::tempdir().unwrap();
+    let half = dir.path().join("half");
+    let recipe = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/quickstart.rhai");
+    ok(run(
+        &recipe,
+        &half,
+        &["--set", "samples=2", "--set", "views=1", "--shard", "0/2"],
+    ));
+    let out = dir.path().join("out");
+    let refused = |dataset: &Path, out: &Path, expect: &str| {
+        let o = export(dataset, "webdataset", out, &[]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains(expect), "{}", stderr(&o));
+    };
+    refused(
+        &half,
+        &out,
+        "not finished: manifest.jsonl lists 1 of 2 samples",
+    );
+    std::fs::create_dir(dir.path().join("foreign")).unwrap();
+    refused(&dir.path().join("foreign"), &out, "not a shmgen dataset");
+    assert!(!out.exists());
+    let whole = quickstart(dir.path(), "whole", &["samples=1", "views=1"]);
+    std::fs::create_dir(&out).unwrap();
+    refused(&whole, &out, "already exists");
+    refused(&whole, &whole.join("exports"), "inside the dataset");
+    let o = export(&whole, "tiff", &dir.path().join("t"), &[]);
+    assert!(stderr(&o).contains("expected nerfstudio, colmap, webdataset or png16"));
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(
+        names.len(),
+        4,
+        "half, foreign, whole, out; no temporaries: {names:?}"
+    );
+}
+
+#[test]
+fn a_killed_export_never_leaves_a_folder_that_looks_complete() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=2", "views=3"]);
+    let out = dir.path().join("ns");
+    for limit in [5, 20, 60, 150] {
+        let args = ["export", "--format", "nerfstudio", "--out"].map(OsStr::new);
+        let (_, finished) = run_limited(
+            Duration::from_millis(limit),
+            &[
+                args[0],
+                data.as_os_str(),
+                args[1],
+                args[2],
+                args[3],
+                out.as_os_str(),
+            ],
+        );
+        if finished {
+            assert!(out.join("export.json").is_file());
+            std::fs::remove_dir_all(&out).unwrap();
+        } else {
+            assert!(
+                !out.exists(),
+                "killed after {limit} ms, yet {} exists",
+                out.display()
+            );
+        }
+    }
+    // A later export cleans up what killed ones left beside --out, and succeeds.
+    ok(export(&data, "nerfstudio", &out, &[]));
+    let hidden: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(hidden.is_empty(), "{hidden:?}");
+}
