@@ -18,6 +18,8 @@ pub const MATERIAL: &str = "material";
 pub const LIGHT: &str = "light";
 /// The stream of a view's background (scope: the view).
 pub const BACKGROUND: &str = "background";
+/// The stream the points of a sample's point cloud are drawn from (scope: the sample).
+pub const POINTS: &str = "points";
 
 /// Where a stream belongs: a whole sample, or one view of it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -7,7 +7,9 @@
 
 mod common;
 
-use common::{ok, read_exr, read_json, read_png, run, view_path, write};
+use common::{
+    View, load, matrix, off_box, ok, read_json, read_png, render, run, transform, view_path, write,
+};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -24,102 +26,6 @@ fn box_recipe(camera: &str, augment: &str) -> String {
             scene: |rng| assembly(\"box\", [shape::box(2.0, 1.0, 0.5)]),
         }})\n"
     )
-}
-
-/// A written view: its depth, mask and record.
-struct View {
-    width: usize,
-    height: usize,
-    depth: Vec<f32>,
-    mask: Vec<u8>,
-    json: Value,
-}
-
-fn load(out: &Path, view: u32, copy: Option<u32>) -> View {
-    let json = read_json(&view_path(out, 0, view, copy, "json"));
-    let (width, height, _, mask) = read_png(&view_path(out, 0, view, copy, "mask.png"));
-    View {
-        width,
-        height,
-        depth: read_exr(&view_path(out, 0, view, copy, "depth.exr")),
-        mask,
-        json,
-    }
-}
-
-fn matrix<const R: usize, const C: usize>(value: &Value) -> [[f64; C]; R] {
-    std::array::from_fn(|i| std::array::from_fn(|j| value[i][j].as_f64().unwrap()))
-}
-
-impl View {
-    fn k(&self) -> [[f64; 3]; 3] {
-        matrix(&self.json["camera"]["K"])
-    }
-
-    fn c2w(&self) -> [[f64; 4]; 4] {
-        matrix(&self.json["camera"]["c2w_opencv"])
-    }
-
-    fn w2c(&self) -> [[f64; 4]; 4] {
-        matrix(&self.json["camera"]["w2c_opencv"])
-    }
-
-    /// The world point pixel (row, col) sees, back-projected with the written K and pose
-    /// (pinhole).
-    fn point(&self, row: usize, col: usize) -> Option<[f64; 3]> {
-        let z = f64::from(self.depth[row * self.width + col]);
-        (z > 0.0).then(|| {
-            let k = self.k();
-            let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
-            let cam = [(u - k[0][2]) * z / k[0][0], (v - k[1][2]) * z / k[1][1], z];
-            transform(&self.c2w(), cam)
-        })
-    }
-
-    /// Where world point `p` projects (pinhole), with its planar depth.
-    fn project(&self, p: [f64; 3]) -> ([f64; 2], f64) {
-        let k = self.k();
-        let c = transform(&self.w2c(), p);
-        (
-            [
-                k[0][0] * c[0] / c[2] + k[0][2],
-                k[1][1] * c[1] / c[2] + k[1][2],
-            ],
-            c[2],
-        )
-    }
-
-    /// Whether pixel (row, col) and its 8 neighbours all see the box.
-    fn inside(&self, row: usize, col: usize) -> bool {
-        (row > 0 && col > 0 && row + 1 < self.height && col + 1 < self.width)
-            && (row - 1..=row + 1)
-                .all(|r| (col - 1..=col + 1).all(|c| self.mask[r * self.width + c] == 255))
-    }
-}
-
-fn transform(m: &[[f64; 4]; 4], p: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|i| m[i][0] * p[0] + m[i][1] * p[1] + m[i][2] * p[2] + m[i][3])
-}
-
-/// How far `p` is from the box's surface, metres (inside or outside).
-fn off_box(p: [f64; 3]) -> f64 {
-    let outside = (0..3)
-        .map(|i| (p[i].abs() - HALF[i]).max(0.0).powi(2))
-        .sum::<f64>()
-        .sqrt();
-    let inside = (0..3)
-        .map(|i| HALF[i] - p[i].abs())
-        .fold(f64::INFINITY, f64::min)
-        .max(0.0);
-    outside.max(inside)
-}
-
-fn render(recipe: &str, extra: &[&str]) -> (tempfile::TempDir, PathBuf) {
-    let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "cameras.rhai", recipe);
-    let out = dir.path().join("out");
-    ok(run(&path, &out, extra));
-    (dir, out)
 }
 
 /// The box seen by `camera`, with two copies made by `operations` warping the rendered
@@ -154,7 +60,7 @@ fn exact_geometric_copies_back_project_onto_the_box_and_agree_across_views() {
                     let Some(p) = v.point(row, col) else { continue };
                     seen += 1;
                     assert!(
-                        off_box(p) < 1e-4,
+                        off_box(p, HALF) < 1e-4,
                         "view {view} {copy:?} ({row},{col}): {p:?}"
                     );
                     // Seen from the clean view 0 too (unless hidden or off its frame), the
@@ -291,21 +197,6 @@ fn photometric_copies_leave_depth_masks_and_labels_byte_identical() {
     }
 }
 
-/// OpenCV's undistortPoints iteration (its documentation's model, solved by fixed point):
-/// x ← (x_d − δ(x)) / radial(x), independent of shmgen's Newton solver.
-fn undistort(d: &[f64; 5], xd: f64, yd: f64) -> (f64, f64) {
-    let [k1, k2, p1, p2, k3] = *d;
-    let (mut x, mut y) = (xd, yd);
-    for _ in 0..200 {
-        let r2 = x * x + y * y;
-        let radial = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
-        let dx = 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
-        let dy = p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
-        (x, y) = ((xd - dx) / radial, (yd - dy) / radial);
-    }
-    (x, y)
-}
-
 /// Planar depth of the first hit of the camera ray (x, y, 1) with the box, slab method.
 fn box_depth(c2w: &[[f64; 4]; 4], x: f64, y: f64) -> Option<f64> {
     let d: [f64; 3] = std::array::from_fn(|i| c2w[i][0] * x + c2w[i][1] * y + c2w[i][2]);
@@ -317,50 +208,6 @@ fn box_depth(c2w: &[[f64; 4]; 4], x: f64, y: f64) -> Option<f64> {
         t1 = t1.min(a.max(b));
     }
     (t0 <= t1 && t0 > 0.0).then_some(t0)
-}
-
-/// OpenCV's distortion of normalised coordinates (its documentation's formula).
-fn distort(d: &[f64; 5], x: f64, y: f64) -> (f64, f64) {
-    let [k1, k2, p1, p2, k3] = *d;
-    let r2 = x * x + y * y;
-    let radial = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
-    (
-        x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
-        y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y,
-    )
-}
-
-impl View {
-    /// The written lens, in OpenCV's order (all zero for a pinhole).
-    fn lens(&self) -> [f64; 5] {
-        let d = &self.json["camera"]["distortion"];
-        ["k1", "k2", "p1", "p2", "k3"].map(|k| d[k].as_f64().unwrap())
-    }
-
-    /// The undistorted normalised coordinates of pixel (row, col)'s centre, through the
-    /// written K and lens with OpenCV's undistortion.
-    fn ray(&self, row: usize, col: usize) -> (f64, f64) {
-        let k = self.k();
-        let (xd, yd) = (
-            (col as f64 + 0.5 - k[0][2]) / k[0][0],
-            (row as f64 + 0.5 - k[1][2]) / k[1][1],
-        );
-        undistort(&self.lens(), xd, yd)
-    }
-
-    /// Where world point `p` lands through the written pose, lens and K.
-    fn project_distorted(&self, p: [f64; 3]) -> [f64; 2] {
-        let (k, c) = (self.k(), transform(&self.w2c(), p));
-        let (x, y) = distort(&self.lens(), c[0] / c[2], c[1] / c[2]);
-        [k[0][0] * x + k[0][2], k[1][1] * y + k[1][2]]
-    }
-
-    /// The world point pixel (row, col) sees, through the written camera and lens.
-    fn point_through_lens(&self, row: usize, col: usize) -> Option<[f64; 3]> {
-        let z = f64::from(self.depth[row * self.width + col]);
-        let (x, y) = self.ray(row, col);
-        (z > 0.0).then(|| transform(&self.c2w(), [x * z, y * z, z]))
-    }
 }
 
 /// Checks every pixel of `v` against the box: where its ray (the written camera's, undistorted
@@ -519,7 +366,7 @@ fn image_space_warps_of_a_decentred_lens_are_reproduced_by_the_written_camera() 
                         s * (a.cos() * x - a.sin() * y) + number(&c[0]) + number(&t[0]),
                         s * (a.sin() * x + a.cos() * y) + number(&c[1]) + number(&t[1]),
                     ];
-                    let projected = w.project_distorted(p);
+                    let projected = w.project_through_lens(p);
                     let off = (projected[0] - moved[0]).hypot(projected[1] - moved[1]);
                     assert!(off < 1e-6, "view {view} copy {copy}: {off} px");
                     checked += 1;

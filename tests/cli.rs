@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{BIN, hashes, ok, read_exr, read_json, run, write};
+use common::{BIN, hashes, off_box, ok, read_exr, read_json, run, write};
 
 /// A small recipe (low resolution so the suite stays fast) importing the stdlib beam module.
 const SMALL: &str = r#"
@@ -18,6 +18,10 @@ dataset(#{
     seed: param("seed", 0),
     samples: samples,
     views: param("views", 3),
+    outputs: if param("ground_truth", false) {
+        ["rgb", "depth", "mask", "normals", "displacement", "flow", "rest_rgb", "rest_depth", "ray_distance", "mesh", "mesh_gltf", "points"]
+    } else { ["rgb", "depth", "mask"] },
+    points: 500,
     camera: #{ width: param("width", 96), height: param("height", 72), pitch: [deg(-60), deg(90)] },
     scene: |rng| {
         let length = rng.uniform(1.0, 4.0);
@@ -45,6 +49,39 @@ fn same_bytes_with_one_or_two_threads() {
         "run.json, manifest and 4 files per view"
     );
     assert_eq!(a, b);
+}
+
+#[test]
+fn ground_truth_outputs_have_the_same_bytes_with_one_or_two_threads_and_in_shards() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = write(dir.path(), "small.rhai", SMALL);
+    let gt = ["--set", "ground_truth=true", "--set", "samples=5"];
+    ok(run(
+        &recipe,
+        &dir.path().join("t1"),
+        &[&gt[..], &["--threads", "1"]].concat(),
+    ));
+    ok(run(
+        &recipe,
+        &dir.path().join("t2"),
+        &[&gt[..], &["--threads", "2"]].concat(),
+    ));
+    let sharded = dir.path().join("sharded");
+    ok(run(
+        &recipe,
+        &sharded,
+        &[&gt[..], &["--shard", "1/2"]].concat(),
+    ));
+    ok(run(
+        &recipe,
+        &sharded,
+        &[&gt[..], &["--shard", "0/2", "--threads", "1"]].concat(),
+    ));
+    let one = hashes(&dir.path().join("t1"));
+    // run.json, manifest, 11 files per view (json included) and 4 per sample.
+    assert_eq!(one.len(), 2 + 5 * (3 * 11 + 4));
+    assert_eq!(one, hashes(&dir.path().join("t2")));
+    assert_eq!(one, hashes(&sharded));
 }
 
 #[test]
@@ -176,20 +213,8 @@ fn written_files_round_trip_through_other_readers() {
                 .collect();
             let local = [p[0] - 10.0, p[1] + 20.0, p[2] - 5.0];
             let half = [1.5, 0.2, 0.4];
-            // Distance to the box surface for a point near it.
-            let outside: f64 = (0..3)
-                .map(|a| (local[a].abs() - half[a]).max(0.0).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            let inside = (0..3)
-                .map(|a| half[a] - local[a].abs())
-                .fold(f64::INFINITY, f64::min)
-                .max(0.0);
-            assert!(
-                outside.max(inside) < 1e-5 * 3.2,
-                "pixel {i}: {} m off the box",
-                outside.max(inside)
-            );
+            let off = off_box(local, half);
+            assert!(off < 1e-5 * 3.2, "pixel {i}: {off} m off the box");
         }
         assert!(hits > 100, "{hits} hits");
     }

@@ -179,6 +179,8 @@ const DATASETS: &[&str] = &[
     "light: #{ sky: #{ intensity: $ } }",
     "light: #{ ambient: $ }",
     "light: #{ sun: #{ colour: [$, 1.0, 1.0] } }",
+    "normals: $",
+    "points: $",
 ];
 
 /// One case: its recipe text and a label for failures.
@@ -191,7 +193,7 @@ fn cases() -> Vec<Case> {
     let mut cases = Vec::new();
     let dataset = |options: &str, scene: &str| {
         format!(
-            "dataset(#{{ name: \"fuzz\", samples: 1, views: 1, outputs: [\"rgb\", \"depth\", \"mask\", \"parts\", \"instances\", \"cracks\"], camera: #{{ width: 16, height: 16 }}, {options}, scene: |rng| {{ {scene} }} }})\n"
+            "dataset(#{{ name: \"fuzz\", samples: 1, views: 1, outputs: [\"rgb\", \"depth\", \"mask\", \"parts\", \"instances\", \"cracks\", \"normals\", \"displacement\", \"flow\", \"rest_rgb\", \"rest_depth\", \"ray_distance\", \"mesh\", \"mesh_gltf\", \"points\"], points: 64, camera: #{{ width: 16, height: 16 }}, {options}, scene: |rng| {{ {scene} }} }})\n"
         )
     };
     for template in SCENES {
@@ -230,6 +232,8 @@ fn cases() -> Vec<Case> {
             };
             let recipe = if options.starts_with("seed:") {
                 recipe.replacen(", seed: 1", "", 1)
+            } else if options.starts_with("points:") {
+                recipe.replacen("points: 64, ", "", 1)
             } else {
                 recipe
             };
@@ -301,7 +305,10 @@ fn complete(out: &Path) -> Result<(), String> {
                 let record = serde_json::from_slice(&bytes).map_err(|e| e.to_string())?;
                 valid(&VIEW_SCHEMA, &record).map_err(|e| format!("{}: {e}", path.display()))?;
             } else if path.extension().is_some_and(|e| e == "exr") {
-                finite_depth(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+                // Depths and distances are never negative; vectors may be.
+                let name = path.to_string_lossy();
+                let distance = name.ends_with("depth.exr") || name.ends_with("distance.exr");
+                finite_floats(&bytes, distance).map_err(|e| format!("{}: {e}", path.display()))?;
             }
         }
     }
@@ -326,7 +333,8 @@ fn valid(schema: &jsonschema::Validator, record: &serde_json::Value) -> Result<(
     }
 }
 
-fn finite_depth(bytes: &[u8]) -> Result<(), String> {
+/// Every float of an EXR is finite (and, for a distance, not negative).
+fn finite_floats(bytes: &[u8], distance: bool) -> Result<(), String> {
     use exr::prelude::*;
     let image = read()
         .no_deep_data()
@@ -339,8 +347,9 @@ fn finite_depth(bytes: &[u8]) -> Result<(), String> {
     for layer in &image.layer_data {
         for channel in &layer.channel_data.list {
             if let FlatSamples::F32(values) = &channel.sample_data {
-                if let Some(bad) = values.iter().find(|z| !(z.is_finite() && **z >= 0.0)) {
-                    return Err(format!("depth {bad}"));
+                let wrong = |z: &&f32| !(z.is_finite() && (!distance || **z >= 0.0));
+                if let Some(bad) = values.iter().find(wrong) {
+                    return Err(format!("channel {} holds {bad}", channel.name));
                 }
             }
         }

@@ -1,5 +1,6 @@
-//! Encoders: RGB and mask PNG (fast deflate), depth OpenEXR (float32 `Z`, scanlines in
-//! increasing order, lossless ZIP), each into memory so callers decide where bytes go.
+//! Encoders: RGB and mask PNG (fast deflate), float OpenEXR (depth as float32 `Z`, vector
+//! layers as one float32 channel per component; scanlines in increasing order, lossless ZIP),
+//! each into memory so callers decide where bytes go.
 
 use exr::prelude::*;
 use std::io::Cursor;
@@ -88,25 +89,66 @@ pub fn id_png(width: u32, height: u32, ids: &[u32]) -> anyhow::Result<Vec<u8>> {
 
 /// Planar depth in metres, 0 where no surface was hit.
 pub fn depth_exr(width: u32, height: u32, depth: &[f32]) -> Vec<u8> {
-    let channel = AnyChannel::new(DEPTH_CHANNEL, FlatSamples::F32(depth.to_vec()));
-    let mut attributes = LayerAttributes::default();
-    attributes.other.insert(
-        Text::from("shmgen_depth"),
-        AttributeValue::Text(Text::from(
+    float_exr(
+        (width, height),
+        &[(DEPTH_CHANNEL, depth.to_vec())],
+        (
+            "shmgen_depth",
             "planar z along the optical axis, metres, 0 = no surface",
-        )),
-    );
+        ),
+    )
+    .expect("depth layers are finite")
+}
+
+/// Float32 EXR of one value or vector per pixel: `names` are the channels of the vector's
+/// components, in order; `note` = (attribute name, text) says what the values mean. Refuses
+/// a non-finite value, so none ever reaches a file.
+pub fn vector_exr<const N: usize>(
+    (width, height): (u32, u32),
+    names: [&str; N],
+    values: &[[f32; N]],
+    note: (&str, &str),
+) -> anyhow::Result<Vec<u8>> {
+    let channels: Vec<(&str, Vec<f32>)> = names
+        .iter()
+        .enumerate()
+        .map(|(k, name)| (*name, values.iter().map(|v| v[k]).collect()))
+        .collect();
+    float_exr((width, height), &channels, note)
+}
+
+/// The one EXR encoder: float32 channels, lossless ZIP over 16 scanlines, scanlines in
+/// increasing order, written on this thread, so the same values give the same bytes on any
+/// machine and thread count. Channels are stored in name order, as EXR requires.
+fn float_exr(
+    (width, height): (u32, u32),
+    channels: &[(&str, Vec<f32>)],
+    (key, text): (&str, &str),
+) -> anyhow::Result<Vec<u8>> {
+    if let Some((name, _)) = channels
+        .iter()
+        .find(|(_, values)| values.iter().any(|v| !v.is_finite()))
+    {
+        anyhow::bail!("{key}: channel {name} holds a value that is not finite");
+    }
+    let list = channels
+        .iter()
+        .map(|(name, values)| AnyChannel::new(*name, FlatSamples::F32(values.clone())))
+        .collect();
+    let mut attributes = LayerAttributes::default();
+    attributes
+        .other
+        .insert(Text::from(key), AttributeValue::Text(Text::from(text)));
     let encoding = Encoding {
         compression: Compression::ZIP16,
         blocks: Blocks::ScanLines,
         line_order: LineOrder::Increasing,
     };
-    let channels = AnyChannels::sort(SmallVec::from_vec(vec![channel]));
     let layer = Layer::new(
         (width as usize, height as usize),
         attributes,
         encoding,
-        channels,
+        AnyChannels::sort(list),
     );
     let mut out = Cursor::new(Vec::new());
     Image::from_layer(layer)
@@ -114,15 +156,16 @@ pub fn depth_exr(width: u32, height: u32, depth: &[f32]) -> Vec<u8> {
         .non_parallel()
         .to_buffered(&mut out)
         .expect("EXR into memory");
-    out.into_inner()
+    Ok(out.into_inner())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Reads a depth EXR back with the exr crate's own reader (a separate code path).
-    pub fn read_depth(bytes: &[u8]) -> (usize, usize, Vec<f32>) {
+    /// Reads an EXR back with the exr crate's own reader (a separate code path): its size and
+    /// every channel by name, which must be float32.
+    fn read_channels(bytes: &[u8]) -> ((usize, usize), Vec<(String, Vec<f32>)>) {
         let image = read()
             .no_deep_data()
             .largest_resolution_level()
@@ -131,15 +174,27 @@ mod tests {
             .all_attributes()
             .from_buffered(Cursor::new(bytes))
             .unwrap();
-        let layer = &image.layer_data[0];
         assert_eq!(image.layer_data.len(), 1);
-        assert_eq!(layer.channel_data.list.len(), 1);
-        let channel = &layer.channel_data.list[0];
-        assert_eq!(channel.name, Text::from(DEPTH_CHANNEL));
-        let FlatSamples::F32(values) = &channel.sample_data else {
-            panic!("depth must be f32")
-        };
-        (layer.size.width(), layer.size.height(), values.clone())
+        let layer = &image.layer_data[0];
+        let channels = layer.channel_data.list.iter().map(|channel| {
+            let FlatSamples::F32(values) = &channel.sample_data else {
+                panic!("float32 channels only")
+            };
+            (channel.name.to_string(), values.clone())
+        });
+        (
+            (layer.size.width(), layer.size.height()),
+            channels.collect(),
+        )
+    }
+
+    /// A depth EXR: its size and its one channel, which must be `Z`.
+    fn read_depth(bytes: &[u8]) -> (usize, usize, Vec<f32>) {
+        let ((w, h), mut channels) = read_channels(bytes);
+        assert_eq!(channels.len(), 1);
+        let (name, values) = channels.pop().unwrap();
+        assert_eq!(name, DEPTH_CHANNEL);
+        (w, h, values)
     }
 
     #[test]
@@ -168,6 +223,32 @@ mod tests {
             &[0x76, 0x2f, 0x31, 0x01],
             "OpenEXR magic number"
         );
+    }
+
+    #[test]
+    fn vector_layers_round_trip_by_channel_name_and_refuse_non_finite_values() {
+        let values: Vec<[f32; 3]> = (0..12)
+            .map(|i| [i as f32, -0.5 * i as f32, 1e-7 * i as f32])
+            .collect();
+        let bytes = vector_exr((4, 3), ["X", "Y", "Z"], &values, ("note", "test")).unwrap();
+        let ((w, h), channels) = read_channels(&bytes);
+        assert_eq!((w, h), (4, 3));
+        for (k, name) in ["X", "Y", "Z"].iter().enumerate() {
+            let (_, back) = channels.iter().find(|(n, _)| n == name).unwrap();
+            assert_eq!(*back, values.iter().map(|v| v[k]).collect::<Vec<_>>());
+        }
+        // Flow's channels come out in EXR's name order whatever order they are given in.
+        let flow = vector_exr((2, 1), ["V", "U"], &[[1.0, 2.0], [3.0, 4.0]], ("n", "t")).unwrap();
+        assert_eq!(
+            flow,
+            vector_exr((2, 1), ["V", "U"], &[[1.0, 2.0], [3.0, 4.0]], ("n", "t")).unwrap()
+        );
+        let mut bad = values.clone();
+        bad[5][1] = f32::NAN;
+        let error = vector_exr((4, 3), ["X", "Y", "Z"], &bad, ("shmgen_x", "t")).unwrap_err();
+        assert!(error.to_string().contains("channel Y"), "{error}");
+        bad[5][1] = f32::INFINITY;
+        assert!(vector_exr((4, 3), ["X", "Y", "Z"], &bad, ("shmgen_x", "t")).is_err());
     }
 
     #[test]

@@ -1,8 +1,10 @@
-//! Writing datasets: the writers of every output kind, file encodings, the folder layout and
-//! the atomic, resumable commit of each sample.
+//! Writing datasets: the writers of every output kind (per view and per sample), file
+//! encodings (PNG, EXR, PLY, GLB), the folder layout and the atomic, resumable commit of each
+//! sample.
 //!
 //! Owns: bytes on disk. Must not touch: recipes, mechanics or tracing; it receives finished
-//! per-pixel layers and serialised records, and imports nothing else of the crate. Every file
+//! per-pixel layers, a sample's meshes as plain arrays and serialised records, and imports
+//! nothing else of the crate. Every file
 //! is written under a temporary name and renamed into place, so a killed run never leaves a
 //! truncated file under a final name, and a sample appears in the manifest only after all of
 //! its files are complete. File locks keep one process per shard and let shards share a
@@ -13,13 +15,19 @@ mod encode;
 mod fault;
 mod folder;
 mod lock;
+mod meshes;
 mod writers;
 
 pub use encode::{
     DEPTH_CHANNEL, MAX_SEGMENTATION_ID, depth_exr, grey16_png, id_png, mask_png, rgb_png,
+    vector_exr,
 };
 pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, write_atomic};
-pub use writers::{DEFAULT_OUTPUTS, ViewLayers, WRITERS, Writer, output_names};
+pub use meshes::{MeshLayer, PointLayer};
+pub use writers::{
+    DEFAULT_OUTPUTS, Flow, SAMPLE_WRITERS, SampleLayers, SampleWriter, ViewLayers, WRITERS, Writer,
+    output_names,
+};
 
 /// Relative path of one view's file of the given kind (`rgb.png`, `depth.exr`, ...):
 /// samples are grouped a thousand to a folder so no folder grows unboundedly. Augmented copy
@@ -32,6 +40,12 @@ pub fn view_file(sample: u64, view: u32, copy: Option<u32>, kind: &str) -> Strin
     )
 }
 
+/// Relative path of one of a sample's own files (`mesh.ply`, `points.ply`, ...), beside the
+/// files of its views: `samples/{sample/1000:04}/{sample:06}.{kind}`.
+pub fn sample_file(sample: u64, kind: &str) -> String {
+    format!("samples/{:04}/{sample:06}.{kind}", sample / 1000)
+}
+
 #[cfg(test)]
 mod tests {
     #[test]
@@ -41,5 +55,9 @@ mod tests {
         assert_eq!(f, "samples/0001/001234_07.depth.exr");
         let copy = super::view_file(1234, 7, Some(2), "depth.exr");
         assert_eq!(copy, "samples/0001/001234_07a2.depth.exr");
+        assert_eq!(
+            super::sample_file(1234, "mesh.ply"),
+            "samples/0001/001234.mesh.ply"
+        );
     }
 }

@@ -1,7 +1,9 @@
-//! The writers: one per output kind, registered in one table. Each reads the layers of a
-//! rendered view and returns its files; adding an output is adding a writer here.
+//! The writers: one per output kind, registered in two tables — per view (`WRITERS`, reading
+//! the layers of a rendered view) and per sample (`SAMPLE_WRITERS`, reading the sample's
+//! geometry). Each returns its files; adding an output is adding a writer here.
 
-use super::encode::{depth_exr, id_png, mask_png, rgb_png};
+use super::encode::{depth_exr, id_png, mask_png, rgb_png, vector_exr};
+use super::meshes::{MeshLayer, PointLayer, mesh_glb, mesh_ply, points_ply};
 use anyhow::Result;
 
 /// The per-pixel layers of one rendered view, row-major. Every geometric layer comes from one
@@ -26,12 +28,35 @@ pub trait ViewLayers {
     /// 255 where the pixel has a source, 0 where an image-space warp left it without one
     /// (its depth, mask and ids are then 0).
     fn valid(&self) -> Vec<u8>;
+    /// Unit normal of the surface seen (its triangle's, turned towards the camera), in the
+    /// axes the dataset asks for; 0 where no surface is seen.
+    fn normals(&self) -> Vec<[f32; 3]>;
+    /// Distance from the camera centre to the surface point along the ray, metres; 0 where no
+    /// surface is seen.
+    fn ray_distance(&self) -> Vec<f32>;
+    /// Displacement of the surface point seen from the unloaded structure to the loaded one,
+    /// world axes, metres; 0 where no surface is seen.
+    fn displacement(&self) -> Vec<[f32; 3]>;
+    /// Where each surface point of the unloaded image moves in the loaded one.
+    fn flow(&self) -> Flow;
+    /// sRGB colour of the unloaded structure seen through the same camera, three bytes a pixel.
+    fn rest_rgb(&self) -> &[u8];
+    /// Planar depth of the unloaded structure, metres, 0 where no surface is seen.
+    fn rest_depth(&self) -> &[f32];
 
     /// Share of the pixels that see a structure.
     fn coverage(&self) -> f64 {
         let mask = self.mask();
         mask.iter().filter(|&&m| m != 0).count() as f64 / mask.len().max(1) as f64
     }
+}
+
+/// Optical flow from the unloaded image to the loaded one, per pixel of the unloaded image.
+pub struct Flow {
+    /// (u, v) displacement in pixels, 0 where `valid` is 0.
+    pub vectors: Vec<[f32; 2]>,
+    /// 255 where the point moves to a pixel inside the frame and is seen there, else 0.
+    pub valid: Vec<u8>,
 }
 
 /// An output kind: its name in `dataset.outputs`, the files it writes for each view and how
@@ -56,7 +81,7 @@ impl Writer {
 }
 
 /// Every output shmgen can write, in the order a view's files are written.
-pub const WRITERS: [Writer; 8] = [
+pub const WRITERS: [Writer; 14] = [
     Writer {
         output: "rgb",
         files: &["rgb.png"],
@@ -121,11 +146,126 @@ pub const WRITERS: [Writer; 8] = [
             Ok(vec![id_png(w, h, &v.instance_ids())?])
         },
     },
+    Writer {
+        output: "normals",
+        files: &["normals.exr"],
+        write: |v| {
+            let note = "unit normal of the surface seen, facing the camera, in the axes of the view record's normals.frame; 0 = no surface";
+            Ok(vec![vector_exr(
+                v.size(),
+                XYZ,
+                &v.normals(),
+                ("shmgen_normals", note),
+            )?])
+        },
+    },
+    Writer {
+        output: "displacement",
+        files: &["displacement.exr"],
+        write: |v| {
+            let note = "displacement unloaded -> loaded of the surface point seen, world axes, metres; 0 = no surface";
+            Ok(vec![vector_exr(
+                v.size(),
+                XYZ,
+                &v.displacement(),
+                ("shmgen_displacement", note),
+            )?])
+        },
+    },
+    Writer {
+        output: "flow",
+        files: &["flow.exr", "flow_valid.png"],
+        write: |v| {
+            let (w, h) = v.size();
+            let flow = v.flow();
+            let note = "pixels from the unloaded image to the loaded one; 0 where flow_valid is 0";
+            Ok(vec![
+                vector_exr((w, h), ["U", "V"], &flow.vectors, ("shmgen_flow", note))?,
+                mask_png(w, h, &flow.valid),
+            ])
+        },
+    },
+    Writer {
+        output: "rest_rgb",
+        files: &["rest_rgb.png"],
+        write: |v| {
+            let (w, h) = v.size();
+            Ok(vec![rgb_png(w, h, v.rest_rgb())])
+        },
+    },
+    Writer {
+        output: "rest_depth",
+        files: &["rest_depth.exr"],
+        write: |v| {
+            let (w, h) = v.size();
+            Ok(vec![depth_exr(w, h, v.rest_depth())])
+        },
+    },
+    Writer {
+        output: "ray_distance",
+        files: &["ray_distance.exr"],
+        write: |v| {
+            let note =
+                "distance from the camera centre to the surface point, metres; 0 = no surface";
+            let distance: Vec<[f32; 1]> = v.ray_distance().into_iter().map(|d| [d]).collect();
+            Ok(vec![vector_exr(
+                v.size(),
+                ["Y"],
+                &distance,
+                ("shmgen_ray_distance", note),
+            )?])
+        },
+    },
 ];
 
-/// The names of every output, in writing order.
+/// The channels of a 3-vector layer.
+const XYZ: [&str; 3] = ["X", "Y", "Z"];
+
+/// The geometry of a built sample, for the per-sample writers.
+pub trait SampleLayers {
+    /// The loaded (deformed) mesh of every structure, merged.
+    fn mesh(&self) -> MeshLayer<'_>;
+    /// The same vertices, in the same order, before any load or damage; the same triangles.
+    fn rest_mesh(&self) -> MeshLayer<'_>;
+    /// Points drawn uniformly by area on the loaded mesh, with their normals.
+    fn points(&self) -> PointLayer;
+}
+
+/// An output written once per sample: its name in `dataset.outputs`, its files (named
+/// `{sample:06}.{kind}` beside the sample's views, listed in every view's record under
+/// `sample_files` by kind) and how it encodes them.
+pub struct SampleWriter {
+    /// The output's name in `dataset.outputs`.
+    pub output: &'static str,
+    /// The kinds of its files, `{name}.{extension}`.
+    pub files: &'static [&'static str],
+    /// Encodes the sample's geometry into the output's files, in the order of `files`.
+    pub write: fn(&dyn SampleLayers) -> Result<Vec<Vec<u8>>>,
+}
+
+/// Every per-sample output, in the order a sample's files are written.
+pub const SAMPLE_WRITERS: [SampleWriter; 3] = [
+    SampleWriter {
+        output: "mesh",
+        files: &["mesh.ply", "rest.ply"],
+        write: |s| Ok(vec![mesh_ply(&s.mesh())?, mesh_ply(&s.rest_mesh())?]),
+    },
+    SampleWriter {
+        output: "mesh_gltf",
+        files: &["mesh.glb"],
+        write: |s| Ok(vec![mesh_glb(&s.mesh())?]),
+    },
+    SampleWriter {
+        output: "points",
+        files: &["points.ply"],
+        write: |s| Ok(vec![points_ply(&s.points())]),
+    },
+];
+
+/// The names of every output, per view then per sample, in writing order.
 pub fn output_names() -> Vec<&'static str> {
-    WRITERS.iter().map(|w| w.output).collect()
+    let per_sample = SAMPLE_WRITERS.iter().map(|w| w.output);
+    WRITERS.iter().map(|w| w.output).chain(per_sample).collect()
 }
 
 /// The outputs written by default: the paper's image, depth and mask.
@@ -166,6 +306,64 @@ mod tests {
         fn valid(&self) -> Vec<u8> {
             vec![255, 255]
         }
+        fn normals(&self) -> Vec<[f32; 3]> {
+            vec![[0.0, 0.6, -0.8], [0.0; 3]]
+        }
+        fn ray_distance(&self) -> Vec<f32> {
+            vec![2.6, 0.0]
+        }
+        fn displacement(&self) -> Vec<[f32; 3]> {
+            vec![[1e-3, 0.0, -0.02], [0.0; 3]]
+        }
+        fn flow(&self) -> Flow {
+            Flow {
+                vectors: vec![[0.25, 1.5], [0.0; 2]],
+                valid: vec![255, 0],
+            }
+        }
+        fn rest_rgb(&self) -> &[u8] {
+            &[190, 100, 50, 0, 0, 0]
+        }
+        fn rest_depth(&self) -> &[f32] {
+            &[2.45, 0.0]
+        }
+    }
+
+    /// One triangle of part 1, lifted by 1 cm when loaded.
+    struct Triangle {
+        rest: Vec<glam::DVec3>,
+        loaded: Vec<glam::DVec3>,
+    }
+
+    impl Triangle {
+        fn new() -> Self {
+            let rest = vec![glam::DVec3::ZERO, glam::DVec3::X, glam::DVec3::Y];
+            let loaded = rest.iter().map(|p| *p + 0.01 * glam::DVec3::Z).collect();
+            Triangle { rest, loaded }
+        }
+    }
+
+    impl SampleLayers for Triangle {
+        fn mesh(&self) -> MeshLayer<'_> {
+            MeshLayer {
+                positions: &self.loaded,
+                triangles: &[[0, 1, 2]],
+                parts: &[1],
+            }
+        }
+        fn rest_mesh(&self) -> MeshLayer<'_> {
+            MeshLayer {
+                positions: &self.rest,
+                triangles: &[[0, 1, 2]],
+                parts: &[1],
+            }
+        }
+        fn points(&self) -> PointLayer {
+            PointLayer {
+                positions: vec![glam::DVec3::new(0.2, 0.2, 0.01)],
+                normals: vec![[0.0, 0.0, 1.0]],
+            }
+        }
     }
 
     #[test]
@@ -183,5 +381,11 @@ mod tests {
             }
         }
         assert!(DEFAULT_OUTPUTS.iter().all(|d| names.contains(d)));
+        for writer in &SAMPLE_WRITERS {
+            assert!(names.iter().filter(|n| **n == writer.output).count() == 1);
+            let files = (writer.write)(&Triangle::new()).unwrap();
+            assert_eq!(files.len(), writer.files.len(), "{}", writer.output);
+            assert!(files.iter().all(|bytes| !bytes.is_empty()));
+        }
     }
 }

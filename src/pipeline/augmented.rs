@@ -1,10 +1,12 @@
 //! Augmented copies of a view: the operations drawn for a copy, the camera a geometric one
 //! makes, and the copy's layers. In exact mode the view is rendered again through the new
 //! camera, so every label is exact; in image mode the rendered layers are warped (RGB
-//! bilinearly, labels by nearest neighbour, pixels without a source invalid). Photometric
-//! operations then act on the RGB image only, in the order the recipe lists them; pixels
-//! without a source stay black. Both modes write one camera: the one under which the moved
-//! picture is exact, lens included.
+//! bilinearly, labels by nearest neighbour, pixels without a source invalid; normals in camera
+//! axes turn with the camera). Photometric operations then act on the RGB images only (the
+//! loaded and the unloaded one alike, with the same drawn values), in the order the recipe
+//! lists them; pixels without a source stay black. Both modes write one camera: the one under
+//! which the moved picture is exact, lens included. Flow is not defined on a warped image:
+//! the recipe refuses that combination.
 
 use super::view::ViewCamera;
 use crate::augment::{
@@ -12,8 +14,8 @@ use crate::augment::{
     Vignette,
 };
 use crate::cameras::Camera;
-use crate::output::ViewLayers;
-use crate::scene::{AugmentSpec, DatasetSpec, GeometryMode, Operation};
+use crate::output::{Flow, ViewLayers};
+use crate::scene::{AugmentSpec, DatasetSpec, GeometryMode, NormalsFrame, Operation};
 use crate::seeds::{Scope, Stream};
 use anyhow::{Result, anyhow};
 use glam::{DMat3, DVec3};
@@ -169,16 +171,21 @@ pub fn moved_camera(camera: &Camera, sim: &Similarity) -> Result<Camera> {
 /// `camera` turned about its optical axis as the similarity `sim` turns the picture:
 /// c2w′ = c2w·R_z(θ)ᵀ (the intrinsics left as they are).
 pub fn turned_camera(camera: &Camera, sim: &Similarity) -> Camera {
+    Camera {
+        rotation: camera.rotation * optical_axis_turn(sim).transpose(),
+        ..*camera
+    }
+}
+
+/// R_z(θ) of the similarity: the turn about the optical axis taking camera-axis vectors of
+/// the original camera to those of the moved one (c2w′ = c2w·R_zᵀ, so x′ = R_z·x).
+fn optical_axis_turn(sim: &Similarity) -> DMat3 {
     let r = sim.camera_rotation();
-    let rz = DMat3::from_cols(
+    DMat3::from_cols(
         DVec3::new(r[0][0], r[1][0], r[2][0]),
         DVec3::new(r[0][1], r[1][1], r[2][1]),
         DVec3::new(r[0][2], r[1][2], r[2][2]),
-    );
-    Camera {
-        rotation: camera.rotation * rz.transpose(),
-        ..*camera
-    }
+    )
 }
 
 /// A copy of a view: its base (the view itself, or the view rendered again through the
@@ -188,26 +195,55 @@ pub struct AugmentedView<'a> {
     base: &'a dyn ViewLayers,
     warp: Option<Similarity>,
     operations: &'a [Applied],
+    /// The turn applied to normals: the warp's, when normals are in camera axes.
+    normals_turn: Option<DMat3>,
     rgb: OnceLock<Vec<u8>>,
     depth: OnceLock<Vec<f32>>,
     cracks: OnceLock<Vec<u8>>,
+    rest_rgb: OnceLock<Vec<u8>>,
+    rest_depth: OnceLock<Vec<f32>>,
 }
 
 impl<'a> AugmentedView<'a> {
-    /// The copy of `base` made by `operations`; `warp` moves pixels (image mode only).
+    /// The copy of `base` made by `operations`; `warp` moves pixels (image mode only);
+    /// normals are written in `normals` axes.
     pub fn new(
         base: &'a dyn ViewLayers,
         warp: Option<Similarity>,
         operations: &'a [Applied],
+        normals: NormalsFrame,
     ) -> Self {
+        let normals_turn = warp
+            .as_ref()
+            .filter(|_| normals == NormalsFrame::Camera)
+            .map(optical_axis_turn);
         AugmentedView {
             base,
             warp,
             operations,
+            normals_turn,
             rgb: OnceLock::new(),
             depth: OnceLock::new(),
             cracks: OnceLock::new(),
+            rest_rgb: OnceLock::new(),
+            rest_depth: OnceLock::new(),
         }
+    }
+
+    /// An RGB image of the base moved by the warp (bilinearly), then through the photometric
+    /// operations.
+    fn augmented_rgb(&self, rgb: &[u8]) -> Vec<u8> {
+        let mut rgb = match &self.warp {
+            Some(sim) => augment::warp_rgb(rgb, self.frame(), sim),
+            None => rgb.to_vec(),
+        };
+        let valid = self
+            .warp
+            .map(|sim| augment::warp_validity(self.frame(), &sim));
+        // The operations are validated; an encoder failing in memory is a bug.
+        self.photometric(&mut rgb, valid.as_deref())
+            .expect("photometric augmentations of a valid image");
+        rgb
     }
 
     fn frame(&self) -> Frame {
@@ -260,19 +296,7 @@ impl ViewLayers for AugmentedView<'_> {
     }
 
     fn rgb(&self) -> &[u8] {
-        self.rgb.get_or_init(|| {
-            let mut rgb = match &self.warp {
-                Some(sim) => augment::warp_rgb(self.base.rgb(), self.frame(), sim),
-                None => self.base.rgb().to_vec(),
-            };
-            let valid = self
-                .warp
-                .map(|sim| augment::warp_validity(self.frame(), &sim));
-            // The operations are validated; an encoder failing in memory is a bug.
-            self.photometric(&mut rgb, valid.as_deref())
-                .expect("photometric augmentations of a valid image");
-            rgb
-        })
+        self.rgb.get_or_init(|| self.augmented_rgb(self.base.rgb()))
     }
 
     fn depth(&self) -> &[f32] {
@@ -315,6 +339,50 @@ impl ViewLayers for AugmentedView<'_> {
             Some(sim) => augment::warp_validity(self.frame(), sim),
             None => self.base.valid(),
         }
+    }
+
+    fn normals(&self) -> Vec<[f32; 3]> {
+        let moved = self.moved(self.base.normals());
+        match self.normals_turn {
+            Some(turn) => moved
+                .into_iter()
+                .map(|n| (turn * DVec3::from(n.map(f64::from))).as_vec3().to_array())
+                .collect(),
+            None => moved,
+        }
+    }
+
+    fn ray_distance(&self) -> Vec<f32> {
+        // The warped camera keeps its centre, so each surface point keeps its distance.
+        self.moved(self.base.ray_distance())
+    }
+
+    fn displacement(&self) -> Vec<[f32; 3]> {
+        self.moved(self.base.displacement())
+    }
+
+    fn flow(&self) -> Flow {
+        if self.warp.is_none() {
+            return self.base.flow();
+        }
+        // The recipe refuses flow with image-space warps; should one get here, no pixel
+        // claims a flow rather than one measured in another frame.
+        let (w, h) = self.size();
+        let pixels = w as usize * h as usize;
+        Flow {
+            vectors: vec![[0.0; 2]; pixels],
+            valid: vec![0; pixels],
+        }
+    }
+
+    fn rest_rgb(&self) -> &[u8] {
+        self.rest_rgb
+            .get_or_init(|| self.augmented_rgb(self.base.rest_rgb()))
+    }
+
+    fn rest_depth(&self) -> &[f32] {
+        self.rest_depth
+            .get_or_init(|| self.moved(self.base.rest_depth().to_vec()))
     }
 }
 

@@ -9,11 +9,13 @@
 
 mod augmented;
 mod finite;
+mod geometry;
 mod progress;
 mod record;
 mod sample;
 mod view;
 
+pub use geometry::SampleGeometry;
 pub use record::ViewFacts;
 pub use record::{RunRecord, ViewRecord, json_bytes, run_json, run_schema, view_schema};
 pub use sample::{for_each_image, prepare, write_sample};

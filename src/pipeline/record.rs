@@ -11,9 +11,9 @@ use crate::cameras::{Camera, CameraRig, Distortion, ViewDraw, rows4};
 use crate::materials::MaterialDraw;
 use crate::materials::procedural::CRACK_LABEL_COVER;
 use crate::mechanics::{Labels, SectionProperties};
-use crate::output::{DEPTH_CHANNEL, WRITERS};
+use crate::output::{DEPTH_CHANNEL, SAMPLE_WRITERS, WRITERS};
 use crate::recipe::Recipe;
-use crate::scene::{DatasetSpec, GeometryMode, Structure};
+use crate::scene::{DatasetSpec, GeometryMode, NormalsFrame, Structure};
 use crate::seeds;
 use anyhow::Result;
 use serde::Serialize;
@@ -54,7 +54,7 @@ pub struct RunRecord<'a> {
     /// Version tag of every view's JSON in this dataset.
     pub view_schema: ViewSchema,
     /// Where a view's files are, by sample and view index: the dataset's outputs and the
-    /// view's JSON.
+    /// view's JSON; then, if the dataset writes any, where a sample's own files are.
     pub layout: String,
     /// What `manifest.jsonl` holds.
     pub manifest: &'static str,
@@ -95,14 +95,25 @@ pub struct ViewRecord<'a> {
     pub view: u32,
     /// The view's files by output, relative to the dataset root.
     pub files: BTreeMap<&'static str, String>,
+    /// The files of the whole sample, shared by its views (meshes, point cloud), by kind
+    /// (`mesh.ply`, `rest.ply`, `mesh.glb`, `points.ply`), relative to the dataset root.
+    pub sample_files: &'a BTreeMap<&'static str, String>,
     /// The random streams every value of this view was drawn from.
     pub seeds: Seeds,
     /// The resolved value of every parameter the recipe declared.
     pub params: &'a BTreeMap<String, Value>,
     /// The camera of this view: intrinsics, poses and the values drawn.
     pub camera: CameraRecord,
-    /// How to read the depth file.
+    /// How to read the depth files: `depth` and `rest_depth` (the unloaded structure).
     pub depth: DepthConvention,
+    /// How to read the ray distance file.
+    pub ray_distance: DepthConvention,
+    /// How to read the normals file.
+    pub normals: VectorConvention,
+    /// How to read the displacement file.
+    pub displacement: VectorConvention,
+    /// How to read the flow files (`flow` and `flow_valid`).
+    pub flow: VectorConvention,
     /// How to read the mask file.
     pub mask: MaskConvention,
     /// How to read the crack file.
@@ -176,6 +187,8 @@ pub struct Seeds {
     pub light_stream: StreamRecord,
     /// The stream this view's background was drawn from.
     pub background_stream: StreamRecord,
+    /// The stream the sample's point cloud was drawn from.
+    pub points_stream: StreamRecord,
 }
 
 impl Seeds {
@@ -200,6 +213,7 @@ impl Seeds {
             material_stream: of_sample(seeds::MATERIAL),
             light_stream: of_sample(seeds::LIGHT),
             background_stream: of_view(seeds::BACKGROUND),
+            points_stream: of_sample(seeds::POINTS),
         }
     }
 }
@@ -293,27 +307,63 @@ pub struct StereoRecord {
 pub enum DepthKind {
     /// Distance along the optical axis.
     PlanarZ,
+    /// Euclidean distance from the camera centre to the surface point, along the pixel's ray.
+    RayDistance,
 }
 
-/// The unit of depth values.
+/// The unit of the values of a file.
 #[derive(Serialize, schemars::JsonSchema)]
 pub enum Unit {
     /// Metres.
     #[serde(rename = "m")]
     Metre,
+    /// Pixels.
+    #[serde(rename = "px")]
+    Pixel,
+    /// Dimensionless.
+    #[serde(rename = "1")]
+    Unitless,
 }
 
-/// How to read the depth file.
+/// The axes the vectors of a file are expressed in.
+#[derive(Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Axes {
+    /// The view's camera axes, OpenCV's: x right, y down, z forward.
+    CameraOpencv,
+    /// World axes: right-handed, +z up.
+    World,
+    /// Image axes: u along a row (right), v down the columns, as pixel coordinates.
+    Image,
+}
+
+/// How to read a file of one vector per pixel (float32 OpenEXR, one channel per component).
+#[derive(Serialize, schemars::JsonSchema)]
+pub struct VectorConvention {
+    /// What each pixel's vector is.
+    pub meaning: &'static str,
+    /// The axes of the vectors.
+    pub axes: Axes,
+    /// Unit of the components.
+    pub unit: Unit,
+    /// EXR channels holding the components, in axis order.
+    pub channels: Vec<&'static str>,
+    /// The value of every component where the pixel has no vector (no surface seen, or for flow
+    /// an invalid pixel): 0.
+    pub no_value: f64,
+}
+
+/// How to read a file of one distance per pixel (float32 OpenEXR, one channel).
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct DepthConvention {
-    /// What a depth value measures: "planar_z", the camera-frame z of the surface point (not the
-    /// distance along the ray).
+    /// What a value measures: "planar_z", the camera-frame z of the surface point (not the
+    /// distance along the ray), or "ray_distance", its distance from the camera centre.
     pub kind: DepthKind,
-    /// Unit of depth values: "m".
+    /// Unit of the values: "m".
     pub unit: Unit,
     /// The value of pixels that see no surface (0).
     pub no_surface: f64,
-    /// The EXR channel holding depth.
+    /// The EXR channel holding the values.
     pub channel: &'static str,
 }
 
@@ -422,6 +472,8 @@ pub struct SampleRecord<'a> {
     pub structures: Vec<StructureRecord<'a>>,
     /// The id tables of the part and instance images.
     pub segmentation: Segmentation,
+    /// The sample's own files (meshes, point cloud) by kind, once written.
+    pub files: BTreeMap<&'static str, String>,
 }
 
 /// Pretty JSON with a final newline, as every record is written; a record holding a
@@ -464,7 +516,8 @@ pub fn run_json(recipe: &Recipe, recorded: Option<&Value>) -> Result<Vec<u8>> {
     })
 }
 
-/// The path pattern of a view's files, listing the files of every output the dataset writes.
+/// The path pattern of a view's files, listing the files of every output the dataset writes,
+/// then that of the sample's own files, if it writes any.
 fn layout(dataset: &DatasetSpec) -> String {
     let files: Vec<&str> = WRITERS
         .iter()
@@ -477,9 +530,21 @@ fn layout(dataset: &DatasetSpec) -> String {
     } else {
         ""
     };
-    format!(
+    let views = format!(
         "samples/{{sample/1000:04}}/{{sample:06}}_{{view:02}}{copy}.{{{}}}",
         files.join(",")
+    );
+    let own: Vec<&str> = SAMPLE_WRITERS
+        .iter()
+        .filter(|w| dataset.outputs.wants(w.output))
+        .flat_map(|w| w.files.iter().copied())
+        .collect();
+    if own.is_empty() {
+        return views;
+    }
+    format!(
+        "{views}; samples/{{sample/1000:04}}/{{sample:06}}.{{{}}}",
+        own.join(",")
     )
 }
 
@@ -524,6 +589,7 @@ impl<'a> SampleRecord<'a> {
                 instance_ids,
                 encoding: "PNG grey, 8-bit when every id fits, else 16-bit; 0 = background",
             },
+            files: BTreeMap::new(),
         }
     }
 
@@ -545,6 +611,7 @@ impl<'a> SampleRecord<'a> {
             sample: sample.index,
             view,
             files,
+            sample_files: &self.files,
             seeds: Seeds::of_view(
                 recipe.dataset.seed,
                 sample.index,
@@ -578,6 +645,27 @@ impl<'a> SampleRecord<'a> {
                 no_surface: 0.0,
                 channel: DEPTH_CHANNEL,
             },
+            ray_distance: DepthConvention {
+                kind: DepthKind::RayDistance,
+                unit: Unit::Metre,
+                no_surface: 0.0,
+                channel: "Y",
+            },
+            normals: normals_convention(recipe.dataset.normals),
+            displacement: VectorConvention {
+                meaning: "displacement of the surface point seen, from the unloaded (undamaged) structure to the loaded one",
+                axes: Axes::World,
+                unit: Unit::Metre,
+                channels: vec!["X", "Y", "Z"],
+                no_value: 0.0,
+            },
+            flow: VectorConvention {
+                meaning: "on the unloaded image (rest_rgb), where the pixel's surface point lands in the loaded image (rgb), minus the pixel centre; valid where flow_valid is 255 (the point lands inside the frame, unhidden)",
+                axes: Axes::Image,
+                unit: Unit::Pixel,
+                channels: vec!["U", "V"],
+                no_value: 0.0,
+            },
             mask: MaskConvention {
                 structure: 255,
                 background: 0,
@@ -602,6 +690,20 @@ impl<'a> SampleRecord<'a> {
             coverage: facts.coverage,
             augmentation: facts.augmentation,
         }
+    }
+}
+
+/// How to read the normals file, in the axes the dataset chose.
+fn normals_convention(frame: NormalsFrame) -> VectorConvention {
+    VectorConvention {
+        meaning: "unit normal of the triangle seen, turned towards the camera",
+        axes: match frame {
+            NormalsFrame::Camera => Axes::CameraOpencv,
+            NormalsFrame::World => Axes::World,
+        },
+        unit: Unit::Unitless,
+        channels: vec!["X", "Y", "Z"],
+        no_value: 0.0,
     }
 }
 

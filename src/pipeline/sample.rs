@@ -1,14 +1,18 @@
-//! One sample, end to end: draw its scene, build it, render each view, hand the view's layers
-//! to the dataset's writers, and stage their files with the view's record.
+//! One sample, end to end: draw its scene, build it, hand its geometry to the per-sample
+//! writers, render each view, hand the view's layers to the per-view writers, and stage their
+//! files with the view's record.
 
 use super::augmented::{Applied, AugmentedView, copy_camera};
 use super::finite::check_finite;
+use super::geometry::SampleGeometry;
 use super::record::{AugmentationRecord, SampleRecord, ViewFacts, json_bytes};
 use super::view::{SampleRenderer, view_camera};
 use crate::build::{BuiltSample, build_sample};
-use crate::output::{MAX_SEGMENTATION_ID, SampleStage, ViewLayers, WRITERS, view_file};
+use crate::output::{
+    MAX_SEGMENTATION_ID, SAMPLE_WRITERS, SampleStage, ViewLayers, WRITERS, sample_file, view_file,
+};
 use crate::recipe::Recipe;
-use crate::scene::GeometryMode;
+use crate::scene::{DatasetSpec, GeometryMode};
 use anyhow::{Result, bail};
 use std::collections::BTreeMap;
 
@@ -55,12 +59,13 @@ fn check_segmentation(recipe: &Recipe, sample: &BuiltSample) -> Result<()> {
     Ok(())
 }
 
-/// Renders every view of the sample, clean and augmented, and stages its files. Returns the
-/// number of images written.
+/// Renders every view of the sample, clean and augmented, and stages its files, the sample's
+/// own files first. Returns the number of images written.
 pub fn write_sample(recipe: &Recipe, sample: &BuiltSample, stage: &mut SampleStage) -> Result<u32> {
     let dataset = &recipe.dataset;
     let renderer = SampleRenderer::new(dataset, sample);
-    let record = SampleRecord::new(sample);
+    let mut record = SampleRecord::new(sample);
+    record.files = write_sample_files(dataset, sample, stage)?;
     for view in 0..dataset.cameras_per_sample() {
         for_each_image(&renderer, view, |layers, copy, facts| {
             write_view(recipe, (sample, &record), stage, (layers, copy), facts)
@@ -104,7 +109,7 @@ pub fn for_each_image(
             (GeometryMode::Image, Some(sim)) => (&clean, Some(sim)),
             (_, None) => (&clean, None),
         };
-        let copied = AugmentedView::new(base, warp, &operations);
+        let copied = AugmentedView::new(base, warp, &operations, dataset.normals);
         let facts = ViewFacts {
             view,
             camera,
@@ -120,6 +125,27 @@ pub fn for_each_image(
         each(&copied, Some(copy), facts)?;
     }
     Ok(())
+}
+
+/// Runs the dataset's per-sample writers and stages their files; returns them by kind.
+fn write_sample_files(
+    dataset: &DatasetSpec,
+    sample: &BuiltSample,
+    stage: &mut SampleStage,
+) -> Result<BTreeMap<&'static str, String>> {
+    let geometry = SampleGeometry::new(dataset, sample);
+    let mut files = BTreeMap::new();
+    for writer in SAMPLE_WRITERS
+        .iter()
+        .filter(|w| dataset.outputs.wants(w.output))
+    {
+        for (kind, bytes) in writer.files.iter().zip((writer.write)(&geometry)?) {
+            let path = sample_file(sample.index, kind);
+            stage.write(path.clone(), &bytes)?;
+            files.insert(*kind, path);
+        }
+    }
+    Ok(files)
 }
 
 /// Runs the dataset's writers on one view (or copy) and stages their files and its record.

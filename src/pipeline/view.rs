@@ -1,12 +1,17 @@
 //! Rendering the views of a built sample into memory: the camera of each view, its trace, and
-//! the layers writers and previews ask for, each computed once and only when asked for.
+//! the layers writers and previews ask for, each computed once and only when asked for. The
+//! unloaded structure (for the rest image, its depth and the flow) is traced through a second
+//! BVH, built once per sample when a view first needs it.
 
 use crate::build::{BackdropDraw, BuiltSample, draw_backdrop};
 use crate::cameras::{Camera, ViewDraw};
 use crate::materials::Backdrop;
-use crate::output::ViewLayers;
-use crate::render::{GBuffer, NO_HIT, SampleSurfaces, TraceMesh, shade};
-use crate::scene::DatasetSpec;
+use crate::output::{Flow, ViewLayers};
+use crate::render::{
+    Deformed, GBuffer, NO_HIT, SampleSurfaces, TraceMesh, Traced, displacement, flow, normals,
+    ray_distance, shade,
+};
+use crate::scene::{DatasetSpec, NormalsFrame};
 use crate::seeds::{self, Scope, Stream};
 use anyhow::{Result, anyhow};
 use serde::Serialize;
@@ -75,6 +80,7 @@ pub struct SampleRenderer<'a> {
     sample: &'a BuiltSample,
     trace_mesh: TraceMesh,
     surfaces: SampleSurfaces<'a>,
+    rest: OnceLock<Traced>,
 }
 
 /// One view of a sample: its camera and centre-ray trace, with the other layers rendered on
@@ -94,6 +100,9 @@ pub struct RenderedView<'a> {
     pub backdrop_drawn: BackdropDraw,
     rgb: OnceLock<Vec<u8>>,
     cracks: OnceLock<Vec<u8>>,
+    /// The unloaded structure through the same camera.
+    rest_gbuffer: OnceLock<GBuffer>,
+    rest_rgb: OnceLock<Vec<u8>>,
 }
 
 impl<'a> SampleRenderer<'a> {
@@ -110,6 +119,23 @@ impl<'a> SampleRenderer<'a> {
                 pieces: &sample.pieces,
                 shaders: &sample.shaders,
             },
+            rest: OnceLock::new(),
+        }
+    }
+
+    /// The unloaded structure and its BVH, built on first use: the loaded mesh's triangles
+    /// over the undeformed vertices.
+    fn rest(&self) -> &Traced {
+        self.rest
+            .get_or_init(|| Traced::with_positions(&self.sample.mesh, &self.sample.rest))
+    }
+
+    /// The loaded structure with the undeformed position of every vertex.
+    fn deformed(&self) -> Deformed<'_> {
+        Deformed {
+            mesh: &self.sample.mesh,
+            traced: &self.trace_mesh,
+            rest: &self.sample.rest,
         }
     }
 
@@ -151,6 +177,8 @@ impl<'a> SampleRenderer<'a> {
             backdrop_drawn,
             rgb: OnceLock::new(),
             cracks: OnceLock::new(),
+            rest_gbuffer: OnceLock::new(),
+            rest_rgb: OnceLock::new(),
         }
     }
 }
@@ -170,6 +198,26 @@ impl RenderedView<'_> {
             })
             .collect()
     }
+
+    /// RGB of what `g` saw through this view's camera in the mesh `bvh`, with the sample's
+    /// light and this view's backdrop.
+    fn shaded(&self, g: &GBuffer, bvh: &TraceMesh, surfaces: &SampleSurfaces) -> Vec<u8> {
+        let r = self.renderer;
+        shade(
+            g,
+            bvh,
+            &self.camera,
+            &r.sample.lighting,
+            surfaces,
+            &self.backdrop,
+            r.dataset.antialias,
+        )
+    }
+
+    fn rest_gbuffer(&self) -> &GBuffer {
+        self.rest_gbuffer
+            .get_or_init(|| self.renderer.rest().bvh.trace(&self.camera))
+    }
 }
 
 impl ViewLayers for RenderedView<'_> {
@@ -180,15 +228,7 @@ impl ViewLayers for RenderedView<'_> {
     fn rgb(&self) -> &[u8] {
         self.rgb.get_or_init(|| {
             let r = self.renderer;
-            shade(
-                &self.gbuffer,
-                &r.trace_mesh,
-                &self.camera,
-                &r.sample.lighting,
-                &r.surfaces,
-                &self.backdrop,
-                r.dataset.antialias,
-            )
+            self.shaded(&self.gbuffer, &r.trace_mesh, &r.surfaces)
         })
     }
 
@@ -226,6 +266,55 @@ impl ViewLayers for RenderedView<'_> {
 
     fn valid(&self) -> Vec<u8> {
         vec![255; self.gbuffer.triangle.len()]
+    }
+
+    fn normals(&self) -> Vec<[f32; 3]> {
+        let axes = match self.renderer.dataset.normals {
+            NormalsFrame::Camera => self.camera.rotation.transpose(),
+            NormalsFrame::World => glam::DMat3::IDENTITY,
+        };
+        normals(&self.gbuffer, &self.renderer.trace_mesh, &self.camera, axes)
+    }
+
+    fn ray_distance(&self) -> Vec<f32> {
+        ray_distance(&self.gbuffer, &self.camera)
+    }
+
+    fn displacement(&self) -> Vec<[f32; 3]> {
+        displacement(&self.gbuffer, &self.camera, &self.renderer.deformed())
+    }
+
+    fn flow(&self) -> Flow {
+        let field = flow(
+            self.rest_gbuffer(),
+            &self.camera,
+            self.renderer.rest(),
+            &self.renderer.deformed(),
+        );
+        Flow {
+            vectors: field.iter().map(|f| f.unwrap_or_default()).collect(),
+            valid: field
+                .iter()
+                .map(|f| if f.is_some() { 255 } else { 0 })
+                .collect(),
+        }
+    }
+
+    fn rest_rgb(&self) -> &[u8] {
+        self.rest_rgb.get_or_init(|| {
+            let r = self.renderer;
+            let rest = r.rest();
+            // The same materials, read at the same undeformed points: only the shape differs.
+            let surfaces = SampleSurfaces {
+                mesh: &rest.mesh,
+                ..r.surfaces
+            };
+            self.shaded(self.rest_gbuffer(), &rest.bvh, &surfaces)
+        })
+    }
+
+    fn rest_depth(&self) -> &[f32] {
+        &self.rest_gbuffer().depth
     }
 
     fn coverage(&self) -> f64 {

@@ -7,8 +7,8 @@ use super::result::{Fallible, fail};
 use crate::cameras::{CameraRig, Distance, DistortionRanges, FixedCamera, Poses, Stereo};
 use crate::output::{DEFAULT_OUTPUTS, output_names};
 use crate::scene::{
-    Background, DatasetSpec, ImageRecord, LightSpec, OUTDOOR_AMBIENT, Outputs, SkyGradient,
-    SkySpec, SourceSite, SunSpec,
+    AugmentSpec, Background, DEFAULT_POINTS, DatasetSpec, GeometryMode, ImageRecord, LightSpec,
+    NormalsFrame, OUTDOOR_AMBIENT, Operation, Outputs, SkyGradient, SkySpec, SourceSite, SunSpec,
 };
 use crate::seeds::Stream;
 use crate::words::number as number_shown;
@@ -161,6 +161,14 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
     let antialias = o.flag("antialias", true)?;
     let augment = super::augment_api::augment(o.take("augment"))?;
     let outputs = outputs(o.take("outputs"))?;
+    check_flow_warps(&outputs, &augment)?;
+    let normals = normals_frame(o.string("normals", "camera")?)?;
+    let points = o.integer(
+        "points",
+        i64::from(DEFAULT_POINTS),
+        1,
+        i64::from(MAX_POINTS),
+    )? as u32;
     let camera = match o.sub("camera")? {
         Some(c) => camera(c, views)?,
         None => CameraRig::default(),
@@ -183,6 +191,8 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
             light,
             antialias,
             augment,
+            normals,
+            points,
         },
         scene,
         site,
@@ -235,6 +245,35 @@ fn outputs(value: Option<Dynamic>) -> OptResult<Outputs> {
         }
     }
     Ok(Outputs::new(&known, &chosen))
+}
+
+/// `normals: "camera"` (the view's OpenCV axes) or `"world"`.
+fn normals_frame(name: String) -> OptResult<NormalsFrame> {
+    match name.as_str() {
+        "camera" => Ok(NormalsFrame::Camera),
+        "world" => Ok(NormalsFrame::World),
+        other => Err(format!(
+            "dataset.normals = \"{}\": expected \"camera\" (the view's OpenCV axes: x right, y down, z forward) or \"world\" (+z up)",
+            crate::words::clip(other, 80)
+        )),
+    }
+}
+
+/// The most points the `points` output may draw per sample (about 360 MB of PLY).
+const MAX_POINTS: u32 = 10_000_000;
+
+/// Flow relates the unloaded and loaded images pixel by pixel through one camera; an
+/// image-space warp would move both images but leave the flow measured in the old frame (the
+/// vectors would need turning and scaling, and targets leaving or entering the frame
+/// re-checking), so the combination is refused rather than written subtly wrong.
+fn check_flow_warps(outputs: &Outputs, augment: &AugmentSpec) -> OptResult<()> {
+    let warps = augment.copies > 0
+        && augment.mode == GeometryMode::Image
+        && augment.operations.iter().any(Operation::is_geometric);
+    if warps && outputs.wants("flow") {
+        return Err("dataset.outputs has \"flow\" and dataset.augment warps the images (mode \"image\"): flow is not defined on a warped image; use mode \"exact\" (the camera moves and the view is rendered again, flow included) or leave \"flow\" out".into());
+    }
+    Ok(())
 }
 
 /// `camera: #{ width, height, fov_y, principal_offset, distortion, aim_jitter, stereo, ... }`

@@ -1,18 +1,23 @@
-//! Ray tracing of one deformed mesh into per-pixel buffers.
+//! Ray tracing of one deformed mesh (and, for the unloaded image, its undeformed twin) into
+//! per-pixel buffers.
 //!
 //! Owns: the BVH over a scene mesh (built once, reused for all its views), the watertight
-//! ray–triangle test, screen-space culling, the per-pixel geometric buffers (planar depth,
-//! hit triangle), texture lookup on the undeformed surface (through `materials`), shading into
-//! RGB with sun, sky, studio lights and shadows, anti-aliased with fixed sub-pixel rays only
-//! where the image changes, and backdrops. Must not touch: recipes, scenes, mechanics or files;
+//! ray–triangle test, screen-space culling, the per-pixel geometric buffers (planar depth, hit
+//! triangle) and the fields that follow the same centre ray (normals, distance along the ray,
+//! displacement from the unloaded structure, optical flow from its image), texture lookup on
+//! the undeformed surface (through `materials`), shading into RGB with sun, sky, studio lights
+//! and shadows, anti-aliased with fixed sub-pixel rays only where the image changes, and
+//! backdrops. Must not touch: recipes, scenes, mechanics or files;
 //! it sees meshes, cameras and materials only. One centre ray per pixel for every geometric
 //! label; nothing here draws random numbers.
 
+mod fields;
 mod shade;
 mod surfaces;
 mod trace;
 mod watertight;
 
+pub use fields::{Deformed, displacement, flow, normals, ray_distance};
 pub use shade::{Surfaces, shade};
 pub use surfaces::SampleSurfaces;
-pub use trace::{GBuffer, NO_HIT, TraceMesh};
+pub use trace::{GBuffer, NO_HIT, TraceMesh, Traced};

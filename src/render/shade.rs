@@ -297,7 +297,7 @@ impl<S: Surfaces> Shading<'_, S> {
 }
 
 /// World normal of the triangle, turned towards the camera (surfaces are two-sided).
-fn facing_normal(camera: &Camera, mesh: &TraceMesh, tri: u32, view: DVec3) -> DVec3 {
+pub(super) fn facing_normal(camera: &Camera, mesh: &TraceMesh, tri: u32, view: DVec3) -> DVec3 {
     let n = mesh.normal(tri);
     if n.dot(camera.rotation * view) > 0.0 {
         -n

@@ -3,6 +3,7 @@
 //! the material as the structure bends, and a shared edge reads the same point from either
 //! side.
 
+use super::fields::carried;
 use super::shade::{Surfaces, hit_geometry};
 use super::trace::{GBuffer, NO_HIT, TraceMesh};
 use crate::cameras::Camera;
@@ -13,7 +14,7 @@ use rayon::prelude::*;
 
 /// The materials of a sample, by triangle.
 pub struct SampleSurfaces<'a> {
-    /// The deformed mesh, as traced.
+    /// The mesh as traced: the loaded one, or for the unloaded image the unloaded one.
     pub mesh: &'a Mesh,
     /// Undeformed position of every vertex of `mesh`.
     pub rest: &'a [DVec3],
@@ -28,12 +29,9 @@ pub struct SampleSurfaces<'a> {
 impl SampleSurfaces<'_> {
     /// The undeformed surface point under world point `p` of triangle `tri`.
     fn rest_point(&self, tri: u32, p: DVec3, footprint: f64) -> SurfacePoint {
-        let ids = self.mesh.triangles[tri as usize];
-        let [a, b, c] = ids.map(|i| self.mesh.positions[i as usize]);
-        let weights = barycentric(a, b, c, p);
-        let [ra, rb, rc] = ids.map(|i| self.rest[i as usize]);
+        let [ra, rb, rc] = self.mesh.triangles[tri as usize].map(|i| self.rest[i as usize]);
         SurfacePoint {
-            rest: weights[0] * ra + weights[1] * rb + weights[2] * rc,
+            rest: carried(self.mesh, tri, p, self.rest),
             rest_normal: (rb - ra).cross(rc - ra).normalize_or_zero(),
             footprint,
         }
@@ -94,7 +92,7 @@ impl Surfaces for SampleSurfaces<'_> {
 
 /// Barycentric weights of the point of triangle (a, b, c) nearest to `p`'s projection,
 /// clamped onto the triangle (a hit can stray outside it by the f32 rounding of tracing).
-fn barycentric(a: DVec3, b: DVec3, c: DVec3, p: DVec3) -> [f64; 3] {
+pub(super) fn barycentric(a: DVec3, b: DVec3, c: DVec3, p: DVec3) -> [f64; 3] {
     let (e1, e2, d) = (b - a, c - a, p - a);
     let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
     let (d1, d2) = (d.dot(e1), d.dot(e2));

@@ -55,6 +55,27 @@ pub struct GBuffer {
     pub triangle: Vec<u32>,
 }
 
+/// A mesh with its BVH: the unloaded twin of a sample's mesh, traced for the unloaded image.
+pub struct Traced {
+    /// The mesh.
+    pub mesh: Mesh,
+    /// Its BVH.
+    pub bvh: TraceMesh,
+}
+
+impl Traced {
+    /// `mesh`'s triangles over other positions of its vertices (the unloaded ones, in the
+    /// same order), with their BVH.
+    pub fn with_positions(mesh: &Mesh, positions: &[DVec3]) -> Self {
+        let mesh = Mesh {
+            positions: positions.to_vec(),
+            triangles: mesh.triangles.clone(),
+        };
+        let bvh = TraceMesh::build(&mesh);
+        Traced { mesh, bvh }
+    }
+}
+
 impl TraceMesh {
     /// Builds the BVH. The mesh must be non-empty with finite vertices (checked upstream).
     pub fn build(mesh: &Mesh) -> Self {

@@ -71,7 +71,7 @@ pub struct DatasetSpec {
     pub views: u32,
     /// The distribution the cameras of the views are drawn from.
     pub camera: CameraRig,
-    /// Which per-view files are written, by output name.
+    /// Which files are written, by output name: per view, and per sample for meshes and points.
     pub outputs: Outputs,
     /// What RGB shows behind the structures; black as in the paper.
     pub background: Background,
@@ -81,7 +81,26 @@ pub struct DatasetSpec {
     pub antialias: bool,
     /// Augmented copies of every view.
     pub augment: AugmentSpec,
+    /// The axes the `normals` output is written in.
+    pub normals: NormalsFrame,
+    /// Points the `points` output draws on each sample's surface.
+    pub points: u32,
 }
+
+/// The axes surface normals are written in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum NormalsFrame {
+    /// The view's camera axes, OpenCV's: x right, y down, z forward (a normal facing the
+    /// camera has z < 0).
+    #[default]
+    Camera,
+    /// World axes: right-handed, +z up.
+    World,
+}
+
+/// Points the `points` output draws by default.
+pub const DEFAULT_POINTS: u32 = 100_000;
 
 impl DatasetSpec {
     /// Camera views per sample: one per view, two with a stereo rig.
@@ -97,8 +116,8 @@ impl DatasetSpec {
     }
 }
 
-/// Which per-view outputs are written: every output shmgen knows, by name, with whether this
-/// dataset writes it.
+/// Which outputs are written (per view, or per sample for meshes and points): every output
+/// shmgen knows, by name, with whether this dataset writes it.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(transparent)]
 pub struct Outputs(BTreeMap<String, bool>);

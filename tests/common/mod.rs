@@ -1,6 +1,7 @@
 //! Helpers the integration tests share: running the binary and reading what it wrote.
 #![allow(dead_code)] // each test crate uses its own subset
 
+use serde_json::Value;
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -137,6 +138,44 @@ pub fn read_exr(path: &Path) -> Vec<f32> {
     channels[0].sample_data.values_as_f32().collect()
 }
 
+/// Every channel of an OpenEXR file by name, each as float32, through the `exr` crate's
+/// reader; with the image's (width, height).
+pub fn read_exr_channels(path: &Path) -> ((usize, usize), BTreeMap<String, Vec<f32>>) {
+    use exr::prelude::*;
+    let image = read_first_flat_layer_from_file(path).unwrap();
+    let size = image.layer_data.size;
+    let channels = image
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .map(|c| {
+            assert!(matches!(c.sample_data, FlatSamples::F32(_)), "float32 only");
+            (c.name.to_string(), c.sample_data.values_as_f32().collect())
+        })
+        .collect();
+    ((size.width(), size.height()), channels)
+}
+
+/// A PLY file through the `ply-rs-bw` crate: every element's rows.
+pub fn read_ply(
+    path: &Path,
+) -> std::collections::HashMap<String, Vec<ply_rs_bw::ply::DefaultElement>> {
+    let parser = ply_rs_bw::parser::Parser::<ply_rs_bw::ply::DefaultElement>::new();
+    let mut file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+    parser
+        .read_ply(&mut file)
+        .unwrap()
+        .payload
+        .into_iter()
+        .collect()
+}
+
+/// A sample's own file of `kind` (`mesh.ply`, ...) in dataset `out`.
+pub fn sample_path(out: &Path, sample: u64, kind: &str) -> PathBuf {
+    out.join(format!("samples/{:04}/{sample:06}.{kind}", sample / 1000))
+}
+
 /// A view's file of `kind` in dataset `out` (copy k of a view is `…a{k}`).
 pub fn view_path(out: &Path, sample: u64, view: u32, copy: Option<u32>, kind: &str) -> PathBuf {
     let copy = copy.map(|k| format!("a{k}")).unwrap_or_default();
@@ -144,6 +183,167 @@ pub fn view_path(out: &Path, sample: u64, view: u32, copy: Option<u32>, kind: &s
         "samples/{:04}/{sample:06}_{view:02}{copy}.{kind}",
         sample / 1000
     ))
+}
+
+/// A written view of sample 0: its depth, mask and record.
+pub struct View {
+    pub width: usize,
+    pub height: usize,
+    pub depth: Vec<f32>,
+    pub mask: Vec<u8>,
+    pub json: Value,
+}
+
+/// View `view` (copy `copy`) of sample 0 in dataset `out`.
+pub fn load(out: &Path, view: u32, copy: Option<u32>) -> View {
+    let json = read_json(&view_path(out, 0, view, copy, "json"));
+    let (width, height, _, mask) = read_png(&view_path(out, 0, view, copy, "mask.png"));
+    View {
+        width,
+        height,
+        depth: read_exr(&view_path(out, 0, view, copy, "depth.exr")),
+        mask,
+        json,
+    }
+}
+
+/// A row-major matrix of the JSON.
+pub fn matrix<const R: usize, const C: usize>(value: &Value) -> [[f64; C]; R] {
+    std::array::from_fn(|i| std::array::from_fn(|j| value[i][j].as_f64().unwrap()))
+}
+
+impl View {
+    pub fn k(&self) -> [[f64; 3]; 3] {
+        matrix(&self.json["camera"]["K"])
+    }
+
+    pub fn c2w(&self) -> [[f64; 4]; 4] {
+        matrix(&self.json["camera"]["c2w_opencv"])
+    }
+
+    pub fn w2c(&self) -> [[f64; 4]; 4] {
+        matrix(&self.json["camera"]["w2c_opencv"])
+    }
+
+    /// The world point pixel (row, col) sees, back-projected with the written K and pose
+    /// (pinhole).
+    pub fn point(&self, row: usize, col: usize) -> Option<[f64; 3]> {
+        let z = f64::from(self.depth[row * self.width + col]);
+        (z > 0.0).then(|| {
+            let k = self.k();
+            let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
+            let cam = [(u - k[0][2]) * z / k[0][0], (v - k[1][2]) * z / k[1][1], z];
+            transform(&self.c2w(), cam)
+        })
+    }
+
+    /// The lens of the view, (k1, k2, p1, p2, k3) (all zero for a pinhole).
+    pub fn lens(&self) -> [f64; 5] {
+        let d = &self.json["camera"]["distortion"];
+        ["k1", "k2", "p1", "p2", "k3"].map(|k| d[k].as_f64().unwrap())
+    }
+
+    /// The undistorted normalised coordinates of pixel (row, col)'s centre, through the
+    /// written K and lens with OpenCV's undistortion.
+    pub fn ray(&self, row: usize, col: usize) -> (f64, f64) {
+        let k = self.k();
+        let (xd, yd) = (
+            (col as f64 + 0.5 - k[0][2]) / k[0][0],
+            (row as f64 + 0.5 - k[1][2]) / k[1][1],
+        );
+        undistort(&self.lens(), xd, yd)
+    }
+
+    /// The world point pixel (row, col) sees, back-projected with the written K, lens and pose.
+    pub fn point_through_lens(&self, row: usize, col: usize) -> Option<[f64; 3]> {
+        let z = f64::from(self.depth[row * self.width + col]);
+        let (x, y) = self.ray(row, col);
+        (z > 0.0).then(|| transform(&self.c2w(), [x * z, y * z, z]))
+    }
+
+    /// Where world point `p` projects through the written pose, lens and K.
+    pub fn project_through_lens(&self, p: [f64; 3]) -> [f64; 2] {
+        let k = self.k();
+        let c = transform(&self.w2c(), p);
+        let (x, y) = distort(&self.lens(), c[0] / c[2], c[1] / c[2]);
+        [k[0][0] * x + k[0][2], k[1][1] * y + k[1][2]]
+    }
+
+    /// Where world point `p` projects (pinhole), with its planar depth.
+    pub fn project(&self, p: [f64; 3]) -> ([f64; 2], f64) {
+        let k = self.k();
+        let c = transform(&self.w2c(), p);
+        (
+            [
+                k[0][0] * c[0] / c[2] + k[0][2],
+                k[1][1] * c[1] / c[2] + k[1][2],
+            ],
+            c[2],
+        )
+    }
+
+    /// Whether pixel (row, col) and its 8 neighbours all see a structure.
+    pub fn inside(&self, row: usize, col: usize) -> bool {
+        (row > 0 && col > 0 && row + 1 < self.height && col + 1 < self.width)
+            && (row - 1..=row + 1)
+                .all(|r| (col - 1..=col + 1).all(|c| self.mask[r * self.width + c] == 255))
+    }
+}
+
+/// OpenCV's undistortPoints iteration (its documentation's model, solved by fixed point):
+/// x ← (x_d − δ(x)) / radial(x), independent of shmgen's Newton solver. `d` is
+/// (k1, k2, p1, p2, k3).
+pub fn undistort(d: &[f64; 5], xd: f64, yd: f64) -> (f64, f64) {
+    let (mut x, mut y) = (xd, yd);
+    for _ in 0..200 {
+        let (radial, dx, dy) = distortion_terms(d, x, y);
+        (x, y) = ((xd - dx) / radial, (yd - dy) / radial);
+    }
+    (x, y)
+}
+
+/// OpenCV's distortion of normalised coordinates (x, y): x·radial + δx, y·radial + δy.
+pub fn distort(d: &[f64; 5], x: f64, y: f64) -> (f64, f64) {
+    let (radial, dx, dy) = distortion_terms(d, x, y);
+    (x * radial + dx, y * radial + dy)
+}
+
+/// The radial factor and tangential terms of OpenCV's model at (x, y).
+fn distortion_terms(d: &[f64; 5], x: f64, y: f64) -> (f64, f64, f64) {
+    let [k1, k2, p1, p2, k3] = *d;
+    let r2 = x * x + y * y;
+    let radial = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
+    let dx = 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+    let dy = p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+    (radial, dx, dy)
+}
+
+/// How far `p` is from the surface of the box [−half, half], metres, inside or out.
+pub fn off_box(p: [f64; 3], half: [f64; 3]) -> f64 {
+    let outside = (0..3)
+        .map(|i| (p[i].abs() - half[i]).max(0.0).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let inside = (0..3)
+        .map(|i| half[i] - p[i].abs())
+        .fold(f64::INFINITY, f64::min)
+        .max(0.0);
+    outside.max(inside)
+}
+
+/// `m · [p, 1]`, the first three rows.
+pub fn transform(m: &[[f64; 4]; 4], p: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| m[i][0] * p[0] + m[i][1] * p[1] + m[i][2] * p[2] + m[i][3])
+}
+
+/// Runs `recipe` (written to a temporary folder) into `out` there; returns the folder (removed
+/// when dropped) and `out`.
+pub fn render(recipe: &str, extra: &[&str]) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "recipe.rhai", recipe);
+    let out = dir.path().join("out");
+    ok(run(&path, &out, extra));
+    (dir, out)
 }
 
 /// `scripts/quickstart.rhai` run into `dir/name` with `--set` values such as `samples=2`.

@@ -1,0 +1,146 @@
+//! Per-pixel geometric fields of a view beyond depth: surface normals, distance along the ray,
+//! displacement from the unloaded structure, and optical flow from the unloaded image to the
+//! loaded one. Every field follows the one centre ray per pixel the depth label uses (never
+//! anti-aliased); pixels that see no surface hold the default (zero, or None).
+//!
+//! The unloaded and loaded meshes share their triangles and vertex order, so a surface point
+//! is carried between them by its barycentric weights on its triangle.
+
+use super::shade::{facing_normal, hit_geometry};
+use super::surfaces::barycentric;
+use super::trace::{GBuffer, NO_HIT, TraceMesh, Traced};
+use crate::cameras::Camera;
+use crate::geometry::Mesh;
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+
+/// Runs `at(row, col, triangle, planar depth)` for every pixel that sees a surface, in
+/// parallel by row; the other pixels hold `T::default()`.
+fn per_hit<T: Copy + Default + Send>(
+    g: &GBuffer,
+    at: impl Fn(u32, u32, u32, f64) -> T + Sync,
+) -> Vec<T> {
+    let width = g.width as usize;
+    let mut out = vec![T::default(); g.triangle.len()];
+    out.par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(row, line)| {
+            for (col, value) in line.iter_mut().enumerate() {
+                let i = row * width + col;
+                if g.triangle[i] != NO_HIT {
+                    *value = at(row as u32, col as u32, g.triangle[i], f64::from(g.depth[i]));
+                }
+            }
+        });
+    out
+}
+
+/// Where a point of `mesh`'s triangle `tri` lies on the same triangle of `positions` (the
+/// same mesh with its vertices moved): the sum of the vertices weighted by the point's
+/// barycentric coordinates.
+pub(super) fn carried(mesh: &Mesh, tri: u32, point: DVec3, positions: &[DVec3]) -> DVec3 {
+    let ids = mesh.triangles[tri as usize];
+    let [a, b, c] = ids.map(|i| mesh.positions[i as usize]);
+    let weights = barycentric(a, b, c, point);
+    ids.iter()
+        .zip(weights)
+        .map(|(&i, w)| w * positions[i as usize])
+        .sum()
+}
+
+/// The unit normal of the triangle each pixel sees, turned towards the camera, expressed in
+/// `axes` (rows: the output axes in world coordinates; the identity for world axes).
+pub fn normals(g: &GBuffer, mesh: &TraceMesh, camera: &Camera, axes: DMat3) -> Vec<[f32; 3]> {
+    let k = camera.intrinsics;
+    per_hit(g, |row, col, tri, _| {
+        let n = facing_normal(camera, mesh, tri, k.ray_through_pixel(row, col));
+        (axes * n).as_vec3().to_array()
+    })
+}
+
+/// Euclidean distance from the camera centre to each pixel's surface point: the planar depth
+/// times the length of the pixel's ray at unit z.
+pub fn ray_distance(g: &GBuffer, camera: &Camera) -> Vec<f32> {
+    let k = camera.intrinsics;
+    per_hit(g, |row, col, _, depth| {
+        (depth * k.ray_through_pixel(row, col).length()) as f32
+    })
+}
+
+/// The loaded structure, as traced, with the unloaded position of every vertex.
+pub struct Deformed<'a> {
+    /// The loaded mesh.
+    pub mesh: &'a Mesh,
+    /// Its BVH.
+    pub traced: &'a TraceMesh,
+    /// The unloaded position of every vertex of `mesh`.
+    pub rest: &'a [DVec3],
+}
+
+/// World displacement (metres) from the unloaded to the loaded structure of the point each
+/// pixel sees: Σ wᵢ (loadedᵢ − restᵢ) with the point's barycentric weights wᵢ on the loaded
+/// triangle, i.e. the hit point minus the same point of the unloaded triangle, without the
+/// cancellation of subtracting two positions far from the origin.
+pub fn displacement(g: &GBuffer, camera: &Camera, deformed: &Deformed) -> Vec<[f32; 3]> {
+    let k = camera.intrinsics;
+    let moved: Vec<DVec3> = deformed
+        .mesh
+        .positions
+        .iter()
+        .zip(deformed.rest)
+        .map(|(p, r)| *p - *r)
+        .collect();
+    per_hit(g, |row, col, tri, depth| {
+        let view = k.ray_through_pixel(row, col);
+        let (p, _, _) = hit_geometry(camera, deformed.traced, tri, view, depth);
+        carried(deformed.mesh, tri, p, &moved).as_vec3().to_array()
+    })
+}
+
+/// How much nearer than a surface point another surface may be before it counts as hiding
+/// it, as a share of the point's planar depth: eight f32 roundings plus a hundredth of a
+/// pixel's footprint (depth / f). When the ray meets the point's own triangle, the hit's depth
+/// is that triangle's f64 plane rounded to f32, one rounding from the point's own depth (with
+/// no tolerance, half the points of a bent beam would count as hidden; one rounding suffices
+/// on the test views, eight leave a margin). When the f32 BVH answers with a neighbour across
+/// an edge the point lies within rounding of, the neighbour's plane can pass in front of the
+/// point by that rounding magnified by the slant: a hundredth of a pixel's footprint covers
+/// it, and a surface so close in front is no occluder the image could show.
+fn occlusion_tolerance(camera: &Camera) -> f64 {
+    let k = camera.intrinsics;
+    8.0 / f64::from(1u32 << 24) + 0.01 / k.fx.max(k.fy)
+}
+
+/// Optical flow on the unloaded image: for each pixel of `rest_g` (the unloaded structure
+/// `rest` traced through `camera`), where its surface point lands in the loaded image, minus the
+/// pixel centre, in pixels (through the lens, when it distorts). None where no surface is
+/// seen, where the point lands behind the camera or outside the frame, or where the loaded
+/// structure hides it (traced from the camera towards it).
+pub fn flow(
+    rest_g: &GBuffer,
+    camera: &Camera,
+    rest: &Traced,
+    deformed: &Deformed,
+) -> Vec<Option<[f32; 2]>> {
+    let k = camera.intrinsics;
+    let (width, height) = (f64::from(k.width), f64::from(k.height));
+    let tolerance = occlusion_tolerance(camera);
+    per_hit(rest_g, |row, col, tri, depth| {
+        let view = k.ray_through_pixel(row, col);
+        let (p, _, _) = hit_geometry(camera, &rest.bvh, tri, view, depth);
+        let moved = camera.world_to_camera(carried(&rest.mesh, tri, p, &deformed.mesh.positions));
+        if !(moved.z > 0.0) {
+            return None;
+        }
+        let (u, v) = k.project(moved);
+        if !((0.0..width).contains(&u) && (0.0..height).contains(&v)) {
+            return None;
+        }
+        let hidden = deformed
+            .traced
+            .first_hit(camera, moved / moved.z)
+            .is_some_and(|(z, _)| f64::from(z) < moved.z * (1.0 - tolerance));
+        let (u0, v0) = (f64::from(col) + 0.5, f64::from(row) + 0.5);
+        (!hidden).then_some([(u - u0) as f32, (v - v0) as f32])
+    })
+}
