@@ -257,7 +257,8 @@ mod tests {
 
     #[test]
     fn the_elastica_reaches_any_rotation_but_not_any_curvature() {
-        // Tip load α = PL²/EI = 10 on a slender rod: 82° at the tip, κc = 0.0185 · 10 (x/L)…
+        // Tip load α = PL²/EI = 10 on a rod with L/c = 400: 82° at the tip, and at the clamp
+        // κc = α (x_tip/L)(c/L) = 10 · 0.445 / 400 = 0.011 (docs/mechanics.md §6.4).
         let mut p = beam(Support::Cantilever, vec![], Target::Physical);
         p.section = Section::Rectangle {
             width: 0.2,
@@ -274,7 +275,12 @@ mod tests {
         p.loads = tip(10.0);
         let d = Deformation::solve(&p).unwrap();
         assert_eq!(d.labels.theory, Theory::Elastica);
-        // α = 1e6 bends the clamp to a radius below the depth.
+        let strain = d.labels.max_bending_stress / p.elastic_modulus;
+        assert!(
+            (strain / (10.0 * (1.0 - 0.555) / 400.0) - 1.0).abs() < 1e-4,
+            "{strain}"
+        );
+        // α = 1e6 bends the clamp to a radius below the depth (κc ≈ 3.5).
         p.loads = tip(1e6);
         refused(
             &p,
