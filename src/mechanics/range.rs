@@ -56,10 +56,11 @@ fn finite(p: &BeamProblem, d: &Deformation, xs: &[f64]) -> Result<(), String> {
         return Ok(());
     }
     Err(format!(
-        "{} theory gives a shape that is not finite (largest deflection {} m, largest moment {} N·m): no beam theory represents these loads; reduce the {}",
+        "{} theory gives a shape that is not finite (largest deflection {} m, moment {} N·m, bending stress {} Pa): no beam theory represents these loads; reduce the {}",
         l.theory.name(),
         shown(l.max_deflection),
         shown(l.max_moment),
+        shown(l.max_bending_stress),
         remedy(p)
     ))
 }
