@@ -3,7 +3,7 @@
 //! everything must be finite, the linear theories, vibration snapshots and von Kármán stop at a
 //! slope of 0.5, and every theory at a bending strain of 0.5 at the extreme fibre.
 
-use super::model::{BeamProblem, Deformation, Target, Theory, extreme};
+use super::model::{BeamProblem, Deformation, Target, Theory};
 
 /// Largest slope |dv/dx| (and tangent of the section rotation) that the small-rotation
 /// theories accept: 0.5, about 26.6°. There the cantilever's linear tip deflection is already
@@ -17,14 +17,51 @@ pub const MAX_SLOPE: f64 = 0.5;
 pub const MAX_FIBRE_STRAIN: f64 = 0.5;
 
 /// Ok when the solved beam lies within what its theory represents; `xs` are the stations its
-/// extremes were searched at (a uniform grid over the span first).
+/// extremes were searched at (512 plus every load point, or 32 per mode number), where the
+/// shape is sampled once for all checks.
 pub(super) fn check(p: &BeamProblem, d: &Deformation, xs: &[f64]) -> Result<(), String> {
-    finite(p, d, xs)?;
+    let sampled = Sampled::new(d, xs);
+    finite(p, d, &sampled)?;
     // The elastica is geometrically exact: any rotation is within its reach.
     if d.labels.theory != Theory::Elastica {
-        slopes(p, d, xs)?;
+        let (slope, at) = sampled.slope;
+        within_small_rotations(p, d, "slope of the axis |dv/dx|", slope, at)?;
+        let (rotation, at) = sampled.rotation;
+        within_small_rotations(p, d, "section rotation |tan ψ|", rotation, at)?;
     }
     fibre_strain(p, d)
+}
+
+/// The deflected axis sampled at the search stations: whether every deflection is finite, and
+/// the largest |slope| and |tan ψ| with where they occur (NaN, once met, is kept, so that the
+/// limit refuses it).
+struct Sampled {
+    finite: bool,
+    slope: (f64, f64),
+    rotation: (f64, f64),
+}
+
+impl Sampled {
+    fn new(d: &Deformation, xs: &[f64]) -> Sampled {
+        let mut s = Sampled {
+            finite: true,
+            slope: (0.0, 0.0),
+            rotation: (0.0, 0.0),
+        };
+        for &x in xs {
+            let a = d.at(x);
+            s.finite &= a.v.is_finite();
+            keep_largest(&mut s.slope, a.slope.abs(), x);
+            keep_largest(&mut s.rotation, a.rotation.abs(), x);
+        }
+        s
+    }
+}
+
+fn keep_largest(best: &mut (f64, f64), value: f64, x: f64) {
+    if !best.0.is_nan() && !(value <= best.0) {
+        *best = (value, x);
+    }
 }
 
 /// The largest z = L√(N/EI) von Kármán may need: slopes within MAX_SLOPE everywhere keep the
@@ -43,7 +80,7 @@ pub(super) fn overstretched(p: &BeamProblem) -> String {
     )
 }
 
-fn finite(p: &BeamProblem, d: &Deformation, xs: &[f64]) -> Result<(), String> {
+fn finite(p: &BeamProblem, d: &Deformation, sampled: &Sampled) -> Result<(), String> {
     let l = &d.labels;
     let labels = [
         l.max_deflection,
@@ -51,8 +88,10 @@ fn finite(p: &BeamProblem, d: &Deformation, xs: &[f64]) -> Result<(), String> {
         l.max_bending_stress,
         l.membrane_force,
     ];
-    let shape = xs.iter().all(|&x| d.at(x).v.is_finite());
-    if shape && labels.iter().all(|v| v.is_finite()) && l.loads.iter().all(|l| l.is_finite()) {
+    if sampled.finite
+        && labels.iter().all(|v| v.is_finite())
+        && l.loads.iter().all(|l| l.is_finite())
+    {
         return Ok(());
     }
     Err(format!(
@@ -63,13 +102,6 @@ fn finite(p: &BeamProblem, d: &Deformation, xs: &[f64]) -> Result<(), String> {
         shown(l.max_bending_stress),
         remedy(p)
     ))
-}
-
-fn slopes(p: &BeamProblem, d: &Deformation, xs: &[f64]) -> Result<(), String> {
-    let (slope, at) = extreme(xs, p.length, |x| d.at(x).slope);
-    within_small_rotations(p, d, "slope of the axis |dv/dx|", slope, at)?;
-    let (rotation, at) = extreme(xs, p.length, |x| d.at(x).rotation);
-    within_small_rotations(p, d, "section rotation |tan ψ|", rotation, at)
 }
 
 fn within_small_rotations(
