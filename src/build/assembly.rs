@@ -226,6 +226,16 @@ mod tests {
             );
         }
         assert!(bent.is_closed_and_oriented());
+        // Bent as a fixed–fixed beam (the axis restrained), the box keeps both ends in place.
+        let mut held = a.clone();
+        let held_beam = &mut held.shapes[0].bending.as_mut().unwrap().beam;
+        held_beam.support = crate::mechanics::Support::FixedFixed;
+        held_beam.loads[0] = Load::Point {
+            at: 2.0,
+            force: 1.0,
+        };
+        let ends = &mesh_assembly(&held, 1e-3).unwrap()[0].mesh;
+        assert!(ends.positions.iter().all(|p| p.x.abs() == 2.0), "{ends:?}");
         // A deflection beyond small rotations is refused, naming the slope.
         let mut steep = a.clone();
         let steep_beam = &mut steep.shapes[0].bending.as_mut().unwrap().beam;

@@ -436,7 +436,8 @@ impl LinearPair {
 }
 
 /// The linear solution `auto` (or the recipe) picks, with its labels; on a restrained axis,
-/// von Kármán instead where the membrane tension changes the peak by more than the tolerance.
+/// von Kármán instead where the membrane tension changes the peak by more than the tolerance
+/// (and by more than shear deformation, which von Kármán leaves out).
 fn linear(p: &BeamProblem, xs: &[f64], pair: LinearPair) -> Result<Deformation, String> {
     let LinearPair {
         eb,
@@ -469,9 +470,12 @@ fn linear(p: &BeamProblem, xs: &[f64], pair: LinearPair) -> Result<Deformation, 
         let peak = (max_deflection, max_deflection_at);
         linear_membrane(p, &beam, scale, beam_flexibility, peak)
     });
+    // Von Kármán leaves shear deformation out: `auto` takes it where the membrane error is too
+    // large and larger than the shear error it would make instead.
     if let Some((_, membrane_error)) = membrane
         && p.theory == Theory::Auto
         && membrane_error > p.tolerance
+        && membrane_error > shear_error
     {
         return von_karman(p, xs, shear_error);
     }
@@ -1023,6 +1027,7 @@ mod tests {
             p.theory = Theory::Timoshenko;
             let e = Deformation::solve(&p).unwrap_err();
             assert!(e.contains("slope of the axis |dv/dx|"), "{support:?}: {e}");
+            assert!(e.contains("shear strain next to a load close to a support"));
             p.theory = Theory::Auto;
         }
         // The roller end of a simply supported beam.

@@ -24,10 +24,14 @@ pub(super) fn check(p: &BeamProblem, d: &Deformation, xs: &[f64]) -> Result<(), 
     finite(p, d, &sampled)?;
     // The elastica is geometrically exact: any rotation is within its reach.
     if d.labels.theory != Theory::Elastica {
+        // Under Timoshenko theory a steep axis with sections that barely turn is shear strain,
+        // which a load close to a support concentrates next to it.
+        let shear = d.labels.theory == Theory::Timoshenko && sampled.rotation.0 <= MAX_SLOPE;
+        let hint = if shear { SHEAR_HINT } else { "" };
         let (slope, at) = sampled.slope;
-        within_small_rotations(p, d, "slope of the axis |dv/dx|", slope, at)?;
+        within_small_rotations(p, d, ("slope of the axis |dv/dx|", hint), slope, at)?;
         let (rotation, at) = sampled.rotation;
-        within_small_rotations(p, d, "section rotation |tan ψ|", rotation, at)?;
+        within_small_rotations(p, d, ("section rotation |tan ψ|", ""), rotation, at)?;
     }
     fibre_strain(p, d)
 }
@@ -104,18 +108,23 @@ fn finite(p: &BeamProblem, d: &Deformation, sampled: &Sampled) -> Result<(), Str
     ))
 }
 
+/// What to do about a slope that is Timoshenko's shear strain rather than rotation.
+const SHEAR_HINT: &str = "; this is shear strain next to a load close to a support (the sections themselves turn less): move the load away from the support, pin theory(\"euler_bernoulli\") or";
+
+/// `what`: the quantity, and a hint that replaces the usual "; reduce the …".
 fn within_small_rotations(
     p: &BeamProblem,
     d: &Deformation,
-    what: &str,
+    (what, hint): (&str, &str),
     value: f64,
     at: f64,
 ) -> Result<(), String> {
     if value.abs() <= MAX_SLOPE {
         return Ok(());
     }
+    let advice = if hint.is_empty() { ";" } else { hint };
     Err(format!(
-        "{} theory cannot represent this deflection: the largest {what} = {} at x = {} m exceeds {MAX_SLOPE}, the limit of small rotations (docs/mechanics.md §5.3; the largest deflection would be {} m); reduce the {}",
+        "{} theory cannot represent this deflection: the largest {what} = {} at x = {} m exceeds {MAX_SLOPE}, the limit of small rotations (docs/mechanics.md §5.3; the largest deflection would be {} m){advice} reduce the {}",
         d.labels.theory.name(),
         shown(value.abs()),
         shown(at),

@@ -528,13 +528,19 @@ mod tests {
             assert!((d.labels.max_deflection - delta).abs() < 1e-12 * delta);
             assert!(d.labels.estimated_error.is_finite());
         }
-        // Stocky: shear matters and is reported, since von Kármán leaves it out.
+        // Stocky: where shear deformation, which von Kármán leaves out, matters more than the
+        // tension, auto keeps Timoshenko and reports the membrane error; pinned, von Kármán
+        // reports the shear error.
         let mut p = beam(Support::FixedFixed, 1.0, 0.5, vec![]);
         p.loads = udl(&p, 1.0);
         p.target = Target::Peak { deflection: 0.06 };
         let stocky = Deformation::solve(&p).unwrap().labels;
-        assert_eq!(stocky.theory, Theory::VonKarman);
-        assert!(stocky.shear_error > 0.1 && stocky.estimated_error >= stocky.shear_error);
+        assert_eq!(stocky.theory, Theory::Timoshenko);
+        assert!(stocky.membrane_error > 0.01 && stocky.estimated_error >= stocky.membrane_error);
+        p.theory = Theory::VonKarman;
+        let pinned = Deformation::solve(&p).unwrap().labels;
+        assert!(pinned.shear_error > stocky.membrane_error);
+        assert!(pinned.estimated_error >= pinned.shear_error);
         for support in [
             Support::SimplySupported,
             Support::FixedFixed,
