@@ -35,8 +35,8 @@ pub enum Theory {
     Elastica,
     /// Geometrically nonlinear beam with axially restrained ends (von Kármán): EI w'''' − N w''
     /// = q with the membrane tension N = (EA/2L)∫w′² the stretched axis carries; moderate
-    /// rotations, no shear deformation. Chosen by `auto` where the membrane error exceeds
-    /// `model_tolerance`.
+    /// rotations, no shear deformation. Chosen by `auto` where the membrane error exceeds both
+    /// `model_tolerance` and the shear error leaving shear out would make.
     VonKarman,
 }
 
