@@ -271,12 +271,13 @@ fn beam_api_reaches_the_labels() {
         "api.rhai",
         r#"
         import "beam" as beam;
-        dataset(#{ samples: 4, camera: #{ width: 64, height: 48 }, scene: |rng| {
+        dataset(#{ samples: 5, camera: #{ width: 64, height: 48 }, scene: |rng| {
             let k = rng.sample;
             if k == 0 { beam::steel_i(6.0, 0.15, 0.3, 0.0107, 0.0071).fixed_fixed().distributed_load(20000.0) }
             else if k == 1 { beam::steel_tube(4.0, 0.3, 0.01).propped_cantilever().point_force(2.0, 5000.0).end_moments(0.0, 1000.0) }
             else if k == 2 { beam(#{ length: 1.0, section: hollow_box(0.4, 0.5, 0.02) }).cantilever().point_force(1.0, 1.0).target_deflection_at(0.5, 0.01).theory("euler_bernoulli") }
-            else { beam(#{ length: 3.0, width: 0.1, height: 0.2 }).cantilever().vibration([[1, 0.05], [4, 0.01]]) }
+            else if k == 3 { beam(#{ length: 3.0, width: 0.1, height: 0.2 }).cantilever().vibration([[1, 0.05], [4, 0.01]]) }
+            else { beam(#{ length: 2.0, width: 0.05, height: 0.05, axial: "restrained" }).distributed_load(1.0).target_deflection(0.05) }
         } })"#,
     );
     let out = dir.path().join("ds");
@@ -298,6 +299,20 @@ fn beam_api_reaches_the_labels() {
         "fixed–fixed UDL {got} vs {want}"
     );
     assert_eq!(s0["section"]["shape"], "i_section");
+    // Two clamps hold the axis unless told otherwise: the spec leaves `axial` out, the labels
+    // say what applied, with the tension (EA/2L)∫v′² the stretched axis carries.
+    assert!(s0.get("axial").is_none());
+    assert_eq!(s0["labels"]["axial"], "restrained");
+    let force = s0["labels"]["membrane_force"].as_f64().unwrap();
+    let stress = s0["labels"]["membrane_stress"].as_f64().unwrap();
+    assert!(force > 0.0 && (stress * p("area") / force - 1.0).abs() < 1e-12);
+    assert!(s0["labels"]["membrane_error"].as_f64().unwrap() < 0.01);
+    // Immovable pins asked for in the beam's options, δ = h: von Kármán.
+    let s4 = &meta(4)["scene"]["structures"][0];
+    assert_eq!(s4["axial"], "restrained");
+    assert_eq!(s4["labels"]["theory"], "von_karman");
+    assert_eq!(s4["labels"]["membrane_error"], 0.0);
+    assert!((s4["labels"]["max_deflection"].as_f64().unwrap() - 0.05).abs() < 1e-12);
     assert_eq!(
         meta(1)["scene"]["structures"][0]["support"],
         "propped_cantilever"
@@ -310,6 +325,62 @@ fn beam_api_reaches_the_labels() {
     // |0.05 − 0.01| and 0.05 + 0.01.
     let peak = s3["max_deflection"].as_f64().unwrap().abs();
     assert!((0.04 - 1e-12..=0.06 + 1e-12).contains(&peak), "{peak}");
+}
+
+/// Deformations beyond what a theory represents, and axial conditions the supports or theory
+/// cannot have, are errors at the recipe line that declared them.
+#[test]
+fn out_of_range_beams_are_named_at_their_line() {
+    let beam = "        beam(#{ length: 2.0, width: 0.2, height: 0.3 })";
+    rejects(
+        &with_scene(&format!("{beam}.end_moments(1e28, 0.0)")),
+        &[],
+        &[
+            "structure 0: euler_bernoulli theory cannot represent this deflection",
+            "slope of the axis |dv/dx| = 7.05e19 at x = 0 m exceeds 0.5",
+            "<dir>/bad.rhai:4:",
+        ],
+    );
+    rejects(
+        &with_scene(&format!(
+            "{beam}.point_force(1.0, 1.0).target_deflection_at(1e-12, 1e-3)"
+        )),
+        &[],
+        &[
+            "exceeds 0.5",
+            "reduce the target deflection",
+            "<dir>/bad.rhai:4:",
+        ],
+    );
+    rejects(
+        &with_scene(&format!(
+            "{beam}.vibration([[1, 0.3], [5, 0.3], [20, 0.3]])"
+        )),
+        &[],
+        &["slope of the axis", "reduce the mode amplitudes"],
+    );
+    rejects(
+        &with_scene(&format!(
+            "{beam}.cantilever().axial(\"restrained\").point_force(2.0, 1.0)"
+        )),
+        &[],
+        &[
+            "a cantilever's free end cannot hold the axis",
+            "<dir>/bad.rhai:4:",
+        ],
+    );
+    rejects(
+        &with_scene(&format!(
+            "{beam}.fixed_fixed().axial(\"free\").theory(\"von_karman\")"
+        )),
+        &[],
+        &["needs an axially restrained beam"],
+    );
+    rejects(
+        &with_scene(&format!("{beam}.axial(\"stuck\")")),
+        &[],
+        &["axial = \"stuck\" is unknown"],
+    );
 }
 
 #[test]

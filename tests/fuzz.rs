@@ -89,6 +89,9 @@ const SCENES: &[&str] = &[
     "BEAM.point_force(1.0, 1.0).target_deflection_at($, 0.01)",
     "BEAM.fixed_fixed().distributed_load(1.0).target_deflection_at(1e-7, $)",
     "BEAM.point_load(1.0, 0.05).theory($)",
+    "BEAM.fixed_fixed().point_load(1.0, 0.05).axial($)",
+    "BEAM.fixed_fixed().distributed_load($)",
+    "BEAM.axial(\"restrained\").point_load(1.0, $)",
     "BEAM.cantilever().point_load(2.0, 0.5).theory(\"elastica\").model_tolerance($)",
     "BEAM.point_load(1.0, 0.05).mapping($)",
     "BEAM.point_load(1.0, 0.05).segments($)",
@@ -199,6 +202,7 @@ fn cases() -> Vec<Case> {
     for template in SCENES {
         let words = template.contains("material($)")
             || template.contains("theory($)")
+            || template.contains("axial($)")
             || template.contains("mapping($)")
             || template.contains("part($)")
             || template.contains("assembly($");

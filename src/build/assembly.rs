@@ -171,7 +171,9 @@ fn bend(mesh: &mut Mesh, b: &Bending) -> Result<(), String> {
     stations.push(0.0);
     stations.sort_by(f64::total_cmp);
     stations.dedup();
-    let frames = section_frames(&stations, b.beam.mapping, |x| deformation.at(x));
+    let frames = section_frames(&stations, b.beam.mapping, b.beam.axial(), |x| {
+        deformation.at(x)
+    });
     for p in &mut mesh.positions {
         let s = along(*p) - lo;
         let frame = frames[stations.partition_point(|&x| x < s)];
@@ -224,6 +226,26 @@ mod tests {
             );
         }
         assert!(bent.is_closed_and_oriented());
+        // Bent as a fixed–fixed beam (the axis restrained), the box keeps both ends in place.
+        let mut held = a.clone();
+        let held_beam = &mut held.shapes[0].bending.as_mut().unwrap().beam;
+        held_beam.support = crate::mechanics::Support::FixedFixed;
+        held_beam.loads[0] = Load::Point {
+            at: 2.0,
+            force: 1.0,
+        };
+        let ends = &mesh_assembly(&held, 1e-3).unwrap()[0].mesh;
+        assert!(ends.positions.iter().all(|p| p.x.abs() == 2.0), "{ends:?}");
+        // A deflection beyond small rotations is refused, naming the slope.
+        let mut steep = a.clone();
+        let steep_beam = &mut steep.shapes[0].bending.as_mut().unwrap().beam;
+        steep_beam.target = crate::mechanics::Target::Peak { deflection: 3.0 };
+        steep_beam.theory = crate::mechanics::Theory::EulerBernoulli;
+        let e = mesh_assembly(&steep, 1e-3).unwrap_err();
+        assert!(
+            e.contains("part \"body\"") && e.contains("slope of the axis"),
+            "{e}"
+        );
         // A length that does not match the shape is refused, naming both.
         let mut wrong = a.clone();
         wrong.shapes[0].bending.as_mut().unwrap().beam.length = 3.0;

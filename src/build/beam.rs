@@ -35,6 +35,7 @@ pub fn problem(beam: &BeamSpec) -> BeamProblem {
         theory: beam.theory,
         tolerance: beam.model_tolerance,
         vibration: beam.vibration.clone(),
+        axial: beam.axial(),
     }
 }
 
@@ -66,7 +67,7 @@ pub fn mesh_beam(beam: &BeamSpec, pixel_footprint: f64) -> Result<BuiltBeam, Str
     let mut at = kinks(&beam.loads);
     at.push(deformation.labels.max_deflection_at);
     let stations = stations(beam.length, segments, &at);
-    let frames = section_frames(&stations, beam.mapping, |x| deformation.at(x));
+    let frames = section_frames(&stations, beam.mapping, beam.axial(), |x| deformation.at(x));
     let unloaded: Vec<SectionFrame> = stations
         .iter()
         .map(|&x| SectionFrame {
@@ -171,7 +172,7 @@ pub fn stations(length: f64, segments: usize, kinks: &[f64]) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mechanics::{Load, Support, Target, section_examples};
+    use crate::mechanics::{Load, Mapping, Support, Target, section_examples};
 
     #[test]
     fn section_outlines_have_the_section_properties() {
@@ -243,6 +244,72 @@ mod tests {
         assert!(built.mesh.is_closed_and_oriented());
         // Bending keeps the volume to second order in the rotation.
         assert!((built.mesh.signed_volume() / (3.0 * 0.15) - 1.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn restrained_ends_stay_where_they_are() {
+        // A fixed–fixed beam under a UDL, δ = 0.05 L: both clamps hold the axis (the default),
+        // so the end sections stay exactly at x = ±L/2. With axial "free" the far clamp slides in
+        // by ½∫v′² = (512/210) δ²/L, today's geometry for a pin-roller mapping
+        // (docs/mechanics.md §5.2).
+        let (l, delta) = (2.0, 0.1);
+        let mut b = BeamSpec::rectangular(l, 0.1, 0.05);
+        b.support = Support::FixedFixed;
+        b.theory = crate::mechanics::Theory::EulerBernoulli;
+        b.loads = vec![Load::Distributed {
+            from: 0.0,
+            to: l,
+            intensity: 1.0,
+        }];
+        b.target = Target::Peak { deflection: delta };
+        let ends = |built: &BuiltBeam, end: f64| -> Vec<f64> {
+            built
+                .rest
+                .iter()
+                .zip(&built.mesh.positions)
+                .filter(|(r, _)| r.x == end)
+                .map(|(_, p)| p.x)
+                .collect()
+        };
+        let held = mesh_beam(&b, 1e-3).unwrap();
+        assert_eq!(
+            held.deformation.labels.axial,
+            crate::mechanics::Axial::Restrained
+        );
+        for end in [-0.5 * l, 0.5 * l] {
+            let xs = ends(&held, end);
+            assert!(
+                !xs.is_empty() && xs.iter().all(|&x| x == end),
+                "{end}: {xs:?}"
+            );
+        }
+        b.axial = Some(crate::mechanics::Axial::Free);
+        let free = mesh_beam(&b, 1e-3).unwrap();
+        let shortening = 512.0 / 210.0 * delta * delta / l;
+        assert!(ends(&free, -0.5 * l).iter().all(|&x| x == -0.5 * l));
+        for x in ends(&free, 0.5 * l) {
+            assert!(
+                (x - (0.5 * l - shortening)).abs() < 1e-6 * shortening,
+                "{x}"
+            );
+        }
+    }
+
+    #[test]
+    fn out_of_range_beams_are_refused_with_either_mapping() {
+        for mapping in [Mapping::RotateSections, Mapping::AddDeflection] {
+            let mut b = BeamSpec::rectangular(2.0, 0.2, 0.3);
+            b.loads = vec![Load::EndMoments {
+                start: 1e28,
+                end: 0.0,
+            }];
+            b.mapping = mapping;
+            let e = mesh_beam(&b, 1e-3).err().unwrap();
+            assert!(
+                e.contains("slope of the axis") && e.contains("exceeds 0.5"),
+                "{e}"
+            );
+        }
     }
 
     #[test]

@@ -40,6 +40,21 @@ pub enum Load {
     },
 }
 
+impl Load {
+    /// Whether every number of the load is finite.
+    pub fn is_finite(&self) -> bool {
+        match *self {
+            Load::Point { at, force } => at.is_finite() && force.is_finite(),
+            Load::Distributed {
+                from,
+                to,
+                intensity,
+            } => from.is_finite() && to.is_finite() && intensity.is_finite(),
+            Load::EndMoments { start, end } => start.is_finite() && end.is_finite(),
+        }
+    }
+}
+
 /// Positions on the span where the loads put kinks into the deflected shape: stations there
 /// keep every mesh vertex on the exact curve.
 pub fn kinks(loads: &[Load]) -> Vec<f64> {
@@ -107,6 +122,10 @@ impl LinearBeam {
         for load in loads {
             match *load {
                 Load::Point { at, force } if at >= l => end_force += force,
+                // Every support holds x = 0: a load there goes straight into it and bends
+                // nothing. Kept out of the span terms, its reaction does not show as a shear
+                // slope P/(κGA) at x = 0 either.
+                Load::Point { at, .. } if at <= 0.0 => {}
                 Load::Point { at, force } => beam.points.push((at / l, force)),
                 Load::Distributed {
                     from,
@@ -227,7 +246,7 @@ fn boundary(
 }
 
 /// Gaussian elimination with partial pivoting on an augmented 4×5 matrix.
-fn solve4(mut m: [[f64; 5]; 4]) -> [f64; 4] {
+pub(super) fn solve4(mut m: [[f64; 5]; 4]) -> [f64; 4] {
     for col in 0..4 {
         let pivot = (col..4)
             .max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))

@@ -1,5 +1,6 @@
 //! Moving section points with the deflected axis.
 
+use super::Axial;
 use serde::Serialize;
 
 /// The deflected axis at one station: deflection (down), slope dv/dx, and the tangent of the
@@ -23,7 +24,8 @@ pub struct AxisPoint {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Mapping {
-    /// Plane sections stay plane and turn with the bending rotation; the axis shortens by ½∫v′².
+    /// Plane sections stay plane and turn with the bending rotation; a free axis shortens by
+    /// ½∫v′², a restrained one stretches by as much between its held ends.
     #[default]
     RotateSections,
     /// 3DGEN's mapping, kept for parity with the paper: every point moves vertically by the
@@ -51,23 +53,65 @@ impl SectionFrame {
     }
 }
 
-/// Section frames at the given stations (which must include 0 and every kink). The axial
-/// shortening u(x) = ½∫₀ˣ v′² is integrated with 3-point Gauss–Legendre per interval, exact
-/// for the piecewise-quartic integrand of a piecewise-cubic deflection.
+/// Section frames at the given stations (which must include both ends and every kink). The
+/// axial shortening u(x) = ½∫₀ˣ v′² is integrated with 3-point Gauss–Legendre per interval, exact
+/// for the piecewise-quartic integrand of a piecewise-cubic deflection. A free axis keeps its
+/// length, so its far end moves in by u(L); a restrained one is held at both ends and stretches
+/// uniformly instead (membrane strain u(L)/L), so each section moves in by u(x) − (x/L)·u(L)
+/// and the last station stays exactly where it was (docs/mechanics.md §5.4).
 pub fn section_frames(
     stations: &[f64],
     mapping: Mapping,
+    axial: Axial,
     axis: impl Fn(f64) -> AxisPoint,
 ) -> Vec<SectionFrame> {
+    let shortening = match mapping {
+        Mapping::RotateSections => shortening(stations, &axis),
+        Mapping::AddDeflection => vec![0.0; stations.len()],
+    };
+    let total = shortening.last().copied().unwrap_or(0.0);
+    let span = stations.last().copied().unwrap_or(0.0);
+    stations
+        .iter()
+        .zip(&shortening)
+        .map(|(&x, &u)| {
+            let p = axis(x);
+            match mapping {
+                Mapping::AddDeflection => SectionFrame {
+                    x,
+                    v: p.v,
+                    cos: 1.0,
+                    sin: 0.0,
+                },
+                Mapping::RotateSections => {
+                    let moved_in = match axial {
+                        Axial::Free => u,
+                        Axial::Restrained => u - x / span * total,
+                    };
+                    let inv = 1.0 / p.rotation.hypot(1.0);
+                    SectionFrame {
+                        x: p.axial.unwrap_or(x - moved_in),
+                        v: p.v,
+                        cos: inv,
+                        sin: p.rotation * inv,
+                    }
+                }
+            }
+        })
+        .collect()
+}
+
+/// u(x) = ½∫₀ˣ v′² at every station, accumulated interval by interval.
+fn shortening(stations: &[f64], axis: &impl Fn(f64) -> AxisPoint) -> Vec<f64> {
     const GAUSS: [(f64, f64); 3] = [
         (-0.774_596_669_241_483_4, 5.0 / 9.0),
         (0.0, 8.0 / 9.0),
         (0.774_596_669_241_483_4, 5.0 / 9.0),
     ];
     let mut shortening = 0.0;
-    let mut frames = Vec::with_capacity(stations.len());
+    let mut out = Vec::with_capacity(stations.len());
     for (i, &x) in stations.iter().enumerate() {
-        if i > 0 && mapping == Mapping::RotateSections {
+        if i > 0 {
             let (mid, half) = (0.5 * (stations[i - 1] + x), 0.5 * (x - stations[i - 1]));
             shortening += 0.5
                 * half
@@ -76,26 +120,9 @@ pub fn section_frames(
                     .map(|&(t, w)| w * axis(mid + half * t).slope.powi(2))
                     .sum::<f64>();
         }
-        let p = axis(x);
-        frames.push(match mapping {
-            Mapping::AddDeflection => SectionFrame {
-                x,
-                v: p.v,
-                cos: 1.0,
-                sin: 0.0,
-            },
-            Mapping::RotateSections => {
-                let inv = 1.0 / p.rotation.hypot(1.0);
-                SectionFrame {
-                    x: p.axial.unwrap_or(x - shortening),
-                    v: p.v,
-                    cos: inv,
-                    sin: p.rotation * inv,
-                }
-            }
-        });
+        out.push(shortening);
     }
-    frames
+    out
 }
 
 #[cfg(test)]
@@ -120,7 +147,12 @@ mod tests {
     fn shortening_matches_closed_form() {
         // ½∫v′² = 2.4 δ²/L for the SS centre load (docs/mechanics.md §5.2).
         let stations: Vec<f64> = (0..=6).map(|i| f64::from(i) / 6.0).collect();
-        let frames = section_frames(&stations, Mapping::RotateSections, ss_centre(0.1));
+        let frames = section_frames(
+            &stations,
+            Mapping::RotateSections,
+            Axial::Free,
+            ss_centre(0.1),
+        );
         assert!((1.0 - frames[6].x - 2.4 * 0.01).abs() < 1e-14);
     }
 
@@ -128,7 +160,7 @@ mod tests {
     fn sections_stay_plane_and_normal_to_the_axis() {
         let stations: Vec<f64> = (0..=10).map(|i| f64::from(i) / 10.0).collect();
         let axis = ss_centre(0.15);
-        for (f, &x) in section_frames(&stations, Mapping::RotateSections, &axis)
+        for (f, &x) in section_frames(&stations, Mapping::RotateSections, Axial::Free, &axis)
             .iter()
             .zip(&stations)
         {
@@ -140,7 +172,12 @@ mod tests {
 
     #[test]
     fn parity_mapping_adds_the_deflection() {
-        let f = section_frames(&[0.0, 0.5], Mapping::AddDeflection, ss_centre(0.2))[1];
+        let f = section_frames(
+            &[0.0, 0.5],
+            Mapping::AddDeflection,
+            Axial::Free,
+            ss_centre(0.2),
+        )[1];
         assert_eq!(f.place(0.1), (0.5, 0.1 - 0.2));
     }
 }

@@ -2,10 +2,11 @@
 //! a cylindrical shell may be deformed.
 //!
 //! Owns: the linear theories (Euler–Bernoulli, Timoshenko) for four support cases and any mix
-//! of loads, the cantilever elastica, vibration mode shapes, the choice of theory by estimated
-//! error, the derived labels (load, moment, stress, plausibility), the mapping of section
-//! points onto the deformed axis, cross-section properties, and silo shell patterns with
-//! their plausible amplitudes. Must not touch: meshes, cameras or files; it works on plain
+//! of loads, the cantilever elastica, the von Kármán beam with axially restrained ends,
+//! vibration mode shapes, the choice of theory by estimated error, the range each theory can
+//! represent, the derived labels (load, moment, stress, membrane force, plausibility), the
+//! mapping of section points onto the deformed axis, cross-section properties, and silo shell
+//! patterns with their plausible amplitudes. Must not touch: meshes, cameras or files; it works on plain
 //! numbers in the beam's own frame (axis along x from 0 to L, deflection v positive downward).
 //!
 //! Formulas, reference values, floating-point traps and the primary literature:
@@ -14,8 +15,11 @@
 mod elastica;
 mod linear;
 mod mapping;
+mod membrane;
 mod model;
 mod modes;
+mod range;
+mod restrained;
 mod section;
 mod shell;
 
@@ -23,6 +27,7 @@ pub use linear::{LinearBeam, Load, Station, kinks};
 pub use mapping::{AxisPoint, Mapping, SectionFrame, section_frames};
 pub use model::{BeamProblem, Deformation, Labels, Target, Theory};
 pub use modes::ModeShape;
+pub use range::{MAX_FIBRE_STRAIN, MAX_SLOPE};
 #[cfg(test)]
 pub(crate) use section::examples as section_examples;
 pub use section::{Section, SectionProperties};
@@ -50,4 +55,31 @@ pub enum Support {
     FixedFixed,
     /// Clamped at x = 0, pinned (on a roller) at x = L.
     ProppedCantilever,
+}
+
+/// Whether a beam's supports hold its axis along its length. Ends that cannot move towards each
+/// other make a deflecting beam stretch and carry membrane tension (docs/mechanics.md §5.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Axial {
+    /// Both ends held along the axis (two clamps, or a clamp or pin at each end that cannot
+    /// slide): the axis stretches by ½∫v′² and carries the membrane tension that takes.
+    Restrained,
+    /// One end free to move along the axis (a roller or a free end): the axis keeps its length
+    /// and that end moves in by ½∫v′².
+    Free,
+}
+
+impl Axial {
+    /// What the supports give unless the recipe says otherwise: two clamps hold the axis
+    /// (fixed–fixed); a roller or a free end lets it slide (simply supported, propped
+    /// cantilever, cantilever).
+    pub fn of(support: Support) -> Axial {
+        match support {
+            Support::FixedFixed => Axial::Restrained,
+            Support::SimplySupported | Support::Cantilever | Support::ProppedCantilever => {
+                Axial::Free
+            }
+        }
+    }
 }

@@ -4,7 +4,7 @@
 use super::diagnostics::call_site;
 use super::options::{OptResult, Options, number, positive};
 use super::result::{Fallible, fail};
-use crate::mechanics::{Load, Mapping, Section, Support, Target, Theory};
+use crate::mechanics::{Axial, Load, Mapping, Section, Support, Target, Theory};
 use crate::scene::{BeamSpec, Tessellation};
 use rhai::{Array, Dynamic, Engine, ImmutableString, Map, NativeCallContext};
 
@@ -27,7 +27,8 @@ pub fn register(engine: &mut Engine) {
     register_settings(engine);
 }
 
-/// `beam(#{ length, width, height })` for a rectangle, or `beam(#{ length, section })`.
+/// `beam(#{ length, width, height })` for a rectangle, or `beam(#{ length, section })`; options
+/// `segments` and `axial`.
 fn beam_from_map(map: Map) -> OptResult<BeamSpec> {
     let mut o = Options::new(map, "beam");
     let length = o.positive("length", "metres")?;
@@ -45,8 +46,23 @@ fn beam_from_map(map: Map) -> OptResult<BeamSpec> {
     if let Some(n) = o.take("segments") {
         beam.tessellation = Tessellation::Segments(segments(&n)?);
     }
+    if let Some(a) = o.take("axial") {
+        beam.axial = Some(axial(&a.to_string())?);
+    }
     o.finish()?;
     Ok(beam)
+}
+
+/// An axial condition by name. Which supports it suits is checked when the beam is solved, as
+/// the supports may be set after it.
+fn axial(name: &str) -> OptResult<Axial> {
+    match name {
+        "restrained" => Ok(Axial::Restrained),
+        "free" => Ok(Axial::Free),
+        other => Err(format!(
+            "axial = \"{other}\" is unknown (known: \"restrained\": both ends hold the axis, \"free\": one end slides)"
+        )),
+    }
 }
 
 fn segments(n: &Dynamic) -> OptResult<u32> {
@@ -297,10 +313,19 @@ fn register_settings(engine: &mut Engine) {
             "euler_bernoulli" => Theory::EulerBernoulli,
             "timoshenko" => Theory::Timoshenko,
             "elastica" => Theory::Elastica,
-            other => return fail(format!("theory = \"{other}\" is unknown (known: \"auto\", \"euler_bernoulli\", \"timoshenko\", \"elastica\")")),
+            "von_karman" => Theory::VonKarman,
+            other => return fail(format!("theory = \"{other}\" is unknown (known: \"auto\", \"euler_bernoulli\", \"timoshenko\", \"elastica\", \"von_karman\")")),
         };
         Ok(b.clone())
     });
+    engine.register_fn(
+        "axial",
+        |ctx: NativeCallContext, b: &mut BeamSpec, name: ImmutableString| -> Fallible<BeamSpec> {
+            b.declared_at = Some(call_site(&ctx));
+            b.axial = Some(axial(&name)?);
+            Ok(b.clone())
+        },
+    );
     engine.register_fn(
         "model_tolerance",
         |ctx: NativeCallContext, b: &mut BeamSpec, t: Dynamic| -> Fallible<BeamSpec> {

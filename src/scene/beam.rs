@@ -4,7 +4,7 @@
 use super::{SourceSite, Tolerance};
 use crate::materials::Material;
 use crate::mechanics::{
-    Load, Mapping, STEEL_E, STEEL_FY, STEEL_NU, Section, Support, Target, Theory,
+    Axial, Load, Mapping, STEEL_E, STEEL_FY, STEEL_NU, Section, Support, Target, Theory,
 };
 use serde::Serialize;
 
@@ -60,6 +60,11 @@ pub struct BeamSpec {
     pub section: Section,
     /// How the ends are supported.
     pub support: Support,
+    /// Whether the supports hold the axis along its length, as the recipe asked; absent: as the
+    /// supports give it (restrained for fixed_fixed, free otherwise). `labels.axial` says which
+    /// applied.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axial: Option<Axial>,
     /// Loads on the span as declared; when `target` scales them, only their ratios matter
     /// (`labels.loads` holds the physical loads).
     pub loads: Vec<Load>,
@@ -103,6 +108,7 @@ impl BeamSpec {
             length,
             section,
             support: Support::SimplySupported,
+            axial: None,
             loads: Vec::new(),
             target: Target::Physical,
             theory: Theory::Auto,
@@ -118,6 +124,11 @@ impl BeamSpec {
             yaw: 0.0,
             declared_at: None,
         }
+    }
+
+    /// How the supports hold the axis: as the recipe asked, or what the supports give.
+    pub fn axial(&self) -> Axial {
+        self.axial.unwrap_or(Axial::of(self.support))
     }
 
     /// [`BeamSpec::new`] with a solid rectangular section `width` × `height` metres.
