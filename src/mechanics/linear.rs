@@ -117,26 +117,13 @@ impl LinearBeam {
             constants: [0.0; 4],
             end_scale: 0.0,
         };
-        // Loads exactly at the free end enter through its boundary condition, not as span terms.
-        let (mut end_force, mut end_moments) = (0.0, (0.0, 0.0));
-        for load in loads {
-            match *load {
-                Load::Point { at, force } if at >= l => end_force += force,
-                // Every support holds x = 0: a load there goes straight into it and bends
-                // nothing. Kept out of the span terms, its reaction does not show as a shear
-                // slope P/(κGA) at x = 0 either.
-                Load::Point { at, .. } if at <= 0.0 => {}
-                Load::Point { at, force } => beam.points.push((at / l, force)),
-                Load::Distributed {
-                    from,
-                    to,
-                    intensity,
-                } => beam.udls.push((from / l, to / l, intensity * l)),
-                Load::EndMoments { start, end } => {
-                    end_moments = (end_moments.0 + start / l, end_moments.1 + end / l)
-                }
-            }
-        }
+        let SpanLoads {
+            points,
+            udls,
+            end_force,
+            end_moments,
+        } = SpanLoads::new(loads, l);
+        (beam.points, beam.udls) = (points, udls);
         beam.end_scale = end_force.abs() + end_moments.0.abs() + end_moments.1.abs();
         let rows = [
             boundary(support, 0.0, &beam, 0.0, end_moments.0),
@@ -246,6 +233,52 @@ fn boundary(
 }
 
 /// Gaussian elimination with partial pivoting on an augmented 4×5 matrix.
+/// Loads in span units (ξ = x/L), as the solvers take them.
+pub(super) struct SpanLoads {
+    /// Point loads strictly inside the span: (ξ, P).
+    pub points: Vec<(f64, f64)>,
+    /// Distributed loads: (ξ₀, ξ₁, q·L).
+    pub udls: Vec<(f64, f64, f64)>,
+    /// The point force exactly at x = L: it enters through that end's boundary condition
+    /// (a free end's shear), not as a span term.
+    pub end_force: f64,
+    /// End moments at x = 0 and x = L, divided by L.
+    pub end_moments: (f64, f64),
+}
+
+impl SpanLoads {
+    /// `loads` on a span of `length` metres.
+    pub fn new(loads: &[Load], length: f64) -> SpanLoads {
+        let l = length;
+        let mut span = SpanLoads {
+            points: Vec::new(),
+            udls: Vec::new(),
+            end_force: 0.0,
+            end_moments: (0.0, 0.0),
+        };
+        for load in loads {
+            match *load {
+                Load::Point { at, force } if at >= l => span.end_force += force,
+                // Every support holds x = 0: a load there goes straight into it and bends
+                // nothing. Kept out of the span terms, its reaction does not show as a shear
+                // slope P/(κGA) at x = 0 either.
+                Load::Point { at, .. } if at <= 0.0 => {}
+                Load::Point { at, force } => span.points.push((at / l, force)),
+                Load::Distributed {
+                    from,
+                    to,
+                    intensity,
+                } => span.udls.push((from / l, to / l, intensity * l)),
+                Load::EndMoments { start, end } => {
+                    span.end_moments.0 += start / l;
+                    span.end_moments.1 += end / l;
+                }
+            }
+        }
+        span
+    }
+}
+
 pub(super) fn solve4(mut m: [[f64; 5]; 4]) -> [f64; 4] {
     for col in 0..4 {
         let pivot = (col..4)

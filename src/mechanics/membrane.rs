@@ -13,7 +13,7 @@
 //!   bounded on the span, so nothing grows like cosh zξ and no large kL overflows.
 
 use super::Support;
-use super::linear::{Load, solve4};
+use super::linear::{Load, SpanLoads, solve4};
 
 /// Below this z = kL the series form is used, above it the exponential form: on either side
 /// the rounding error stays within a few hundred ulps of the deflection (docs/mechanics.md §5.5).
@@ -85,20 +85,14 @@ impl TensionBeam {
             udls: Vec::new(),
             constants: [0.0; 4],
         };
-        let mut end_moments = (0.0, 0.0);
-        for load in loads {
-            match *load {
-                Load::Point { at, force } => beam.points.push((at / l, force)),
-                Load::Distributed {
-                    from,
-                    to,
-                    intensity,
-                } => beam.udls.push((from / l, to / l, intensity * l)),
-                Load::EndMoments { start, end } => {
-                    end_moments = (end_moments.0 + start / l, end_moments.1 + end / l)
-                }
-            }
-        }
+        // Both ends are held, so a point load at either end goes into its support.
+        let SpanLoads {
+            points,
+            udls,
+            end_moments,
+            ..
+        } = SpanLoads::new(loads, l);
+        (beam.points, beam.udls) = (points, udls);
         let rows = [
             beam.boundary(support, 0.0, end_moments.0),
             beam.boundary(support, 1.0, end_moments.1),

@@ -743,31 +743,39 @@ pub(super) fn extreme(xs: &[f64], length: f64, f: impl Fn(f64) -> f64) -> (f64, 
     }
 }
 
+/// A steel (S355) beam of rectangular section for the tests: theory `auto`, tolerance 1 %,
+/// the support's own axial condition.
+#[cfg(test)]
+pub(super) fn steel_rectangle(
+    support: Support,
+    length: f64,
+    (width, height): (f64, f64),
+    loads: Vec<Load>,
+    target: Target,
+) -> BeamProblem {
+    BeamProblem {
+        support,
+        length,
+        loads,
+        target,
+        section: super::Section::Rectangle { width, height }.properties(super::STEEL_NU),
+        elastic_modulus: super::STEEL_E,
+        poisson: super::STEEL_NU,
+        yield_strength: super::STEEL_FY,
+        theory: Theory::Auto,
+        tolerance: 0.01,
+        vibration: Vec::new(),
+        axial: Axial::of(support),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mechanics::Section;
 
     fn problem(support: Support, l_over_h: f64, loads: Vec<Load>, target: Target) -> BeamProblem {
         let h = 0.5;
-        BeamProblem {
-            support,
-            length: l_over_h * h,
-            loads,
-            target,
-            section: Section::Rectangle {
-                width: 0.3,
-                height: h,
-            }
-            .properties(0.3),
-            elastic_modulus: 210e9,
-            poisson: 0.3,
-            yield_strength: 355e6,
-            theory: Theory::Auto,
-            tolerance: 0.01,
-            vibration: Vec::new(),
-            axial: Axial::of(support),
-        }
+        steel_rectangle(support, l_over_h * h, (0.3, h), loads, target)
     }
 
     #[test]

@@ -174,28 +174,11 @@ fn shown(x: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mechanics::{Axial, Load, Section, Support};
+    use crate::mechanics::{Load, Section, Support};
 
     /// A 2 m steel beam, 0.2 m wide and 0.3 m deep.
     fn beam(support: Support, loads: Vec<Load>, target: Target) -> BeamProblem {
-        BeamProblem {
-            support,
-            length: 2.0,
-            loads,
-            target,
-            section: Section::Rectangle {
-                width: 0.2,
-                height: 0.3,
-            }
-            .properties(0.3),
-            elastic_modulus: 210e9,
-            poisson: 0.3,
-            yield_strength: 355e6,
-            theory: Theory::Auto,
-            tolerance: 0.01,
-            vibration: Vec::new(),
-            axial: Axial::of(support),
-        }
+        crate::mechanics::model::steel_rectangle(support, 2.0, (0.2, 0.3), loads, target)
     }
 
     fn refused(p: &BeamProblem, words: &[&str]) {

@@ -198,30 +198,22 @@ pub(super) fn check_axial(p: &BeamProblem) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mechanics::{Section, SectionProperties};
 
     const E: f64 = 210e9;
 
     /// A steel beam of span `length` and rectangular `width` × `height`, axis restrained.
     fn beam(support: Support, length: f64, height: f64, loads: Vec<Load>) -> BeamProblem {
-        BeamProblem {
+        let p = crate::mechanics::model::steel_rectangle(
             support,
             length,
+            (0.1, height),
             loads,
-            target: Target::Physical,
-            section: rectangle(0.1, height),
-            elastic_modulus: E,
-            poisson: 0.3,
-            yield_strength: 355e6,
-            theory: Theory::Auto,
-            tolerance: 0.01,
-            vibration: Vec::new(),
+            Target::Physical,
+        );
+        BeamProblem {
             axial: Axial::Restrained,
+            ..p
         }
-    }
-
-    fn rectangle(width: f64, height: f64) -> SectionProperties {
-        Section::Rectangle { width, height }.properties(0.3)
     }
 
     fn udl(p: &BeamProblem, q: f64) -> Vec<Load> {

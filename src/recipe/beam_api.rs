@@ -146,6 +146,11 @@ fn on_span(b: &BeamSpec, what: &str, x: f64) -> Fallible<f64> {
     }
 }
 
+/// A position along the span given to `what` (metres from x = 0), checked to lie on it.
+fn position(b: &BeamSpec, what: &str, x: &Dynamic) -> Fallible<f64> {
+    on_span(b, what, number(x, what)?)
+}
+
 fn register_loads(engine: &mut Engine) {
     // Shape form: a unit load, scaled so that the beam's largest deflection is `deflection`.
     engine.register_fn(
@@ -156,11 +161,7 @@ fn register_loads(engine: &mut Engine) {
          deflection: Dynamic|
          -> Fallible<BeamSpec> {
             b.declared_at = Some(call_site(&ctx));
-            let at = on_span(
-                b,
-                "point_load position",
-                number(&at, "point_load position")?,
-            )?;
+            let at = position(b, "point_load position", &at)?;
             let deflection = number(&deflection, "point_load deflection")?;
             b.loads.push(Load::Point { at, force: 1.0 });
             b.target = Target::Peak { deflection };
@@ -175,11 +176,7 @@ fn register_loads(engine: &mut Engine) {
          force: Dynamic|
          -> Fallible<BeamSpec> {
             b.declared_at = Some(call_site(&ctx));
-            let at = on_span(
-                b,
-                "point_force position",
-                number(&at, "point_force position")?,
-            )?;
+            let at = position(b, "point_force position", &at)?;
             b.loads.push(Load::Point {
                 at,
                 force: number(&force, "point_force force")?,
@@ -208,16 +205,8 @@ fn register_loads(engine: &mut Engine) {
          q: Dynamic|
          -> Fallible<BeamSpec> {
             b.declared_at = Some(call_site(&ctx));
-            let from = on_span(
-                b,
-                "distributed_load from",
-                number(&from, "distributed_load from")?,
-            )?;
-            let to = on_span(
-                b,
-                "distributed_load to",
-                number(&to, "distributed_load to")?,
-            )?;
+            let from = position(b, "distributed_load from", &from)?;
+            let to = position(b, "distributed_load to", &to)?;
             if from >= to {
                 return fail(format!(
                     "distributed_load from = {from} m must be less than to = {to} m"
@@ -291,11 +280,7 @@ fn register_loads(engine: &mut Engine) {
          deflection: Dynamic|
          -> Fallible<BeamSpec> {
             b.declared_at = Some(call_site(&ctx));
-            let at = on_span(
-                b,
-                "target_deflection_at position",
-                number(&at, "target_deflection_at position")?,
-            )?;
+            let at = position(b, "target_deflection_at position", &at)?;
             b.target = Target::At {
                 at,
                 deflection: number(&deflection, "target_deflection_at deflection")?,
