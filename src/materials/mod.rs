@@ -209,11 +209,12 @@ impl Material {
     }
 }
 
-/// sRGB (0–1) → linear.
+/// sRGB (0–1) → linear. `libm`'s pow, not the platform's, so albedos are the same bits on
+/// every machine.
 pub fn srgb_to_linear(s: f64) -> f64 {
     if s <= 0.040_45 {
         s / 12.92
     } else {
-        ((s + 0.055) / 1.055).powf(2.4)
+        libm::pow((s + 0.055) / 1.055, 2.4)
     }
 }

@@ -5,11 +5,12 @@
 //! of the 3D rest position, and every feature finer than the pixel footprint is averaged out
 //! (fractal octaves fade, thin lines lighten by the fraction of the pixel they cover).
 
-use super::noise::{Noise, pair, smoothstep, unit};
+use super::noise::{Field, Ladder, Noise, pair, smoothstep, unit};
 use super::{Base, Condition, ConditionKind, Material, Species, Texture};
 use crate::seeds::Stream;
 use glam::DVec3;
 use serde::Serialize;
+use std::sync::LazyLock;
 
 /// What a sample drew for its material: where its texture is cut from, how far the wood's
 /// pith lies from the piece's axis (metres) and a brightness variation.
@@ -65,8 +66,9 @@ pub struct Shader {
     noise: Noise,
     /// Added to every rest position, so each sample shows another part of the texture.
     offset: DVec3,
-    /// Pith distance from the piece's axis as a multiple of 1 m, and its direction angle.
-    pith: (f64, f64),
+    /// Pith distance from the piece's axis as a multiple of 1 m, and the cosine and sine of its
+    /// direction angle.
+    pith: (f64, [f64; 2]),
     brightness: f64,
     /// The material's linear base colour times `brightness`.
     albedo: [f64; 3],
@@ -75,6 +77,32 @@ pub struct Shader {
 /// Share of a pixel a crack must cover for the pixel to be labelled a crack.
 pub const CRACK_LABEL_COVER: f64 = 0.2;
 
+// The fractal fields of the bases and conditions, on the octave ladder (wavelengths are rungs:
+// 1.28 m halved). Fields of one lane share the octaves they have in common, so lanes go by
+// role: 0 a base's coarse pattern (and the rust tone, finer than any base's coarse pattern
+// but the smoothest), 1 a base's fine pattern, 2 the rust patches (steel's mill-scale mottle
+// is their coarse half, as rust starts where the mill scale is thin), 3 their ragged edges;
+// 4–7 (a second lattice evaluation, paid only by materials with these conditions) weathering,
+// moss and paint wear.
+const STEEL_MOTTLE: Field = Field::new(2, 0.32, 4);
+const BASE_FINE: Field = Field::new(1, 0.02, 3);
+const SHEEN: Field = Field::new(0, 0.64, 3);
+const PATINA: Field = Field::new(0, 0.16, 5);
+const CONCRETE_MOTTLE: Field = Field::new(0, 0.32, 4);
+const CONCRETE_FINE: Field = Field::new(1, 0.04, 3);
+const RING_WANDER: Field = Field::new(0, 0.32, 3);
+const SMOOTH: Field = Field::new(0, 0.04, 3);
+const STONE: Field = Field::new(0, 0.08, 4);
+const PAINT: Field = Field::new(0, 0.08, 3);
+const RUST: Field = Field::new(2, 0.32, 6);
+const RUST_EDGE: Field = Field::new(3, 0.02, 3);
+const RUST_TONE: Field = Field::new(0, 0.04, 5);
+const BLOTCH: Field = Field::new(4, 0.64, 4);
+const WORN_SUBSTRATE: Field = Field::new(4, 0.04, 3);
+const MOSS_PATCH: Field = Field::new(5, 0.32, 5);
+const MOSS_TONE: Field = Field::new(6, 0.01, 3);
+const WEAR: Field = Field::new(7, 0.16, 5);
+
 /// Rust as it forms on structural steel: orange-brown to dark brown (sRGB).
 const RUST_LIGHT: [f64; 3] = [0.5, 0.27, 0.14];
 const RUST_DARK: [f64; 3] = [0.22, 0.11, 0.06];
@@ -82,6 +110,23 @@ const MOSS: [f64; 3] = [0.27, 0.36, 0.12];
 const MORTAR: [f64; 3] = [0.66, 0.64, 0.6];
 /// Bare steel showing where paint has worn away.
 const BARE_STEEL: [f64; 3] = [0.45, 0.45, 0.46];
+
+/// The colours above in linear light, decoded once rather than at every point.
+struct Palette {
+    rust_light: [f64; 3],
+    rust_dark: [f64; 3],
+    moss: [f64; 3],
+    mortar: [f64; 3],
+    bare_steel: [f64; 3],
+}
+
+static PALETTE: LazyLock<Palette> = LazyLock::new(|| Palette {
+    rust_light: linear(RUST_LIGHT),
+    rust_dark: linear(RUST_DARK),
+    moss: linear(MOSS),
+    mortar: linear(MORTAR),
+    bare_steel: linear(BARE_STEEL),
+});
 
 impl Shader {
     /// Draws the sample's choices for `material` from `stream` (a stream of its own, so a
@@ -93,10 +138,9 @@ impl Shader {
             stream.uniform(-500.0, 500.0),
             stream.uniform(-500.0, 500.0),
         );
-        let pith = (
-            stream.uniform(0.15, 0.6),
-            stream.uniform(0.0, std::f64::consts::TAU),
-        );
+        let distance = stream.uniform(0.15, 0.6);
+        let (sin, cos) = libm::sincos(stream.uniform(0.0, std::f64::consts::TAU));
+        let pith = (distance, [cos, sin]);
         let variation = if material.base == Base::Plain {
             0.0
         } else {
@@ -156,8 +200,10 @@ impl Shader {
         if !self.textured() {
             return s;
         }
+        let texture = (p.rest + self.offset) / m.scale;
         let at = Point {
-            p: (p.rest + self.offset) / m.scale,
+            p: texture,
+            ladder: Ladder::new(&self.noise, texture, p.footprint / m.scale),
             rest: p.rest,
             normal: p.rest_normal,
             footprint: p.footprint / m.scale,
@@ -210,13 +256,7 @@ impl Shader {
             q
         };
         let size = 0.3 / (0.6 + intensity) * if timber { 0.5 } else { 1.0 };
-        let wander = DVec3::new(
-            self.noise.fractal(q, 0.15, 3, footprint),
-            self.noise
-                .fractal(q + DVec3::splat(31.0), 0.15, 3, footprint),
-            self.noise
-                .fractal(q + DVec3::splat(67.0), 0.15, 3, footprint),
-        );
+        let wander = DVec3::from_array(self.noise.fractals::<3>(q, 0.15, 3, footprint));
         let c = self.noise.cells(q + 0.25 * size * wander, size);
         let edge = pair(c.id, c.neighbour);
         if unit(edge, 7) > 0.3 + 0.5 * intensity {
@@ -233,6 +273,8 @@ impl Shader {
 struct Point<'a> {
     /// Texture-space position (offset, divided by the material scale).
     p: DVec3,
+    /// The octaves of the material's fractal fields at `p`.
+    ladder: Ladder<'a>,
     rest: DVec3,
     normal: DVec3,
     footprint: f64,
@@ -241,20 +283,9 @@ struct Point<'a> {
 }
 
 impl Point<'_> {
-    fn fractal(&self, wavelength: f64, octaves: u32) -> f64 {
-        self.shader
-            .noise
-            .fractal(self.p, wavelength, octaves, self.footprint)
-    }
-
-    /// Fractal noise at a shifted position: an independent pattern from the same generator.
-    fn fractal_at(&self, shift: f64, wavelength: f64, octaves: u32) -> f64 {
-        self.shader.noise.fractal(
-            self.p + DVec3::splat(shift),
-            wavelength,
-            octaves,
-            self.footprint,
-        )
+    /// A fractal field at this point.
+    fn field(&self, field: Field) -> f64 {
+        self.ladder.get(field)
     }
 
     /// The base material's albedo (linear) at this point; `colour` is its mean.
@@ -263,32 +294,37 @@ impl Point<'_> {
             Base::Plain => colour,
             Base::Steel => scale(
                 colour,
-                1.0 + 0.12 * self.fractal(0.3, 4) + 0.05 * self.fractal_at(5.0, 0.02, 3),
+                1.0 + 0.12 * self.field(STEEL_MOTTLE) + 0.05 * self.field(BASE_FINE),
             ),
             Base::GalvanisedSteel => {
-                // Spangle: zinc crystals a centimetre across, each with its own sheen.
+                // Spangle: zinc crystals a centimetre across, each with its own sheen. Within
+                // half a pixel of a grain boundary the two crystals' sheens blend, equally on
+                // the boundary itself, so the albedo is continuous across it and the boundary
+                // is anti-aliased.
                 let c = self.shader.noise.cells(self.p, 0.012);
-                let crystal = 0.12 * (unit(c.id, 3) - 0.5) * self.resolved(0.012);
-                scale(colour, 1.0 + crystal + 0.08 * self.fractal(0.5, 3))
+                let own = (0.5 + c.border / self.footprint).min(1.0);
+                let sheen = own * unit(c.id, 3) + (1.0 - own) * unit(c.neighbour, 3);
+                let crystal = 0.12 * (sheen - 0.5) * self.resolved(0.012);
+                scale(colour, 1.0 + crystal + 0.08 * self.field(SHEEN))
             }
             Base::WeatheringSteel => {
-                let patina = smoothstep(-0.4, 0.5, self.fractal(0.15, 5));
-                mix(colour, linear(RUST_DARK), patina * 0.6)
+                let patina = smoothstep(-0.4, 0.5, self.field(PATINA));
+                mix(colour, PALETTE.rust_dark, patina * 0.6)
             }
             Base::Aluminium => scale(colour, 1.0 + 0.06 * self.brushed(0.002)),
             Base::Concrete => {
                 let pores = self.pores(0.008, 0.0012, 0.3);
                 scale(
                     colour,
-                    (1.0 + 0.1 * self.fractal(0.4, 4) + 0.05 * self.fractal_at(9.0, 0.03, 3))
+                    (1.0 + 0.1 * self.field(CONCRETE_MOTTLE) + 0.05 * self.field(CONCRETE_FINE))
                         * (1.0 - 0.55 * pores),
                 )
             }
             Base::Timber(species) => self.wood(species, colour),
-            Base::Plastic => scale(colour, 1.0 + 0.02 * self.fractal(0.05, 3)),
+            Base::Plastic => scale(colour, 1.0 + 0.02 * self.field(SMOOTH)),
             Base::Brick => self.brick(colour),
             Base::Stone => self.stone(colour),
-            Base::Painted => scale(colour, 1.0 + 0.03 * self.fractal(0.1, 3)),
+            Base::Painted => scale(colour, 1.0 + 0.03 * self.field(PAINT)),
         }
     }
 
@@ -337,10 +373,10 @@ impl Point<'_> {
         let scale_m = self.shader.material.scale;
         let axis = self.grain.axis;
         let (e1, e2) = axis.any_orthonormal_pair();
-        let (distance, angle) = self.shader.pith;
-        let pith = self.grain.centre + distance * (angle.cos() * e1 + angle.sin() * e2);
+        let (distance, [cos, sin]) = self.shader.pith;
+        let pith = self.grain.centre + distance * (cos * e1 + sin * e2);
         let radial = (self.rest - pith) - (self.rest - pith).dot(axis) * axis;
-        let r = radial.length() / scale_m + 0.004 * self.fractal(0.25, 3);
+        let r = radial.length() / scale_m + 0.004 * self.field(RING_WANDER);
         let ring = (r / spacing).fract();
         // Late wood: the dark band at the end of each year's growth.
         let late = smoothstep(0.6, 0.9, ring) * (1.0 - smoothstep(0.95, 1.0, ring));
@@ -381,9 +417,9 @@ impl Point<'_> {
         let id = pair(course as i64 as u64, column as i64 as u64);
         let brick = scale(
             colour,
-            1.0 + 0.24 * (unit(id, 6) - 0.5) + 0.06 * self.fractal(0.05, 3),
+            1.0 + 0.24 * (unit(id, 6) - 0.5) + 0.06 * self.field(SMOOTH),
         );
-        mix(brick, linear(MORTAR), mortar)
+        mix(brick, PALETTE.mortar, mortar)
     }
 
     /// Random-rubble stone: Voronoi blocks about 0.3 m across, each its own shade, with joints.
@@ -394,9 +430,9 @@ impl Point<'_> {
             * (joint / self.footprint).min(1.0);
         let block = scale(
             colour,
-            1.0 + 0.3 * (unit(c.id, 9) - 0.5) + 0.08 * self.fractal(0.08, 4),
+            1.0 + 0.3 * (unit(c.id, 9) - 0.5) + 0.08 * self.field(STONE),
         );
-        mix(block, scale(linear(MORTAR), 0.7), mortar)
+        mix(block, scale(PALETTE.mortar, 0.7), mortar)
     }
 
     fn condition(&self, c: Condition, s: &mut Surface) {
@@ -407,10 +443,10 @@ impl Point<'_> {
                 let reach = if corroded { 0.85 * i + 0.15 } else { i };
                 // Patches cover about `reach` of the surface and have
                 // ragged edges: fine noise shifts the threshold locally.
-                let field = self.fractal(0.3, 6) + 0.35 * self.fractal_at(19.0, 0.02, 3);
+                let field = self.field(RUST) + 0.35 * self.field(RUST_EDGE);
                 let patch = smoothstep(-0.15, 0.15, coverage_threshold(reach) - field);
-                let tone = smoothstep(-0.7, 0.7, self.fractal_at(13.0, 0.05, 5));
-                let mut rust = mix(linear(RUST_LIGHT), linear(RUST_DARK), tone);
+                let tone = smoothstep(-0.7, 0.7, self.field(RUST_TONE));
+                let mut rust = mix(PALETTE.rust_light, PALETTE.rust_dark, tone);
                 if corroded {
                     rust = scale(rust, 1.0 - 0.6 * self.pores(0.004, 0.0015, 0.6));
                 }
@@ -434,7 +470,7 @@ impl Point<'_> {
             }
             ConditionKind::Weathered => {
                 let grey = luminance(s.albedo);
-                let blotch = 1.0 + 0.18 * i * self.fractal_at(23.0, 0.5, 4);
+                let blotch = 1.0 + 0.18 * i * self.field(BLOTCH);
                 s.albedo = scale(mix(s.albedo, [grey * 1.1; 3], 0.45 * i), blotch);
                 s.roughness = lerp(s.roughness, 1.0, 0.5 * i);
             }
@@ -453,9 +489,9 @@ impl Point<'_> {
                 let patch = smoothstep(
                     -0.05,
                     0.05,
-                    self.fractal_at(41.0, 0.3, 5) + upward + 0.8 * i - 0.75,
+                    self.field(MOSS_PATCH) + upward + 0.8 * i - 0.75,
                 );
-                let moss = scale(linear(MOSS), 1.0 + 0.3 * self.fractal_at(43.0, 0.01, 3));
+                let moss = scale(PALETTE.moss, 1.0 + 0.3 * self.field(MOSS_TONE));
                 s.albedo = mix(s.albedo, moss, patch);
                 s.roughness = lerp(s.roughness, 1.0, patch);
                 s.specular = lerp(s.specular, 0.02, patch);
@@ -466,18 +502,18 @@ impl Point<'_> {
             }
             ConditionKind::Wet => {
                 // A water film darkens porous surfaces and adds a glossy layer (F0 ≈ 0.02).
-                s.albedo = s.albedo.map(|c| c.powf(1.0 + 0.6 * i) * (1.0 - 0.25 * i));
+                s.albedo = s.albedo.map(|c| libm::pow(c, 1.0 + 0.6 * i) * (1.0 - 0.25 * i));
                 s.roughness *= 1.0 - 0.7 * i;
                 s.specular = s.specular.max(0.02 + 0.03 * i);
             }
             ConditionKind::Worn => {
                 // Paint wears through on about half the share rust of the same intensity covers.
-                let field = self.fractal_at(53.0, 0.12, 5);
+                let field = self.field(WEAR);
                 let patch = smoothstep(-0.05, 0.05, coverage_threshold(0.5 * i) - field);
                 let bare = mix(
-                    linear(BARE_STEEL),
-                    linear(RUST_DARK),
-                    0.5 * smoothstep(-0.3, 0.3, self.fractal_at(59.0, 0.05, 3)),
+                    PALETTE.bare_steel,
+                    PALETTE.rust_dark,
+                    0.5 * smoothstep(-0.3, 0.3, self.field(WORN_SUBSTRATE)),
                 );
                 s.albedo = mix(s.albedo, bare, patch);
                 s.roughness = lerp(s.roughness, 0.8, patch);
@@ -707,7 +743,7 @@ mod tests {
         // 65 mm bricks + 10 mm joints: 75 mm courses. Half-way between bed joints is brick,
         // on a bed joint is mortar, whatever the sample's texture offset.
         let s = shader("brick");
-        let mortar = linear(MORTAR);
+        let mortar = PALETTE.mortar;
         let shift = s.offset.z;
         for course in 0..20 {
             let joint = 0.075 * f64::from(course) - shift.rem_euclid(0.075);
