@@ -328,7 +328,7 @@ fn every_format_holds_the_datasets_files_and_cameras() {
 const LENS: &str = r#"
 dataset(#{ name: "lens", seed: 3, samples: 1, views: 2, outputs: ["rgb", "depth", "mask", "points"], points: 500,
     camera: #{ width: 64, height: 48,
-        distortion: #{ k1: [-0.2, -0.1], k2: 0.02, p1: 0.001, p2: -0.001, k3: [0.0, param("k3", 0.004)] } },
+        distortion: #{ k1: [-0.15, -0.1], k2: 0.02, p1: 0.001, p2: -0.001, k3: [0.0, param("k3", 0.004)] } },
     augment: #{ copies: 1, operations: [#{ op: "gamma", gamma: [0.8, 1.2], probability: 1.0 }] },
     scene: |rng| assembly("box", [shape::box(2.0, 1.0, 0.5)]),
 })
