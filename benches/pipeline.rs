@@ -1,131 +1,348 @@
-//! Pipeline benchmark: image/depth pairs per second for the quickstart scene at 960×960 with
-//! RGB, depth, mask and JSON written, plus a per-stage breakdown of one view. Prints medians;
-//! asserts nothing (speed is measured, never tested).
+//! Pipeline benchmark: image/depth pairs per second of whole runs (every default output of the
+//! recipe written to disk: RGB, depth, masks, JSON, manifest), on one thread and on every
+//! core, for each row of the README's table, then a per-stage breakdown of single views.
+//! Prints medians; asserts nothing (speed is measured, never tested).
 //!
-//!     cargo bench --bench pipeline
+//!     cargo bench --bench pipeline                        (about a quarter of an hour on 2 cores)
+//!     SHMGEN_BENCH_RUNS=1 SHMGEN_BENCH_STREAM=10000 cargo bench --bench pipeline   (quicker)
+//!
+//! Rows: the A1 smoke run with the paper's prompts, the quickstart, the A2 smoke run, an
+//! imported mesh of a million triangles (written by the benchmark), a streaming run of tiny
+//! views at growing sample counts (throughput and peak resident memory, each count in its own
+//! process), and the time per pair at 3840×3840 against 960×960.
 
+use shmgen::build::BuiltSample;
+use shmgen::cameras::Camera;
 use shmgen::materials::Backdrop;
 use shmgen::output::{depth_exr, mask_png, rgb_png};
 use shmgen::pipeline::{self, RunOptions, Shard, prepare, view_camera};
 use shmgen::recipe::Recipe;
-use shmgen::render::{SampleSurfaces, TraceMesh, shade};
-use std::path::Path;
+use shmgen::render::{GBuffer, NO_HIT, SampleSurfaces, TraceMesh, shade};
+use std::io::Write;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// Environment variable under which the benchmark runs one streaming count in a child.
+const CHILD: &str = "SHMGEN_BENCH_STREAM_CHILD";
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
 
-fn main() {
-    let recipe_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/quickstart.rhai");
-    let samples = 10u64;
-    let sets = [
-        ("samples".to_string(), samples.to_string()),
-        ("views".to_string(), "20".to_string()),
-    ];
-    let mut recipe = Recipe::load(&recipe_path, &sets).expect("quickstart loads");
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    println!(
-        "shmgen pipeline benchmark: quickstart, {samples} beams × 20 views at 960×960, RGB + depth + mask + JSON, {cores} cores"
-    );
+fn setting(name: &str, default: u64) -> u64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
 
-    for (threads, antialias) in [(1, true), (cores, true), (cores, false)] {
-        recipe.dataset.antialias = antialias;
-        let mut rates = Vec::new();
-        for _ in 0..5 {
-            let dir = tempfile::tempdir().unwrap();
-            let options = RunOptions {
-                out: dir.path().join("ds"),
-                threads: Some(threads),
-                shard: Shard::WHOLE,
-                force: false,
-                quiet: true,
-            };
-            let summary = pipeline::run(&recipe, &options).expect("run");
-            rates.push(summary.pairs as f64 / summary.seconds);
+fn scripts() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts")
+}
+
+fn load(path: &Path, sets: &[(&str, &str)]) -> Recipe {
+    let sets: Vec<(String, String)> = sets
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+    Recipe::load(path, &sets).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// One whole run into a fresh folder: (pairs per second, seconds).
+fn run_once(recipe: &Recipe, threads: usize) -> (f64, f64) {
+    let dir = tempfile::tempdir().unwrap();
+    let options = RunOptions {
+        out: dir.path().join("ds"),
+        threads: Some(threads),
+        shard: Shard::WHOLE,
+        force: false,
+        quiet: true,
+    };
+    let summary = pipeline::run(recipe, &options).expect("run");
+    (summary.pairs as f64 / summary.seconds, summary.seconds)
+}
+
+/// Median pairs per second over `runs` whole runs.
+fn rate(recipe: &Recipe, threads: usize, runs: u64) -> f64 {
+    median((0..runs).map(|_| run_once(recipe, threads).0).collect())
+}
+
+/// A closed, finely tessellated torus with a rippled surface: `around` × `across` quads,
+/// 2 · around · across triangles, as a binary little-endian PLY.
+fn write_torus(path: &Path, around: u32, across: u32) {
+    let mut vertices = Vec::with_capacity((around * across) as usize * 12);
+    for i in 0..around {
+        for j in 0..across {
+            let (a, b) = (
+                std::f64::consts::TAU * f64::from(i) / f64::from(around),
+                std::f64::consts::TAU * f64::from(j) / f64::from(across),
+            );
+            let r = 0.6 + 0.02 * (12.0 * a).sin() * (7.0 * b).cos();
+            let p = [
+                (2.0 + r * b.cos()) * a.cos(),
+                (2.0 + r * b.cos()) * a.sin(),
+                1.2 * r * b.sin(),
+            ];
+            for c in p {
+                vertices.extend_from_slice(&(c as f32).to_le_bytes());
+            }
         }
-        let label = if antialias { "on" } else { "off" };
-        let runs: Vec<String> = rates.iter().map(|r| format!("{r:.1}")).collect();
-        println!(
-            "  {threads} thread(s), anti-aliasing {label}: median {:.1} pairs/s ({:.1} ms per pair), runs {runs:?}",
-            median(rates.clone()),
-            1e3 / median(rates)
-        );
     }
+    let index = |i: u32, j: u32| ((i % around) * across + j % across) as i32;
+    let mut faces = Vec::with_capacity((around * across) as usize * 26);
+    for i in 0..around {
+        for j in 0..across {
+            let quad = [
+                index(i, j),
+                index(i + 1, j),
+                index(i + 1, j + 1),
+                index(i, j + 1),
+            ];
+            for tri in [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]] {
+                faces.push(3u8);
+                for v in tri {
+                    faces.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+        }
+    }
+    let mut file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    write!(
+        file,
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        around * across,
+        2 * around * across
+    )
+    .unwrap();
+    file.write_all(&vertices).unwrap();
+    file.write_all(&faces).unwrap();
+}
 
-    // Per-stage cost of single views, one thread.
+/// A recipe rendering the imported mesh `million.ply` next to it, plain grey, the paper's
+/// camera.
+fn million_recipe(dir: &Path) -> Recipe {
+    write_torus(&dir.join("million.ply"), 1000, 500);
+    let path = dir.join("million.rhai");
+    std::fs::write(
+        &path,
+        r#"dataset(#{ name: "million", seed: 3, samples: param("samples", 2), views: param("views", 10),
+            outputs: ["rgb", "depth", "mask"],
+            camera: #{ width: 960, height: 960, fov_y: PI() / 3.0, pitch: [deg(-20), deg(70)], distance: "frame" },
+            scene: |rng| assembly("torus", [shape::mesh("million.ply")]).colour([0.6, 0.6, 0.6]) })"#,
+    )
+    .unwrap();
+    load(&path, &[])
+}
+
+/// A run of `samples` samples of one 16×16 view each: "pairs/s peak_kB" on stdout.
+fn stream_child(samples: &str) {
+    let recipe = streaming_recipe(samples);
+    let (rate, _) = run_once(
+        &recipe,
+        std::thread::available_parallelism().map_or(1, |n| n.get()),
+    );
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let peak = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        .unwrap_or(0);
+    println!("{rate} {peak}");
+}
+
+fn streaming_recipe(samples: &str) -> Recipe {
+    let mut recipe = load(
+        &scripts().join("quickstart.rhai"),
+        &[("samples", samples), ("views", "1")],
+    );
+    (recipe.dataset.camera.width, recipe.dataset.camera.height) = (16, 16);
+    recipe
+}
+
+/// Throughput and peak memory of streaming runs, each in a child process of its own.
+fn streaming(max: u64) {
+    println!(
+        "streaming run, quickstart beams, one 16×16 view each, every core, one run per count:"
+    );
+    println!("  | samples | pairs/s | peak RSS |");
+    let mut count = 1000;
+    while count <= max {
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .env(CHILD, count.to_string())
+            .output()
+            .expect("child run");
+        let text = String::from_utf8_lossy(&out.stdout);
+        let mut fields = text
+            .split_whitespace()
+            .map(|f| f.parse::<f64>().unwrap_or(0.0));
+        let (rate, peak) = (fields.next().unwrap_or(0.0), fields.next().unwrap_or(0.0));
+        println!("  | {count} | {rate:.0} | {:.1} MB |", peak / 1024.0);
+        count *= 10;
+    }
+}
+
+/// Seconds per pair at 3840×3840 over seconds per pair at 960×960 (pixels: 16×).
+fn resolution_ratio(threads: usize, runs: u64) {
+    let mut recipe = load(
+        &scripts().join("quickstart.rhai"),
+        &[("samples", "2"), ("views", "4")],
+    );
+    let mut per_pair = Vec::new();
+    for side in [960, 3840] {
+        (recipe.dataset.camera.width, recipe.dataset.camera.height) = (side, side);
+        per_pair.push(1.0 / rate(&recipe, threads, runs));
+    }
+    println!(
+        "3840×3840 against 960×960 (quickstart, {threads} threads): {:.1} ms vs {:.1} ms per pair, ratio {:.1} for 16× the pixels",
+        1e3 * per_pair[1],
+        1e3 * per_pair[0],
+        per_pair[1] / per_pair[0]
+    );
+}
+
+/// Times of each stage of a view, milliseconds, collected over views.
+#[derive(Default)]
+struct Stages {
+    names: Vec<&'static str>,
+    times: Vec<Vec<f64>>,
+}
+
+impl Stages {
+    /// Runs `f`, adding its time to stage `name`.
+    fn time<T>(&mut self, name: &'static str, f: impl FnOnce() -> T) -> T {
+        let start = Instant::now();
+        let value = f();
+        let ms = 1e3 * start.elapsed().as_secs_f64();
+        match self.names.iter().position(|n| *n == name) {
+            Some(i) => self.times[i].push(ms),
+            None => {
+                self.names.push(name);
+                self.times.push(vec![ms]);
+            }
+        }
+        value
+    }
+}
+
+/// The stages of one view of a built sample, timed.
+fn view_stages(
+    sample: &BuiltSample,
+    mesh: &TraceMesh,
+    camera: &Camera,
+    dir: &Path,
+    stages: &mut Stages,
+) -> GBuffer {
+    let g = stages.time("trace", || mesh.trace(camera));
+    let surfaces = SampleSurfaces {
+        mesh: &sample.mesh,
+        rest: &sample.rest,
+        piece: &sample.piece,
+        pieces: &sample.pieces,
+        shaders: &sample.shaders,
+    };
+    let black = Backdrop::Colour([0, 0, 0]);
+    let rgb = stages.time("shade (anti-aliased)", || {
+        shade(&g, mesh, camera, &sample.lighting, &surfaces, &black, true)
+    });
+    let png = stages.time("RGB PNG", || rgb_png(g.width, g.height, &rgb));
+    let exr = stages.time("depth EXR", || depth_exr(g.width, g.height, &g.depth));
+    let mask = stages.time("mask PNG", || {
+        let mask: Vec<u8> = g
+            .triangle
+            .iter()
+            .map(|&t| if t == NO_HIT { 0 } else { 255 })
+            .collect();
+        mask_png(g.width, g.height, &mask)
+    });
+    stages.time("write 3 files", || {
+        for (name, bytes) in [("rgb.png", &png), ("depth.exr", &exr), ("mask.png", &mask)] {
+            std::fs::write(dir.join(name), bytes).unwrap();
+        }
+    });
+    g
+}
+
+/// Per-stage medians over every view of the recipe's first `samples` samples, on one thread.
+fn breakdown(name: &str, recipe: &Recipe, samples: u64) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut stages = Stages::default();
+    let mut coverage = Vec::new();
     pool.install(|| {
-        let mut stages: [(&str, Vec<f64>); 7] = [
-            ("prepare scene+mesh", vec![]),
-            ("BVH build", vec![]),
-            ("trace", vec![]),
-            ("shade", vec![]),
-            ("RGB PNG", vec![]),
-            ("depth EXR", vec![]),
-            ("mask PNG", vec![]),
-        ];
-        let mut coverage = Vec::new();
-        for s in 0..samples {
-            let t = Instant::now();
-            let sample = prepare(&recipe, s).unwrap();
-            stages[0].1.push(t.elapsed().as_secs_f64());
-            let t = Instant::now();
-            let mesh = TraceMesh::build(&sample.mesh);
-            stages[1].1.push(t.elapsed().as_secs_f64());
-            for view in 0..20 {
+        for s in 0..recipe.dataset.samples.min(samples) {
+            let sample = stages.time("prepare (per sample)", || prepare(recipe, s).unwrap());
+            let mesh = stages.time("BVH build (per sample)", || TraceMesh::build(&sample.mesh));
+            for view in 0..recipe.dataset.views {
                 let camera = view_camera(&recipe.dataset, &sample, view).unwrap().camera;
-                let t = Instant::now();
-                let g = mesh.trace(&camera);
-                stages[2].1.push(t.elapsed().as_secs_f64());
-                coverage.push(
-                    g.triangle.iter().filter(|&&t| t != u32::MAX).count() as f64
-                        / g.triangle.len() as f64,
-                );
-                let t = Instant::now();
-                let surfaces = SampleSurfaces {
-                    mesh: &sample.mesh,
-                    rest: &sample.rest,
-                    piece: &sample.piece,
-                    pieces: &sample.pieces,
-                    shaders: &sample.shaders,
-                };
-                let rgb = shade(
-                    &g,
-                    &mesh,
-                    &camera,
-                    &sample.lighting,
-                    &surfaces,
-                    &Backdrop::Colour([0, 0, 0]),
-                    true,
-                );
-                stages[3].1.push(t.elapsed().as_secs_f64());
-                let t = Instant::now();
-                std::hint::black_box(rgb_png(g.width, g.height, &rgb));
-                stages[4].1.push(t.elapsed().as_secs_f64());
-                let t = Instant::now();
-                std::hint::black_box(depth_exr(g.width, g.height, &g.depth));
-                stages[5].1.push(t.elapsed().as_secs_f64());
-                let mask: Vec<u8> = g
-                    .triangle
-                    .iter()
-                    .map(|&t| if t == u32::MAX { 0 } else { 255 })
-                    .collect();
-                let t = Instant::now();
-                std::hint::black_box(mask_png(g.width, g.height, &mask));
-                stages[6].1.push(t.elapsed().as_secs_f64());
+                let g = view_stages(&sample, &mesh, &camera, dir.path(), &mut stages);
+                let hits = g.triangle.iter().filter(|&&t| t != NO_HIT).count();
+                coverage.push(hits as f64 / g.triangle.len() as f64);
             }
         }
-        println!(
-            "  per-stage medians, 1 thread (median coverage {:.1} % of pixels):",
-            100.0 * median(coverage)
-        );
-        for (name, times) in stages {
-            println!("    {name:<20} {:>8.2} ms", 1e3 * median(times));
-        }
     });
+    let cells: Vec<String> = stages
+        .names
+        .iter()
+        .zip(stages.times)
+        .map(|(n, t)| format!("{n} {:.2}", median(t)))
+        .collect();
+    println!(
+        "  {name} (coverage {:.1} %): {} ms",
+        100.0 * median(coverage),
+        cells.join(", ")
+    );
+}
+
+fn main() {
+    if let Ok(samples) = std::env::var(CHILD) {
+        return stream_child(&samples);
+    }
+    let runs = setting("SHMGEN_BENCH_RUNS", 3);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|c| {
+            c.lines()
+                .find_map(|l| l.strip_prefix("model name\t: ").map(str::to_string))
+        })
+        .unwrap_or_default();
+    println!("shmgen pipeline benchmark: {cores} cores ({cpu}), medians of {runs} runs");
+    let million_dir = tempfile::tempdir().unwrap();
+    let rows = [
+        (
+            "a1_beams.rhai smoke (12 beams × 20 views, paper prompts)",
+            load(&scripts().join("a1_beams.rhai"), &[("samples", "12")]),
+        ),
+        (
+            "quickstart.rhai (10 beams × 20 views)",
+            load(
+                &scripts().join("quickstart.rhai"),
+                &[("samples", "10"), ("views", "20")],
+            ),
+        ),
+        (
+            "a2_silo.rhai smoke (3 silos × 20 views)",
+            load(&scripts().join("a2_silo.rhai"), &[("samples", "3")]),
+        ),
+        (
+            "imported mesh, 1,000,000 triangles (2 × 10 views)",
+            million_recipe(million_dir.path()),
+        ),
+    ];
+    println!("| row | 1 thread | {cores} threads |");
+    for (name, recipe) in &rows {
+        let one = rate(recipe, 1, runs);
+        let all = rate(recipe, cores, runs);
+        println!("| {name} | {one:.1} pairs/s | {all:.1} pairs/s |");
+    }
+    resolution_ratio(cores, runs);
+    streaming(setting("SHMGEN_BENCH_STREAM", 100_000));
+    println!("per-stage medians per view, 1 thread, ms (960×960; rows' first samples):");
+    for (name, recipe) in &rows {
+        breakdown(name, recipe, 3);
+    }
 }

@@ -216,6 +216,16 @@ fn check_nerfstudio(data: &Path, scene: &Path) -> (String, Vec<String>) {
         assert_eq!(mm, millimetres(&depth), "{stem}: depth in millimetres");
         stems.push(stem.to_string());
     }
+    // The surface points go with the scene when the dataset has them, byte for byte.
+    let sample = scene.file_name().unwrap().to_string_lossy().to_string();
+    let points = data.join(format!("samples/0000/{sample}.points.ply"));
+    match t["ply_file_path"].as_str() {
+        Some(file) => assert_eq!(
+            std::fs::read(scene.join(file)).unwrap(),
+            std::fs::read(&points).unwrap()
+        ),
+        None => assert!(!points.exists(), "{} is not named", points.display()),
+    }
     (t["camera_model"].as_str().unwrap().to_string(), stems)
 }
 
@@ -316,9 +326,9 @@ fn every_format_holds_the_datasets_files_and_cameras() {
 
 /// A box seen through a drawn lens, with one augmented copy of each view.
 const LENS: &str = r#"
-dataset(#{ name: "lens", seed: 3, samples: 1, views: 2, outputs: ["rgb", "depth", "mask"],
+dataset(#{ name: "lens", seed: 3, samples: 1, views: 2, outputs: ["rgb", "depth", "mask", "points"], points: 500,
     camera: #{ width: 64, height: 48,
-        distortion: #{ k1: [-0.2, -0.1], k2: 0.02, p1: 0.001, p2: -0.001, k3: [0.0, param("k3", 0.004)] } },
+        distortion: #{ k1: [-0.15, -0.1], k2: 0.02, p1: 0.001, p2: -0.001, k3: [0.0, param("k3", 0.004)] } },
     augment: #{ copies: 1, operations: [#{ op: "gamma", gamma: [0.8, 1.2], probability: 1.0 }] },
     scene: |rng| assembly("box", [shape::box(2.0, 1.0, 0.5)]),
 })

@@ -605,3 +605,62 @@ fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() 
         "{partial} partial, {interior} interior pixels"
     );
 }
+
+/// Depth bits and triangle of every pixel when each centre ray is traced on its own, with no
+/// culling: what tiled, culled tracing must reproduce exactly.
+fn one_ray_per_pixel(trace: &TraceMesh, cam: &Camera) -> (Vec<u32>, Vec<u32>) {
+    let k = cam.intrinsics;
+    let pixels = (0..k.height).flat_map(|row| (0..k.width).map(move |col| (row, col)));
+    pixels
+        .map(
+            |(row, col)| match trace.first_hit(cam, k.ray_through_pixel(row, col)) {
+                Some((depth, tri)) => (depth.to_bits(), tri),
+                None => (0.0f32.to_bits(), NO_HIT),
+            },
+        )
+        .unzip()
+}
+
+#[test]
+fn tiled_culled_tracing_matches_one_ray_per_pixel() {
+    let mut lens = Intrinsics::from_fov_y(203, 117, 1.1);
+    lens.distortion.k1 = -0.04;
+    lens.distortion.p2 = 0.002;
+    let pinhole = Intrinsics::from_fov_y(203, 117, 1.1);
+    for beam in deformed_beams() {
+        let mesh = built(&beam);
+        let trace = TraceMesh::build(&mesh);
+        let (centre, radius) = mesh.bounding_sphere().unwrap();
+        let orbit = |k, yaw: f64, pitch: f64, distance| {
+            let o = Orbit {
+                yaw,
+                pitch,
+                roll: 0.3,
+                distance,
+            };
+            shmgen::cameras::orbit_camera(k, centre, &o)
+        };
+        let cameras = [
+            orbit(pinhole, 0.4, 0.3, 2.5 * radius),
+            orbit(pinhole, 2.0, std::f64::consts::FRAC_PI_2, 3.0 * radius),
+            orbit(pinhole, 1.0, -0.2, 0.6 * radius), // inside the bounding sphere
+            orbit(pinhole, 5.0, 0.1, 40.0 * radius), // a speck
+            orbit(lens, 0.8, 0.5, 2.0 * radius),
+        ];
+        for (c, cam) in cameras.iter().enumerate() {
+            let g = trace.trace(cam);
+            let depth: Vec<u32> = g.depth.iter().map(|d| d.to_bits()).collect();
+            let (want_depth, want_triangle) = one_ray_per_pixel(&trace, cam);
+            assert!(depth == want_depth, "camera {c}: depth");
+            assert!(g.triangle == want_triangle, "camera {c}: triangles");
+            assert!(
+                want_triangle.contains(&NO_HIT),
+                "camera {c} sees background"
+            );
+            assert!(
+                want_triangle.iter().any(|&t| t != NO_HIT),
+                "camera {c} sees the beam"
+            );
+        }
+    }
+}

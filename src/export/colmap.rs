@@ -25,6 +25,7 @@ use std::fmt::Write as _;
 pub(super) fn write(job: &mut Job) -> Result<Value> {
     let (dataset, out, options) = (job.dataset, job.out, job.options);
     for (sample, views) in frames(dataset, options)? {
+        let sample = sample.index;
         let scene = out.join(format!("{sample:06}"));
         let mut cameras = String::from(
             "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n",

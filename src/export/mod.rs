@@ -15,7 +15,7 @@ mod png16;
 mod staging;
 mod webdataset;
 
-use crate::dataset::{Dataset, View};
+use crate::dataset::{Dataset, Sample, View};
 use anyhow::{Result, bail};
 use serde_json::{Value, json};
 use staging::{Placer, Staging};
@@ -155,7 +155,10 @@ pub fn export(source: &Path, options: &ExportOptions) -> Result<Summary> {
 
 /// The views of a sample that multi-view formats (nerfstudio, COLMAP) make frames of: the
 /// clean views, and the augmented copies too with `with_copies`.
-fn frames<'a>(dataset: &'a Dataset, options: &ExportOptions) -> Result<Vec<(u64, Vec<&'a View>)>> {
+fn frames<'a>(
+    dataset: &'a Dataset,
+    options: &ExportOptions,
+) -> Result<Vec<(&'a Sample, Vec<&'a View>)>> {
     let mut out = Vec::new();
     for sample in &dataset.samples {
         let views: Vec<&View> = sample
@@ -169,7 +172,7 @@ fn frames<'a>(dataset: &'a Dataset, options: &ExportOptions) -> Result<Vec<(u64,
                 sample.index
             );
         }
-        out.push((sample.index, views));
+        out.push((sample, views));
     }
     Ok(out)
 }

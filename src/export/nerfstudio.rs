@@ -6,6 +6,8 @@
 //! DIR/{sample:06}/images/{stem}.png   the RGB (hard link)
 //! DIR/{sample:06}/depth/{stem}.png    planar depth, 16-bit millimetres
 //! DIR/{sample:06}/masks/{stem}.png    the structure mask (hard link); 0 = ignored by nerfstudio
+//! DIR/{sample:06}/points.ply          points on the deformed surface (hard link), when the
+//!                                     dataset wrote `points`; named by `ply_file_path`
 //! ```
 //!
 //! Intrinsics are per frame (`fl_x fl_y cx cy w h`, in our pixel-centre-at-0.5 convention,
@@ -22,7 +24,7 @@ use serde_json::{Map, Value, json};
 pub(super) fn write(job: &mut Job) -> Result<Value> {
     let (dataset, out, options) = (job.dataset, job.out, job.options);
     for (sample, views) in frames(dataset, options)? {
-        let scene = out.join(format!("{sample:06}"));
+        let scene = out.join(format!("{:06}", sample.index));
         let cameras = views
             .iter()
             .map(|v| dataset.camera(v))
@@ -83,13 +85,20 @@ pub(super) fn write(job: &mut Job) -> Result<Value> {
             list.push(Value::Object(frame));
             job.summary.views += 1;
         }
-        let transforms = json!({
+        let mut transforms = json!({
             "camera_model": if distorted { "OPENCV" } else { "PINHOLE" },
             // Read by nerfstudio from its command line, not from here; recorded so the
             // file says what the depth PNGs hold.
             "depth_unit_scale_factor": 0.001,
             "frames": list,
         });
+        // Points on the true surface, in the poses' world frame: what splatfacto starts its
+        // Gaussians from when the transforms name them.
+        if let Some(points) = sample.file("points.ply") {
+            job.placer
+                .place(&dataset.path(points), &scene.join("points.ply"))?;
+            transforms["ply_file_path"] = json!("points.ply");
+        }
         let mut bytes = serde_json::to_vec_pretty(&transforms)?;
         bytes.push(b'\n');
         job.placer.write(&scene.join("transforms.json"), &bytes)?;

@@ -2,9 +2,6 @@
 //! layers as one float32 channel per component; scanlines in increasing order, lossless ZIP),
 //! each into memory so callers decide where bytes go.
 
-use exr::prelude::*;
-use std::io::Cursor;
-
 /// Name of the EXR channel holding planar depth (metres, float32).
 pub const DEPTH_CHANNEL: &str = "Z";
 
@@ -91,7 +88,7 @@ pub fn id_png(width: u32, height: u32, ids: &[u32]) -> anyhow::Result<Vec<u8>> {
 pub fn depth_exr(width: u32, height: u32, depth: &[f32]) -> Vec<u8> {
     float_exr(
         (width, height),
-        &[(DEPTH_CHANNEL, depth.to_vec())],
+        &[(DEPTH_CHANNEL, depth)],
         (
             "shmgen_depth",
             "planar z along the optical axis, metres, 0 = no surface",
@@ -109,20 +106,23 @@ pub fn vector_exr<const N: usize>(
     values: &[[f32; N]],
     note: (&str, &str),
 ) -> anyhow::Result<Vec<u8>> {
-    let channels: Vec<(&str, Vec<f32>)> = names
+    let components: Vec<Vec<f32>> = (0..N)
+        .map(|k| values.iter().map(|v| v[k]).collect())
+        .collect();
+    let channels: Vec<(&str, &[f32])> = names
         .iter()
-        .enumerate()
-        .map(|(k, name)| (*name, values.iter().map(|v| v[k]).collect()))
+        .zip(&components)
+        .map(|(name, values)| (*name, values.as_slice()))
         .collect();
     float_exr((width, height), &channels, note)
 }
 
 /// The one EXR encoder: float32 channels, lossless ZIP over 16 scanlines, scanlines in
-/// increasing order, written on this thread, so the same values give the same bytes on any
-/// machine and thread count. Channels are stored in name order, as EXR requires.
+/// increasing order (see `openexr`), so the same values give the same bytes on any machine and
+/// thread count. Channels are stored in name order, as EXR requires.
 fn float_exr(
     (width, height): (u32, u32),
-    channels: &[(&str, Vec<f32>)],
+    channels: &[(&str, &[f32])],
     (key, text): (&str, &str),
 ) -> anyhow::Result<Vec<u8>> {
     if let Some((name, _)) = channels
@@ -131,37 +131,20 @@ fn float_exr(
     {
         anyhow::bail!("{key}: channel {name} holds a value that is not finite");
     }
-    let list = channels
-        .iter()
-        .map(|(name, values)| AnyChannel::new(*name, FlatSamples::F32(values.clone())))
-        .collect();
-    let mut attributes = LayerAttributes::default();
-    attributes
-        .other
-        .insert(Text::from(key), AttributeValue::Text(Text::from(text)));
-    let encoding = Encoding {
-        compression: Compression::ZIP16,
-        blocks: Blocks::ScanLines,
-        line_order: LineOrder::Increasing,
-    };
-    let layer = Layer::new(
-        (width as usize, height as usize),
-        attributes,
-        encoding,
-        AnyChannels::sort(list),
-    );
-    let mut out = Cursor::new(Vec::new());
-    Image::from_layer(layer)
-        .write()
-        .non_parallel()
-        .to_buffered(&mut out)
-        .expect("EXR into memory");
-    Ok(out.into_inner())
+    let mut sorted = channels.to_vec();
+    sorted.sort_by_key(|(name, _)| *name);
+    Ok(super::openexr::float_exr(
+        (width, height),
+        &sorted,
+        (key, text),
+    ))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use exr::prelude::*;
+    use std::io::Cursor;
 
     /// Reads an EXR back with the exr crate's own reader (a separate code path): its size and
     /// every channel by name, which must be float32.
@@ -223,6 +206,66 @@ mod tests {
             &[0x76, 0x2f, 0x31, 0x01],
             "OpenEXR magic number"
         );
+    }
+
+    /// A reproducible stream of f32 bit patterns that are finite: depths, zeros, extremes.
+    fn finite_values(count: usize, seed: u64) -> Vec<f32> {
+        let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        (0..count)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let v = f32::from_bits(state as u32);
+                match state >> 61 {
+                    0 => 0.0,
+                    1 => 1.0 + (state >> 40) as f32 * 1e-6,
+                    _ if v.is_finite() => v,
+                    _ => -0.0,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn depth_files_decode_bit_exactly_at_every_size() {
+        let sizes = [
+            (1, 1),
+            (1, 40),
+            (40, 1),
+            (7, 15),
+            (7, 16),
+            (7, 17),
+            (33, 47),
+            (960, 33),
+        ];
+        for (i, (w, h)) in sizes.into_iter().enumerate() {
+            let mut cases = vec![finite_values(w * h, i as u64 + 1), vec![0.0; w * h]];
+            let mut extremes = vec![f32::MAX; w * h];
+            extremes[0] = f32::MIN_POSITIVE;
+            extremes[w * h - 1] = -f32::from_bits(1); // a negative subnormal
+            cases.push(extremes);
+            for depth in cases {
+                let bytes = depth_exr(w as u32, h as u32, &depth);
+                let (rw, rh, back) = read_depth(&bytes);
+                assert_eq!((rw, rh), (w, h));
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&back), bits(&depth), "{w}×{h}");
+            }
+        }
+    }
+
+    #[test]
+    fn encoding_does_not_depend_on_the_thread_count() {
+        let depth = finite_values(300 * 70, 9);
+        let on = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| depth_exr(300, 70, &depth))
+        };
+        assert_eq!(on(1), on(3));
     }
 
     #[test]

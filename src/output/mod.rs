@@ -16,6 +16,7 @@ mod fault;
 mod folder;
 mod lock;
 mod meshes;
+mod openexr;
 mod writers;
 
 pub use encode::{

@@ -10,6 +10,7 @@
 mod augmented;
 mod finite;
 mod geometry;
+mod heap;
 mod progress;
 mod record;
 mod sample;
@@ -125,6 +126,7 @@ impl Shard {
 /// Renders this shard's unfinished samples of `recipe` into `options.out`.
 pub fn run(recipe: &Recipe, options: &RunOptions) -> Result<RunSummary> {
     let start = Instant::now();
+    heap::keep_view_buffers();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.threads.unwrap_or(0))
         .build()?;

@@ -14,6 +14,7 @@ use crate::output::{
 use crate::recipe::Recipe;
 use crate::scene::{DatasetSpec, GeometryMode};
 use anyhow::{Result, bail};
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 
 /// Draws the scene of sample `index` and builds its deformed meshes; fails on anything that
@@ -61,18 +62,45 @@ fn check_segmentation(recipe: &Recipe, sample: &BuiltSample) -> Result<()> {
 
 /// Renders every view of the sample, clean and augmented, and stages its files, the sample's
 /// own files first. Returns the number of images written.
+///
+/// Views are rendered and encoded in parallel, as many at a time as there are threads (so a
+/// run's last sample, or a run of fewer samples than threads, still keeps every core busy),
+/// and their files are staged in view order after each group: the staging, and the first
+/// error reported, are the same on any thread count, and memory holds one group's files.
 pub fn write_sample(recipe: &Recipe, sample: &BuiltSample, stage: &mut SampleStage) -> Result<u32> {
     let dataset = &recipe.dataset;
     let renderer = SampleRenderer::new(dataset, sample);
     let mut record = SampleRecord::new(sample);
     record.files = write_sample_files(dataset, sample, stage)?;
-    for view in 0..dataset.cameras_per_sample() {
-        for_each_image(&renderer, view, |layers, copy, facts| {
-            write_view(recipe, (sample, &record), stage, (layers, copy), facts)
-        })?;
+    let views: Vec<u32> = (0..dataset.cameras_per_sample()).collect();
+    for group in views.chunks(rayon::current_num_threads().max(1)) {
+        let encoded: Vec<Result<Vec<StagedFile>>> = group
+            .par_iter()
+            .map(|&view| {
+                let mut files = Vec::new();
+                for_each_image(&renderer, view, |layers, copy, facts| {
+                    files.extend(encode_view(
+                        recipe,
+                        (sample, &record),
+                        (layers, copy),
+                        facts,
+                    )?);
+                    Ok(())
+                })?;
+                Ok(files)
+            })
+            .collect();
+        for files in encoded {
+            for (path, bytes) in files? {
+                stage.write(path, &bytes)?;
+            }
+        }
     }
     Ok(dataset.images_per_sample())
 }
+
+/// A file of a view: its path in the dataset and its bytes.
+type StagedFile = (String, Vec<u8>);
 
 /// Calls `each` with every image of camera view `view`: the clean one when the dataset keeps
 /// it (copy None), then each augmented copy, with what its record says.
@@ -148,16 +176,16 @@ fn write_sample_files(
     Ok(files)
 }
 
-/// Runs the dataset's writers on one view (or copy) and stages their files and its record.
-fn write_view(
+/// Runs the dataset's writers on one view (or copy): its files and its record, in order.
+fn encode_view(
     recipe: &Recipe,
     (sample, record): (&BuiltSample, &SampleRecord),
-    stage: &mut SampleStage,
     (layers, copy): (&dyn ViewLayers, Option<u32>),
     facts: ViewFacts,
-) -> Result<()> {
+) -> Result<Vec<StagedFile>> {
     let view = facts.view;
     let mut files = BTreeMap::new();
+    let mut staged = Vec::new();
     for writer in WRITERS
         .iter()
         .filter(|w| recipe.dataset.outputs.wants(w.output))
@@ -165,10 +193,11 @@ fn write_view(
         let encoded = (writer.write)(layers)?;
         for ((name, key), bytes) in writer.files.iter().zip(writer.keys()).zip(encoded) {
             let path = view_file(sample.index, view, copy, name);
-            stage.write(path.clone(), &bytes)?;
-            files.insert(key, path);
+            files.insert(key, path.clone());
+            staged.push((path, bytes));
         }
     }
     let json = json_bytes(&record.view(recipe, sample, facts, files))?;
-    stage.write(view_file(sample.index, view, copy, "json"), &json)
+    staged.push((view_file(sample.index, view, copy, "json"), json));
+    Ok(staged)
 }

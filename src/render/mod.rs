@@ -14,6 +14,7 @@
 mod fields;
 mod shade;
 mod surfaces;
+mod tiles;
 mod trace;
 mod watertight;
 

@@ -51,6 +51,21 @@ impl<F: Fn(u32) -> [f64; 3] + Sync> Surfaces for F {
 /// on every run.
 const EDGE_SAMPLES: [(f64, f64); 4] = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)];
 
+/// Light at a shading point, per channel.
+struct Light {
+    /// Diffuse irradiance, the sun's only where it is not shadowed.
+    diffuse: [f64; 3],
+    /// Diffuse irradiance as if no shadow fell.
+    unshadowed: [f64; 3],
+    /// Glossy reflection towards the eye.
+    specular: [f64; 3],
+}
+
+/// Reflected linear colour of `albedo` under `diffuse` irradiance plus `specular`, clamped.
+fn reflected(albedo: [f64; 3], diffuse: [f64; 3], specular: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|k| (albedo[k] * diffuse[k] + specular[k]).clamp(0.0, 1.0))
+}
+
 /// Everything a ray needs to be shaded.
 struct Shading<'a, S: Surfaces> {
     mesh: &'a TraceMesh,
@@ -73,7 +88,6 @@ pub fn shade(
     backdrop: &Backdrop,
     antialias: bool,
 ) -> Vec<u8> {
-    let k = camera.intrinsics;
     let s = Shading {
         mesh,
         camera,
@@ -92,73 +106,20 @@ pub fn shade(
     let plain_background = matches!(backdrop, Backdrop::Colour(_)).then(|| encode(s.background));
     // Only pixels next to a hit can be an edge, and on a plain background only hits need work.
     let (rows, cols) = hit_bounds(g);
-    // Centre rays: the shaded colour, and the untextured one that decides anti-aliasing.
-    let mut centre = vec![0u8; g.triangle.len() * 3];
-    let mut flat = vec![0u8; g.triangle.len() * 3];
-    centre
-        .par_chunks_mut(width * 3)
+    // Centre rays: the shaded colour, and (for anti-aliasing) the untextured one.
+    let mut rgb = vec![0u8; g.triangle.len() * 3];
+    if !antialias {
+        rgb.par_chunks_mut(width * 3)
+            .enumerate()
+            .for_each(|(row, out)| s.centre_row(g, row, plain_background, out, None));
+        return rgb;
+    }
+    let mut flat = vec![0u8; rgb.len()];
+    rgb.par_chunks_mut(width * 3)
         .zip(flat.par_chunks_mut(width * 3))
         .enumerate()
-        .for_each(|(row, (out, flat))| {
-            for col in 0..width {
-                let i = row * width + col;
-                let hit = (g.triangle[i] != NO_HIT).then(|| (g.depth[i], g.triangle[i]));
-                if let (None, Some(bytes)) = (hit, plain_background) {
-                    out[3 * col..3 * col + 3].copy_from_slice(&bytes);
-                    continue;
-                }
-                let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
-                let colour = encode(s.radiance(hit, u, v));
-                out[3 * col..3 * col + 3].copy_from_slice(&colour);
-                let flat_colour = match hit {
-                    Some((_, tri)) if s.surfaces.textured(tri) => {
-                        let view = k.ray_through(u, v);
-                        encode(s.light(tri, view, s.surfaces.flat(tri), None, None))
-                    }
-                    _ => colour,
-                };
-                flat[3 * col..3 * col + 3].copy_from_slice(&flat_colour);
-            }
-        });
-    if !antialias {
-        return centre;
-    }
-    let differs = |i: usize, j: usize| {
-        let (a, b) = (g.triangle[i], g.triangle[j]);
-        if (a == NO_HIT) != (b == NO_HIT) {
-            return true;
-        }
-        a != NO_HIT
-            && flat[3 * i..3 * i + 3]
-                .iter()
-                .zip(&flat[3 * j..3 * j + 3])
-                .any(|(x, y)| x.abs_diff(*y) > 1)
-    };
-    let mut rgb = centre.clone();
-    rgb.par_chunks_mut(width * 3)
-        .enumerate()
-        .filter(|(row, _)| rows.contains(row))
-        .for_each(|(row, out)| {
-            for col in cols.clone() {
-                let i = row * width + col;
-                let neighbours = [
-                    (col > 0).then(|| i - 1),
-                    (col + 1 < width).then(|| i + 1),
-                    (row > 0).then(|| i - width),
-                    (i + width < g.triangle.len()).then(|| i + width),
-                ];
-                if !neighbours.into_iter().flatten().any(|j| differs(i, j)) {
-                    continue;
-                }
-                let mean = EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
-                    let (u, v) = (col as f64 + du, row as f64 + dv);
-                    let hit = s.mesh.first_hit(s.camera, k.ray_through(u, v));
-                    let c = s.radiance(hit, u, v);
-                    std::array::from_fn(|k| acc[k] + c[k] / 4.0)
-                });
-                out[3 * col..3 * col + 3].copy_from_slice(&encode(mean));
-            }
-        });
+        .for_each(|(row, (out, flat))| s.centre_row(g, row, plain_background, out, Some(flat)));
+    s.antialias_edges(g, &flat, (rows, cols), &mut rgb);
     rgb
 }
 
@@ -183,84 +144,166 @@ fn hit_bounds(g: &GBuffer) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
 }
 
 impl<S: Surfaces> Shading<'_, S> {
-    /// Linear radiance along the ray through image point (u, v), given what it hit.
-    fn radiance(&self, hit: Option<(f32, u32)>, u: f64, v: f64) -> [f64; 3] {
+    /// One row of centre rays: the shaded sRGB colour into `out` and, when anti-aliasing,
+    /// into `flat` the colour that decides where edges are (the untextured albedo lit
+    /// without shadows or gloss for a textured surface; the shaded colour otherwise).
+    fn centre_row(
+        &self,
+        g: &GBuffer,
+        row: usize,
+        plain_background: Option<[u8; 3]>,
+        out: &mut [u8],
+        mut flat: Option<&mut [u8]>,
+    ) {
+        let width = g.width as usize;
+        for col in 0..width {
+            let i = row * width + col;
+            let hit = (g.triangle[i] != NO_HIT).then(|| (g.depth[i], g.triangle[i]));
+            if let (None, Some(bytes)) = (hit, plain_background) {
+                out[3 * col..3 * col + 3].copy_from_slice(&bytes);
+                continue;
+            }
+            let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
+            let (linear, unshadowed) = self.radiance_with_irradiance(hit, u, v);
+            let colour = encode(linear);
+            out[3 * col..3 * col + 3].copy_from_slice(&colour);
+            if let Some(flat) = flat.as_deref_mut() {
+                let flat_colour = match hit {
+                    Some((_, tri)) if self.surfaces.textured(tri) => {
+                        encode(reflected(self.surfaces.flat(tri), unshadowed, [0.0; 3]))
+                    }
+                    _ => colour,
+                };
+                flat[3 * col..3 * col + 3].copy_from_slice(&flat_colour);
+            }
+        }
+    }
+
+    /// Re-shades from four fixed sub-pixel rays every pixel (within `rows` × `cols`) whose
+    /// `flat` colour, or whether it sees a surface, differs from a neighbour's.
+    fn antialias_edges(
+        &self,
+        g: &GBuffer,
+        flat: &[u8],
+        (rows, cols): (std::ops::Range<usize>, std::ops::Range<usize>),
+        rgb: &mut [u8],
+    ) {
+        let width = g.width as usize;
+        let k = self.camera.intrinsics;
+        let differs = |i: usize, j: usize| {
+            let (a, b) = (g.triangle[i], g.triangle[j]);
+            if (a == NO_HIT) != (b == NO_HIT) {
+                return true;
+            }
+            a != NO_HIT
+                && flat[3 * i..3 * i + 3]
+                    .iter()
+                    .zip(&flat[3 * j..3 * j + 3])
+                    .any(|(x, y)| x.abs_diff(*y) > 1)
+        };
+        rgb.par_chunks_mut(width * 3)
+            .enumerate()
+            .filter(|(row, _)| rows.contains(row))
+            .for_each(|(row, out)| {
+                for col in cols.clone() {
+                    let i = row * width + col;
+                    let neighbours = [
+                        (col > 0).then(|| i - 1),
+                        (col + 1 < width).then(|| i + 1),
+                        (row > 0).then(|| i - width),
+                        (i + width < g.triangle.len()).then(|| i + width),
+                    ];
+                    if !neighbours.into_iter().flatten().any(|j| differs(i, j)) {
+                        continue;
+                    }
+                    let mean = EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
+                        let (u, v) = (col as f64 + du, row as f64 + dv);
+                        let hit = self.mesh.first_hit(self.camera, k.ray_through(u, v));
+                        let c = self.radiance_with_irradiance(hit, u, v).0;
+                        std::array::from_fn(|k| acc[k] + c[k] / 4.0)
+                    });
+                    out[3 * col..3 * col + 3].copy_from_slice(&encode(mean));
+                }
+            });
+    }
+
+    /// Linear radiance along the ray through image point (u, v), given what it hit, and the
+    /// diffuse irradiance there as if no shadow fell (zero for the backdrop).
+    fn radiance_with_irradiance(
+        &self,
+        hit: Option<(f32, u32)>,
+        u: f64,
+        v: f64,
+    ) -> ([f64; 3], [f64; 3]) {
         let view = self.camera.intrinsics.ray_through(u, v);
         let Some((depth, tri)) = hit else {
-            return self.backdrop(view, u, v);
+            return (self.backdrop(view, u, v), [0.0; 3]);
         };
         let (point, normal, footprint) =
             hit_geometry(self.camera, self.mesh, tri, view, f64::from(depth));
         let surface = self.surfaces.at(tri, point, footprint);
-        self.light(
-            tri,
-            view,
-            surface.albedo,
-            Some(&surface),
-            Some((point, normal)),
+        let light = self.light(view, &surface, point, normal);
+        (
+            reflected(surface.albedo, light.diffuse, light.specular),
+            light.unshadowed,
         )
     }
 
-    fn facing_normal(&self, tri: u32, view: DVec3) -> DVec3 {
-        facing_normal(self.camera, self.mesh, tri, view)
-    }
-
-    /// Reflected light of a surface with `albedo` (and, when given, its gloss; and the shading
-    /// point, for shadows).
-    fn light(
-        &self,
-        tri: u32,
-        view: DVec3,
-        albedo: [f64; 3],
-        gloss: Option<&Surface>,
-        at: Option<(DVec3, DVec3)>,
-    ) -> [f64; 3] {
+    /// The light a surface at `point` with facing `n` receives along `view`: diffuse
+    /// irradiance with and without the sun's shadow, and the glossy reflection.
+    fn light(&self, view: DVec3, surface: &Surface, point: DVec3, n: DVec3) -> Light {
         let l = self.lighting;
-        let n = match at {
-            Some((_, normal)) => normal,
-            None => self.facing_normal(tri, view),
-        };
-        let gloss = gloss.filter(|s| s.specular > 0.0);
+        let gloss = (surface.specular > 0.0).then_some(surface);
         let to_eye = gloss.map(|_| -(self.camera.rotation * view).normalize());
-        let mut diffuse = [l.ambient; 3];
-        let mut specular = [0.0; 3];
-        let mut add = |direction: DVec3, colour: [f64; 3]| {
+        let mut light = Light {
+            diffuse: [l.ambient; 3],
+            unshadowed: [l.ambient; 3],
+            specular: [0.0; 3],
+        };
+        // Each light in a fixed order, so both sums round alike where no shadow falls.
+        let mut add = |direction: DVec3, colour: [f64; 3], reaches: bool| {
             let cos = n.dot(direction);
             if cos <= 0.0 {
                 return;
             }
             for k in 0..3 {
-                diffuse[k] += colour[k] * cos;
+                light.unshadowed[k] += colour[k] * cos;
+            }
+            if !reaches {
+                return;
+            }
+            for k in 0..3 {
+                light.diffuse[k] += colour[k] * cos;
             }
             if let (Some(s), Some(to_eye)) = (gloss, to_eye) {
                 let glint = blinn_phong(n, direction, to_eye, s) * cos;
                 for k in 0..3 {
-                    specular[k] += colour[k] * glint;
+                    light.specular[k] += colour[k] * glint;
                 }
             }
         };
         if let Some(lights) = &self.studio {
             for (direction, intensity) in lights {
-                add(*direction, [*intensity; 3]);
+                add(*direction, [*intensity; 3], true);
             }
         }
         if let Some(sun) = &l.sun {
             // A face turned away from the sun needs no shadow ray: it is unlit either way.
             let shadowed = l.shadows
                 && n.dot(sun.direction) > 0.0
-                && at.is_some_and(|(p, normal)| self.mesh.occluded(p, normal, sun.direction));
-            if !shadowed {
-                add(sun.direction, sun.colour);
-            }
+                && self.mesh.occluded(point, n, sun.direction);
+            add(sun.direction, sun.colour, !shadowed);
         }
         if let Some(sky) = &l.sky {
             // Irradiance of a sky dome and a ground below, for a surface tilted by n.z.
             let up = 0.5 * (1.0 + n.z);
             for k in 0..3 {
-                diffuse[k] += sky.sky[k] * up + sky.ground[k] * (1.0 - up);
+                let sky = sky.sky[k] * up + sky.ground[k] * (1.0 - up);
+                light.diffuse[k] += sky;
+                light.unshadowed[k] += sky;
             }
         }
-        std::array::from_fn(|k| (albedo[k] * diffuse[k] + specular[k]).clamp(0.0, 1.0))
+        light
     }
 
     fn backdrop(&self, view: DVec3, u: f64, v: f64) -> [f64; 3] {
@@ -338,7 +381,18 @@ fn blinn_phong(n: DVec3, l: DVec3, to_eye: DVec3, s: &Surface) -> f64 {
     let alpha = (s.roughness * s.roughness).max(1e-3);
     let exponent = (2.0 / (alpha * alpha) - 2.0).max(0.0);
     let fresnel = s.specular + (1.0 - s.specular) * (1.0 - to_eye.dot(h).max(0.0)).powi(5);
-    fresnel * (exponent + 8.0) / (8.0 * PI) * n.dot(h).max(0.0).powf(exponent)
+    fresnel * (exponent + 8.0) / (8.0 * PI) * power(n.dot(h).max(0.0), exponent)
+}
+
+/// x^e for x in [0, 1], through libm's exp2 and log2 (relative error below 1e-13, far below
+/// an 8-bit step). Not the platform's pow: glibc picks an FMA or a plain version by CPU,
+/// which may round differently, and the image must be the same on every x86-64 machine;
+/// libm's own pow is three times slower, a tenth of a textured view's time.
+fn power(x: f64, e: f64) -> f64 {
+    if x == 0.0 {
+        return if e == 0.0 { 1.0 } else { 0.0 };
+    }
+    libm::exp2(e * libm::log2(x))
 }
 
 /// Linear colour → sRGB 8-bit.
@@ -358,7 +412,7 @@ fn srgb_lut() -> &'static [u8; LUT_SIZE] {
             let s = if l <= 0.003_130_8 {
                 12.92 * l
             } else {
-                1.055 * l.powf(1.0 / 2.4) - 0.055
+                1.055 * libm::pow(l, 1.0 / 2.4) - 0.055
             };
             (s * 255.0).round() as u8
         })

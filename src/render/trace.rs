@@ -1,5 +1,6 @@
 //! BVH construction and primary-ray tracing into a geometric buffer.
 
+use super::tiles::{PixelRect, TILE, visible_tiles};
 use super::watertight::ShearedRay;
 use crate::cameras::Camera;
 use crate::geometry::Mesh;
@@ -133,25 +134,30 @@ impl TraceMesh {
         self.normals[original_triangle as usize]
     }
 
-    /// Traces one centre ray per pixel, inside the projected bounds only.
+    /// Traces one centre ray per pixel, in the tiles where the BVH's boxes may be seen only.
     pub fn trace(&self, camera: &Camera) -> GBuffer {
         let k = camera.intrinsics;
         let (w, h) = (k.width as usize, k.height as usize);
         let mut depth = vec![0.0f32; w * h];
         let mut triangle = vec![NO_HIT; w * h];
-        let (rows, cols) = self.screen_bounds(camera);
+        let tiles = visible_tiles(&self.bvh, camera, |lo, hi| self.box_bounds(camera, lo, hi));
+        let rays = PrimaryRays::new(camera);
         let origin = camera.position - self.anchor;
         depth
-            .par_chunks_mut(w)
-            .zip(triangle.par_chunks_mut(w))
+            .par_chunks_mut(w * TILE)
+            .zip(triangle.par_chunks_mut(w * TILE))
             .enumerate()
-            .filter(|(row, _)| rows.contains(row))
-            .for_each(|(row, (depth_row, tri_row))| {
-                for col in cols.clone() {
-                    let dir = camera.rotation * k.ray_through_pixel(row as u32, col as u32);
-                    if let Some((t, tri)) = self.closest_hit(origin, dir) {
-                        depth_row[col] = t;
-                        tri_row[col] = tri;
+            .for_each(|(band, (depth_band, tri_band))| {
+                for tile in tiles.row(band) {
+                    let cols = tile * TILE..((tile + 1) * TILE).min(w);
+                    for (r, row) in (band * TILE..h).take(depth_band.len() / w).enumerate() {
+                        for col in cols.clone() {
+                            if let Some((t, tri)) = self.closest_hit(origin, rays.through(row, col))
+                            {
+                                depth_band[r * w + col] = t;
+                                tri_band[r * w + col] = tri;
+                            }
+                        }
                     }
                 }
             });
@@ -232,19 +238,11 @@ impl TraceMesh {
         Some(near.max(0.0) / length)
     }
 
-    /// Pixel rows and columns that can see the mesh: the projection of the bounding box,
-    /// widened by a pixel; the whole frame when a corner is at or behind the camera.
-    fn screen_bounds(&self, camera: &Camera) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+    /// Pixel rows and columns where the box from `lo` to `hi` (relative to the anchor) may
+    /// be seen: its projection, widened by a pixel; None when a corner is at or behind the
+    /// camera.
+    fn box_bounds(&self, camera: &Camera, lo: DVec3, hi: DVec3) -> Option<PixelRect> {
         let k = camera.intrinsics;
-        let full = (0..k.height as usize, 0..k.width as usize);
-        let (lo, hi) = self.local_bounds;
-        let corner = |i: u32| {
-            DVec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            )
-        };
         // A distorting lens bends the box's edges in the image: follow them point by point
         // and widen by the sagitta left between the points.
         let (steps, margin) = if k.distortion.is_none() {
@@ -258,30 +256,78 @@ impl TraceMesh {
             f64::NEG_INFINITY,
             f64::NEG_INFINITY,
         );
-        for i in 0..8u32 {
-            for bit in [1, 2, 4] {
-                if i & bit != 0 {
-                    continue;
-                }
-                let (a, b) = (corner(i), corner(i | bit));
-                for step in 0..=steps {
-                    let point = a + (b - a) * (f64::from(step) / f64::from(steps));
-                    let p = camera.world_to_camera(point + self.anchor);
-                    if p.z <= 1e-9 {
-                        return full;
-                    }
-                    let (u, v) = k.project(p);
-                    (u0, v0, u1, v1) = (u0.min(u), v0.min(v), u1.max(u), v1.max(v));
-                }
+        for point in box_outline(lo, hi, steps) {
+            let p = camera.world_to_camera(point + self.anchor);
+            if p.z <= 1e-9 {
+                return None;
             }
+            let (u, v) = k.project(p);
+            (u0, v0, u1, v1) = (u0.min(u), v0.min(v), u1.max(u), v1.max(v));
         }
         if !(u0.is_finite() && v0.is_finite() && u1.is_finite() && v1.is_finite()) {
-            return full;
+            return None;
         }
         let clamp = |x: f64, n: u32| x.clamp(0.0, f64::from(n)) as usize;
-        (
+        Some((
             clamp(v0.floor() - margin, k.height)..clamp(v1.ceil() + margin, k.height),
             clamp(u0.floor() - margin, k.width)..clamp(u1.ceil() + margin, k.width),
+        ))
+    }
+}
+
+/// Points along the twelve edges of the box from `lo` to `hi`, each edge cut into `steps`
+/// (its corners alone when `steps` is 1).
+fn box_outline(lo: DVec3, hi: DVec3, steps: u32) -> impl Iterator<Item = DVec3> {
+    let corner = move |i: u32| {
+        DVec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
         )
+    };
+    let corners = (steps == 1)
+        .then(|| (0..8).map(corner))
+        .into_iter()
+        .flatten();
+    let edges = (0..8u32)
+        .flat_map(|i| [1, 2, 4].map(|bit| (i, bit)))
+        .filter(move |&(i, bit)| steps > 1 && i & bit == 0)
+        .flat_map(move |(i, bit)| {
+            let (a, b) = (corner(i), corner(i | bit));
+            (0..=steps).map(move |step| a + (b - a) * (f64::from(step) / f64::from(steps)))
+        });
+    corners.chain(edges)
+}
+
+/// The centre-ray directions of a camera's pixels (world axes, unit camera z). For a pinhole
+/// the camera-axes direction is (x(col), y(row), 1), so the rotation's products with x and y
+/// are taken once per column and row, and summed as `DMat3 * DVec3` sums them: the same bits.
+struct PrimaryRays<'a> {
+    camera: &'a Camera,
+    /// Per column, rotation column x times x; per row, rotation column y times y (pinhole).
+    pinhole: Option<(Vec<DVec3>, Vec<DVec3>)>,
+}
+
+impl<'a> PrimaryRays<'a> {
+    fn new(camera: &'a Camera) -> Self {
+        let k = camera.intrinsics;
+        let r = camera.rotation;
+        let pinhole = k.distortion.is_none().then(|| {
+            let x = (0..k.width).map(|c| r.x_axis * k.ray_through_pixel(0, c).x);
+            let y = (0..k.height).map(|row| r.y_axis * k.ray_through_pixel(row, 0).y);
+            (x.collect(), y.collect())
+        });
+        PrimaryRays { camera, pinhole }
+    }
+
+    /// The direction through the centre of pixel (`row`, `col`).
+    fn through(&self, row: usize, col: usize) -> DVec3 {
+        match &self.pinhole {
+            Some((x, y)) => x[col] + y[row] + self.camera.rotation.z_axis,
+            None => {
+                let k = self.camera.intrinsics;
+                self.camera.rotation * k.ray_through_pixel(row as u32, col as u32)
+            }
+        }
     }
 }

@@ -40,12 +40,36 @@ impl ShearedRay {
     /// Ray parameter of the hit with triangle (v0, v1, v2), or +∞. Both sides count as hits.
     #[inline(always)]
     pub fn intersect(&self, v0: Vec3A, v1: Vec3A, v2: Vec3A, t_max: f32) -> f32 {
-        let [kx, ky, kz] = self.axes;
-        let (a, b, c) = (v0 - self.origin, v1 - self.origin, v2 - self.origin);
+        // The axes are fixed per ray, so this branch is predicted for all of its triangles,
+        // and each arm reads components at constant indices instead of indexing at run time.
+        match self.axes {
+            [1, 2, 0] => self.intersect_along::<1, 2, 0>(v0, v1, v2, t_max),
+            [2, 1, 0] => self.intersect_along::<2, 1, 0>(v0, v1, v2, t_max),
+            [2, 0, 1] => self.intersect_along::<2, 0, 1>(v0, v1, v2, t_max),
+            [0, 2, 1] => self.intersect_along::<0, 2, 1>(v0, v1, v2, t_max),
+            [0, 1, 2] => self.intersect_along::<0, 1, 2>(v0, v1, v2, t_max),
+            _ => self.intersect_along::<1, 0, 2>(v0, v1, v2, t_max),
+        }
+    }
+
+    /// `intersect` with the axes (kx, ky, kz) = (X, Y, Z) known when compiling.
+    #[inline(always)]
+    fn intersect_along<const X: usize, const Y: usize, const Z: usize>(
+        &self,
+        v0: Vec3A,
+        v1: Vec3A,
+        v2: Vec3A,
+        t_max: f32,
+    ) -> f32 {
+        let (a, b, c) = (
+            (v0 - self.origin).to_array(),
+            (v1 - self.origin).to_array(),
+            (v2 - self.origin).to_array(),
+        );
         let s = self.shear;
-        let (ax, ay) = (a[kx] - s.x * a[kz], a[ky] - s.y * a[kz]);
-        let (bx, by) = (b[kx] - s.x * b[kz], b[ky] - s.y * b[kz]);
-        let (cx, cy) = (c[kx] - s.x * c[kz], c[ky] - s.y * c[kz]);
+        let (ax, ay) = (a[X] - s.x * a[Z], a[Y] - s.y * a[Z]);
+        let (bx, by) = (b[X] - s.x * b[Z], b[Y] - s.y * b[Z]);
+        let (cx, cy) = (c[X] - s.x * c[Z], c[Y] - s.y * c[Z]);
         let mut u = cx * by - cy * bx;
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
@@ -64,7 +88,7 @@ impl ShearedRay {
         if det == 0.0 {
             return f32::INFINITY;
         }
-        let t_scaled = s.z * (u * a[kz] + v * b[kz] + w * c[kz]);
+        let t_scaled = s.z * (u * a[Z] + v * b[Z] + w * c[Z]);
         let t = t_scaled / det;
         if t > 0.0 && t < t_max {
             t

@@ -1,0 +1,27 @@
+"""Reading shmgen datasets: views and their images, cameras, ground truth and meshes.
+
+>>> from shmgen_data import Dataset, backproject, fuse
+>>> data = Dataset("out/quickstart")
+>>> view = data[0]
+>>> view.rgb.shape, view.depth.shape, view.mask.dtype, view.K
+>>> cloud = fuse(data.samples[0])        # every view's depth back to world points
+
+Submodules: :mod:`shmgen_data.dataset` (datasets, samples, views), :mod:`shmgen_data.camera`
+(cameras and OpenCV's lens model), :mod:`shmgen_data.geometry` (back-projection, fusion),
+:mod:`shmgen_data.io` (EXR, PNG and binary PLY readers), :mod:`shmgen_data.arrays` (a view as
+training arrays) and :mod:`shmgen_data.torch` (a PyTorch ``Dataset``, if torch is installed).
+"""
+
+from .arrays import view_arrays
+from .camera import Camera, distort, undistort
+from .dataset import LAYERS, Dataset, Mesh, MissingFileError, Points, Sample, View
+from .geometry import Cloud, backproject, fuse
+from .io import read_exr, read_ply, read_png
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Camera", "Cloud", "Dataset", "LAYERS", "Mesh", "MissingFileError", "Points", "Sample",
+    "View", "backproject", "distort", "fuse", "read_exr", "read_ply", "read_png",
+    "undistort", "view_arrays",
+]
