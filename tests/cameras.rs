@@ -587,6 +587,61 @@ fn augmentation_and_camera_options_are_checked_by_name() {
 }
 
 #[test]
+fn both_eyes_of_a_stereo_pair_photograph_one_backdrop() {
+    // Photographs as backdrops, each eye a random window of one: a stereo pair is one moment,
+    // so its eyes must show the same photograph through the same window. Three photographs of
+    // distinct flat colours, so a mismatch shows in the pixels as well as in the record.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(dir.path().join("bg")).unwrap();
+    for (name, grey) in [("a.png", 40u8), ("b.png", 120), ("c.png", 200)] {
+        image::GrayImage::from_pixel(64, 48, image::Luma([grey]))
+            .save(dir.path().join("bg").join(name))
+            .unwrap();
+    }
+    let recipe = write(
+        dir.path(),
+        "recipe.rhai",
+        box_recipe(
+            "width: 80, height: 60, stereo: #{ baseline: 0.3 }",
+            "background: #{ images: \"bg\" },",
+        )
+        .replace("views: 3", "views: 6"),
+    );
+    let out = dir.path().join("out");
+    ok(run(&recipe, &out, &[]));
+    let backdrops: Vec<Value> = (0..12)
+        .map(|view| load(&out, view, None).json["background"].clone())
+        .collect();
+    for pair in backdrops.chunks(2) {
+        assert_eq!(pair[0], pair[1], "left and right eye backdrops");
+    }
+    // Six poses draw their photographs independently: not all alike.
+    assert!(backdrops.iter().any(|b| b != &backdrops[0]), "{backdrops:?}");
+    for pair in 0..6 {
+        let rgb = |view| read_png(&view_path(&out, 0, view, None, "rgb.png")).3;
+        let (left, right) = (rgb(2 * pair), rgb(2 * pair + 1));
+        let (lm, rm) = (load(&out, 2 * pair, None).mask, load(&out, 2 * pair + 1, None).mask);
+        // Away from the box: anti-aliasing blends silhouettes into the pixels next to them.
+        let clear = |i: usize| {
+            let (row, col) = ((i / 80) as i64, (i % 80) as i64);
+            (-1..=1).all(|dr| {
+                (-1..=1).all(|dc| {
+                    let (r, c) = ((row + dr).clamp(0, 59), (col + dc).clamp(0, 79));
+                    let j = (r * 80 + c) as usize;
+                    lm[j] == 0 && rm[j] == 0
+                })
+            })
+        };
+        let mut compared = 0;
+        for i in (0..lm.len()).filter(|&i| clear(i)) {
+            assert_eq!(left[3 * i..3 * i + 3], right[3 * i..3 * i + 3], "pixel {i}");
+            compared += 1;
+        }
+        assert!(compared > 1000, "{compared} background pixels");
+    }
+}
+
+#[test]
 fn stereo_copies_record_the_relative_pose_they_are_written_with() {
     for mode in ["exact", "image"] {
         let recipe = box_recipe(

@@ -160,9 +160,11 @@ impl<'a> SampleRenderer<'a> {
     pub fn view_with(&self, view: u32, camera: Camera, drawn: ViewCamera) -> RenderedView<'_> {
         let dataset = self.dataset;
         let gbuffer = self.trace_mesh.trace(&camera);
+        // Both eyes of a stereo pair photograph one scene: they draw the left eye's backdrop.
+        let backdrop_view = drawn.stereo.map_or(view, |(pose, _)| 2 * pose);
         let mut stream = Stream::new(
             dataset.seed,
-            Scope::View(self.sample.index, view),
+            Scope::View(self.sample.index, backdrop_view),
             seeds::BACKGROUND,
         );
         let frame = (dataset.camera.width, dataset.camera.height);
