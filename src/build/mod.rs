@@ -17,7 +17,7 @@ mod tessellation;
 
 pub use assembly::{BuiltShape, assembly_radius, mesh_assembly};
 pub use beam::{BuiltBeam, beam_radius, mesh_beam, problem, section_outline, stations};
-pub use ground::ground_disc;
+pub use ground::ground_square;
 pub use supports::{SupportMaterial, SupportPiece, drawn_supports};
 pub use light::{BackdropDraw, LightDraw, SkyDraw, SunDraw, draw_backdrop, draw_light};
 pub use tessellation::{chord_tolerance, segments_for_chord};
@@ -70,7 +70,7 @@ pub struct BuiltSample {
 pub struct BuiltGround {
     /// Height of the ground plane, world z, metres.
     pub height: f64,
-    /// Radius of the ground disc, metres.
+    /// Half the side of the ground square about the scene's centre, metres.
     pub radius: f64,
     /// Index of the ground's first triangle: every triangle before it is a structure's.
     pub first_triangle: usize,
@@ -211,14 +211,14 @@ pub fn build_sample(
             first_triangle: assembled.mesh.triangles.len(),
             first_vertex: assembled.mesh.positions.len(),
         };
-        let disc = ground_disc(centre, built.height, built.radius);
+        let square = ground_square(centre, built.height, built.radius);
         let material = assembled.extra_material(spec.material.clone());
         let grain = Grain {
             axis: DVec3::X,
             centre: DVec3::new(centre.x, centre.y, built.height),
         };
         let structures = scene.structures.len();
-        assembled.add_piece(&disc, structures, GROUND_PART, grain, material);
+        assembled.add_piece(&square, structures, GROUND_PART, grain, material);
         built
     });
     let Assembled {

@@ -4,14 +4,16 @@
 //!
 //! Owns: the ground vocabulary and each ground's look. Must not touch: the structure prompt
 //! vocabulary (a ground word is not a structure material) or the generators, which it reuses:
-//! concrete's mottle for grass, asphalt and soil, rubble stone for gravel.
+//! concrete's mottle and pores for grass, asphalt, slab and soil (at twice their size on grass
+//! and soil, half on asphalt), rubble stone at 0.15 of its size for gravel. No conditions are
+//! layered on: the ground covers most of an outdoor image, and every layer costs per pixel.
 //!
 //! Colours are sRGB chosen so that the linear albedo falls within the broadband albedos
 //! measured for each surface (Oke, *Boundary Layer Climates*, 2nd ed. 1987, table 1.1): grass
 //! 0.16–0.26, gravel about 0.2–0.3 (taken as light rock), asphalt 0.05–0.20, concrete
 //! 0.10–0.35, dry soil 0.17–0.30 (dark, wet soil down to 0.05), water 0.03–0.10 at high sun.
 
-use super::{Base, Condition, ConditionKind, Material, Texture};
+use super::{Base, Material, Texture};
 
 /// The grounds a recipe can ask for, with the words that name them.
 const GROUNDS: [(&str, &[&str]); 6] = [
@@ -45,7 +47,6 @@ pub fn ground_material(prompt: &str) -> Result<Material, String> {
             ground_names().join(", ")
         ));
     };
-    let condition = |kind, intensity| Condition { kind, intensity };
     let (base, colour, roughness, specular, scale, conditions) = match *name {
         "grass" => (
             Base::Concrete,
@@ -53,7 +54,7 @@ pub fn ground_material(prompt: &str) -> Result<Material, String> {
             1.0,
             0.02,
             2.0,
-            vec![condition(ConditionKind::Weathered, 0.6)],
+            vec![],
         ),
         "gravel" => (Base::Stone, [0.58, 0.56, 0.52], 1.0, 0.03, 0.15, vec![]),
         "asphalt" => (
@@ -62,7 +63,7 @@ pub fn ground_material(prompt: &str) -> Result<Material, String> {
             0.9,
             0.04,
             0.5,
-            vec![condition(ConditionKind::Stained, 0.3)],
+            vec![],
         ),
         "concrete slab" => (
             Base::Concrete,
@@ -70,7 +71,7 @@ pub fn ground_material(prompt: &str) -> Result<Material, String> {
             0.9,
             0.04,
             1.0,
-            vec![condition(ConditionKind::Stained, 0.3)],
+            vec![],
         ),
         "soil" => (
             Base::Concrete,
@@ -78,7 +79,7 @@ pub fn ground_material(prompt: &str) -> Result<Material, String> {
             1.0,
             0.02,
             2.0,
-            vec![condition(ConditionKind::Weathered, 0.6)],
+            vec![],
         ),
         _ => (Base::Plain, [0.24, 0.3, 0.32], 0.1, 0.02, 1.0, vec![]),
     };

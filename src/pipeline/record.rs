@@ -460,7 +460,7 @@ pub struct BeamRecord<'a> {
     pub labels: &'a Labels,
 }
 
-/// The ground of a sample: a flat disc under the structures, drawn in the RGB image.
+/// The ground of a sample: a flat square under the structures, drawn in the RGB image.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct GroundRecord<'a> {
     /// What the ground is made of, compiled from its name.
@@ -470,9 +470,9 @@ pub struct GroundRecord<'a> {
     /// Height of the ground plane, world z, metres: the structures' lowest point unless the
     /// recipe set it.
     pub height: f64,
-    /// Radius of the ground disc about the scene's centre, metres (its rim lies near the
-    /// horizon).
-    pub radius: f64,
+    /// Half the side of the ground square about the scene's centre, metres (its edge lies
+    /// near the horizon).
+    pub half_side: f64,
     /// Whether depth, normals, ray distance, displacement, flow and rest depth see the ground
     /// (else they hold 0 there, as for the background). The mask never includes it.
     pub in_depth: bool,
@@ -584,7 +584,7 @@ fn ground_record<'a>(dataset: &'a DatasetSpec, sample: &BuiltSample) -> Option<G
         material: &spec.material,
         material_drawn: sample.shaders[shader as usize].drawn(),
         height: built.height,
-        radius: built.radius,
+        half_side: built.radius,
         in_depth: spec.in_depth,
         part_id: part as usize + 1,
         instance_id: sample.scene.structures.len() + 1,

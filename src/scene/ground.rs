@@ -1,5 +1,5 @@
 //! The ground a sample stands on, as declared: what it is made of, where it lies and whether
-//! the geometric outputs see it. The build stage turns it into a flat disc of real geometry
+//! the geometric outputs see it. The build stage turns it into a flat square of real geometry
 //! under the structures; nothing here meshes, draws or traces.
 
 use crate::materials::Material;
@@ -26,10 +26,11 @@ pub struct GroundSpec {
     pub in_depth: bool,
 }
 
-/// Radius of the ground disc for a scene whose bounding sphere has `radius`: far enough that
-/// its rim lies within a pixel of the horizon for a camera that frames the scene (2 radii
-/// above the ground, the rim dips 0.06° below the horizon: 0.9 px at 960 px over 60°), and at
-/// least 1 km. Depth stays exact that far out: it comes from each triangle's plane in f64.
+/// Half the side of the ground square for a scene whose bounding sphere has `radius`: far
+/// enough that its edge lies within a pixel of the horizon for a camera that frames the scene
+/// (2 radii above the ground, the edge dips at most 0.06° below the horizon: 0.9 px at 960 px
+/// over 60°), and at least 1 km. Depth stays exact that far out: it comes from each
+/// triangle's plane in f64.
 pub fn ground_radius(radius: f64) -> f64 {
     (2000.0 * radius).max(1000.0)
 }
