@@ -78,10 +78,13 @@ pub struct BuiltGround {
     pub first_vertex: usize,
 }
 
+/// The structures' loaded mesh without the ground: borrowed when there is no ground.
+pub type StructureMesh<'a> = std::borrow::Cow<'a, Mesh>;
+
 impl BuiltSample {
     /// The structures' mesh without the ground (loaded, and the unloaded positions): what the
     /// mesh and point outputs hold.
-    pub fn structure_mesh(&self) -> (std::borrow::Cow<'_, Mesh>, &[DVec3]) {
+    pub fn structure_mesh(&self) -> (StructureMesh<'_>, &[DVec3]) {
         match self.ground {
             None => (std::borrow::Cow::Borrowed(&self.mesh), &self.rest),
             Some(g) => (

@@ -2,8 +2,7 @@
 //! (one vertex list order, one triangle list) with part ids, and points drawn on the loaded
 //! surface from the sample's own stream, so they are the same on any thread or shard.
 
-use crate::build::BuiltSample;
-use crate::geometry::Mesh;
+use crate::build::{BuiltSample, StructureMesh};
 use glam::DVec3;
 use crate::output::{MeshLayer, PointLayer, SampleLayers};
 use crate::scene::DatasetSpec;
@@ -14,7 +13,7 @@ pub struct SampleGeometry<'a> {
     dataset: &'a DatasetSpec,
     sample: &'a BuiltSample,
     /// The structures' loaded mesh.
-    mesh: std::borrow::Cow<'a, Mesh>,
+    mesh: StructureMesh<'a>,
     /// The unloaded position of each of its vertices.
     rest: &'a [DVec3],
     /// Part id of every triangle, as the segmentation images number parts (from 1).

@@ -13,7 +13,6 @@ use crate::render::{
 };
 use crate::scene::{DatasetSpec, NormalsFrame};
 use crate::seeds::{self, Scope, Stream};
-use crate::words::number;
 use anyhow::{Result, anyhow};
 use serde::Serialize;
 use std::sync::OnceLock;
@@ -86,18 +85,16 @@ pub fn above_ground(sample: &BuiltSample, camera: &Camera, draw: &ViewDraw) -> R
         return Ok(());
     }
     Err(format!(
-        "the camera stands at z = {} m, {} m below the ground at z = {} m (dataset.ground); it was drawn at pitch {}° and distance {} m from the structure's centre at z = {} m: raise dataset.camera.pitch's lower end above the ground (at this distance, above {}°), or place the camera higher",
-        number(camera.position.z),
-        number(-clearance),
-        number(ground.height),
-        number(draw.pitch.to_degrees()),
-        number(draw.distance),
-        number(sample.centre.z),
-        number(
-            (-((sample.centre.z - ground.height) / draw.distance).clamp(-1.0, 1.0))
-                .asin()
-                .to_degrees()
-        ),
+        "the camera stands at z = {:.3} m, {:.3} m below the ground at z = {:.3} m (dataset.ground); it was drawn at pitch {:.1}° and distance {:.3} m from the structure's centre at z = {:.3} m: raise dataset.camera.pitch's lower end above the ground (at this distance, above {:.1}°), or place the camera higher",
+        camera.position.z,
+        -clearance,
+        ground.height,
+        draw.pitch.to_degrees(),
+        draw.distance,
+        sample.centre.z,
+        (-((sample.centre.z - ground.height) / draw.distance).clamp(-1.0, 1.0))
+            .asin()
+            .to_degrees(),
     ))
 }
 
