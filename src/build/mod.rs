@@ -10,18 +10,22 @@
 
 mod assembly;
 mod beam;
+mod ground;
 mod light;
+mod supports;
 mod tessellation;
 
 pub use assembly::{BuiltShape, assembly_radius, mesh_assembly};
 pub use beam::{BuiltBeam, beam_radius, mesh_beam, problem, section_outline, stations};
+pub use ground::ground_square;
+pub use supports::{SupportMaterial, SupportPiece, drawn_supports};
 pub use light::{BackdropDraw, LightDraw, SkyDraw, SunDraw, draw_backdrop, draw_light};
 pub use tessellation::{chord_tolerance, segments_for_chord};
 
 use crate::geometry::{self, MAX_COORDINATE, MAX_TRIANGLES, Mesh};
-use crate::materials::{Grain, Lighting, Shader};
+use crate::materials::{Grain, Lighting, Material, Shader, prompt};
 use crate::mechanics::Labels;
-use crate::scene::{DatasetSpec, SceneSpec, SourceSite, Structure};
+use crate::scene::{DatasetSpec, GROUND_PART, SceneSpec, SourceSite, Structure, ground_radius};
 use crate::seeds::{self, Scope, Stream};
 use glam::{DMat3, DVec3};
 
@@ -57,6 +61,47 @@ pub struct BuiltSample {
     pub centre: DVec3,
     /// Radius of that sphere, metres.
     pub radius: f64,
+    /// The ground, when the dataset has one: its triangles and vertices come last in `mesh`.
+    pub ground: Option<BuiltGround>,
+}
+
+/// Where the ground lies and where its geometry starts in the sample's mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BuiltGround {
+    /// Height of the ground plane, world z, metres.
+    pub height: f64,
+    /// Half the side of the ground square about the scene's centre, metres.
+    pub radius: f64,
+    /// Index of the ground's first triangle: every triangle before it is a structure's.
+    pub first_triangle: usize,
+    /// Index of the ground's first vertex: every vertex before it is a structure's.
+    pub first_vertex: usize,
+}
+
+/// The structures' loaded mesh without the ground: borrowed when there is no ground.
+pub type StructureMesh<'a> = std::borrow::Cow<'a, Mesh>;
+
+impl BuiltSample {
+    /// The structures' mesh without the ground (loaded, and the unloaded positions): what the
+    /// mesh and point outputs hold.
+    pub fn structure_mesh(&self) -> (StructureMesh<'_>, &[DVec3]) {
+        match self.ground {
+            None => (std::borrow::Cow::Borrowed(&self.mesh), &self.rest),
+            Some(g) => (
+                std::borrow::Cow::Owned(Mesh {
+                    positions: self.mesh.positions[..g.first_vertex].to_vec(),
+                    triangles: self.mesh.triangles[..g.first_triangle].to_vec(),
+                }),
+                &self.rest[..g.first_vertex],
+            ),
+        }
+    }
+
+    /// Number of the structures' triangles: those before the ground's.
+    pub fn structure_triangles(&self) -> usize {
+        self.ground
+            .map_or(self.mesh.triangles.len(), |g| g.first_triangle)
+    }
 }
 
 /// What building a beam found out: its mechanics labels and its intervals along the length.
@@ -92,7 +137,10 @@ pub fn build_sample(
     index: u64,
     scene: SceneSpec,
 ) -> Result<BuiltSample, BuildError> {
-    let mut assembled = Assembled::default();
+    let mut assembled = Assembled {
+        structures: scene.structures.len(),
+        ..Assembled::default()
+    };
     let mut beams = Vec::new();
     for (i, structure) in scene.structures.iter().enumerate() {
         let failed = |m: String| BuildError {
@@ -111,6 +159,18 @@ pub fn build_sample(
                     centre: DVec3::from_array(beam.centre),
                 };
                 assembled.add(&built.mesh, &built.rest, i, "beam", grain);
+                if beam.supports_drawn {
+                    let lowest = built.mesh.bounds().map_or(0.0, |(lo, _)| lo.z);
+                    for piece in drawn_supports(beam, lowest, footprint).map_err(failed)? {
+                        within_range(&piece.mesh).map_err(failed)?;
+                        let material = assembled.extra(match piece.material {
+                            SupportMaterial::Steel => "steel",
+                            SupportMaterial::Concrete => "concrete",
+                        });
+                        let grain = grain_of(&piece.mesh.positions);
+                        assembled.add_piece(&piece.mesh, i, piece.part, grain, material);
+                    }
+                }
                 beams.push(Some(BeamOutcome {
                     labels: built.deformation.labels,
                     segments: built.segments,
@@ -137,6 +197,33 @@ pub fn build_sample(
             )));
         }
     }
+    let (centre, radius) = assembled
+        .mesh
+        .bounding_sphere()
+        .expect("a scene has at least one structure");
+    if !(radius > 0.0 && radius.is_finite()) {
+        return Err(BuildError::whole_scene(format!(
+            "the scene has no extent (radius {radius})"
+        )));
+    }
+    let ground = dataset.ground.as_ref().map(|spec| {
+        let lowest = assembled.mesh.bounds().map_or(0.0, |(lo, _)| lo.z);
+        let built = BuiltGround {
+            height: spec.height.unwrap_or(lowest),
+            radius: ground_radius(radius),
+            first_triangle: assembled.mesh.triangles.len(),
+            first_vertex: assembled.mesh.positions.len(),
+        };
+        let square = ground_square(centre, built.height, built.radius);
+        let material = assembled.extra_material(spec.material.clone());
+        let grain = Grain {
+            axis: DVec3::X,
+            centre: DVec3::new(centre.x, centre.y, built.height),
+        };
+        let structures = scene.structures.len();
+        assembled.add_piece(&square, structures, GROUND_PART, grain, material);
+        built
+    });
     let Assembled {
         mesh,
         rest,
@@ -145,20 +232,17 @@ pub fn build_sample(
         parts,
         piece,
         pieces,
+        extras,
+        structures: _,
     } = assembled;
-    let (centre, radius) = mesh
-        .bounding_sphere()
-        .expect("a scene has at least one structure");
-    if !(radius > 0.0 && radius.is_finite()) {
-        return Err(BuildError::whole_scene(format!(
-            "the scene has no extent (radius {radius})"
-        )));
-    }
     let mut materials = Stream::new(dataset.seed, Scope::Sample(index), seeds::MATERIAL);
+    // The structures' materials draw first, so a ground or drawn supports change none of them.
     let shaders = scene
         .structures
         .iter()
-        .map(|s| Shader::new(s.material(), &mut materials))
+        .map(|s| s.material())
+        .chain(&extras)
+        .map(|m| Shader::new(m, &mut materials))
         .collect();
     let (lighting, light_drawn) = draw_light(
         &dataset.light,
@@ -180,6 +264,7 @@ pub fn build_sample(
         parts,
         centre,
         radius,
+        ground,
     })
 }
 
@@ -204,7 +289,13 @@ struct Assembled {
     part: Vec<u32>,
     parts: Vec<String>,
     piece: Vec<u32>,
+    /// Shader index and grain of every piece: structure i's material is shader i, and the
+    /// materials of drawn supports and the ground follow the structures' as `extras`.
     pieces: Vec<(u32, Grain)>,
+    /// Materials beyond the structures' (supports, ground), in order of first use.
+    extras: Vec<Material>,
+    /// The number of structures, known once the first extra material is asked for.
+    structures: usize,
 }
 
 /// Grain along the longest side of a piece's undeformed bounding box.
@@ -225,6 +316,34 @@ fn grain_of(rest: &[DVec3]) -> Grain {
 }
 
 impl Assembled {
+    /// Shader index of the material a structure-independent piece is drawn in, from its
+    /// prompt (the supports' "steel" and "concrete").
+    fn extra(&mut self, prompt_text: &str) -> u32 {
+        let material = prompt::compile(prompt_text, true)
+            .expect("a word of the vocabulary")
+            .material;
+        self.extra_material(material)
+    }
+
+    /// Shader index of `material` among the extra materials, added on first use.
+    fn extra_material(&mut self, material: Material) -> u32 {
+        let at = match self.extras.iter().position(|m| *m == material) {
+            Some(at) => at,
+            None => {
+                self.extras.push(material);
+                self.extras.len() - 1
+            }
+        };
+        (self.structures + at) as u32
+    }
+
+    /// A piece that does not deform (its rest positions are its positions) of structure
+    /// `owner` (the ground: one past the last structure) drawn in shader `shader`.
+    fn add_piece(&mut self, mesh: &Mesh, owner: usize, part: &str, grain: Grain, shader: u32) {
+        self.add(mesh, &mesh.positions, owner, part, grain);
+        self.pieces.last_mut().expect("just added").0 = shader;
+    }
+
     fn add(&mut self, mesh: &Mesh, rest: &[DVec3], structure: usize, part: &str, grain: Grain) {
         let id = match self.parts.iter().position(|p| p == part) {
             Some(id) => id,

@@ -14,6 +14,7 @@
 //! light and backdrop values shading uses. Must not touch: geometry, cameras, recipes or
 //! writing files.
 
+pub mod ground;
 pub mod image;
 pub mod light;
 pub mod noise;

@@ -8,7 +8,7 @@ use super::view::{Eye, ViewCamera};
 use crate::augment::Similarity;
 use crate::build::{BackdropDraw, BuiltSample, LightDraw};
 use crate::cameras::{Camera, CameraRig, Distortion, ViewDraw, rows4};
-use crate::materials::MaterialDraw;
+use crate::materials::{Material, MaterialDraw};
 use crate::materials::procedural::CRACK_LABEL_COVER;
 use crate::mechanics::{Labels, SectionProperties};
 use crate::output::{DEPTH_CHANNEL, SAMPLE_WRITERS, WRITERS};
@@ -124,6 +124,9 @@ pub struct ViewRecord<'a> {
     pub background: &'a BackdropDraw,
     /// The light of the sample, as drawn.
     pub light: &'a LightDraw,
+    /// The ground the structures stand on (absent without `dataset.ground`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ground: Option<GroundRecord<'a>>,
     /// The sample's structures as described, with what the sample drew for their materials and, for
     /// beams, what the mechanics found.
     pub scene: SceneRecord<'a>,
@@ -417,6 +420,8 @@ pub enum Instance {
         /// The assembly's name, as the recipe gave it.
         name: String,
     },
+    /// The ground (`dataset.ground`): the id after the last structure's.
+    Ground,
 }
 
 /// The structures of a sample.
@@ -453,6 +458,28 @@ pub struct BeamRecord<'a> {
     /// What the mechanics found: the theory used and its estimated error, the physical loads, the
     /// peak deflection, moment and stress, and whether the beam could carry the loads.
     pub labels: &'a Labels,
+}
+
+/// The ground of a sample: a flat square under the structures, drawn in the RGB image.
+#[derive(Serialize, schemars::JsonSchema)]
+pub struct GroundRecord<'a> {
+    /// What the ground is made of, compiled from its name.
+    pub material: &'a Material,
+    /// What the sample drew for the ground's material variations.
+    pub material_drawn: MaterialDraw,
+    /// Height of the ground plane, world z, metres: the structures' lowest point unless the
+    /// recipe set it.
+    pub height: f64,
+    /// Half the side of the ground square about the scene's centre, metres (its edge lies
+    /// near the horizon).
+    pub half_side: f64,
+    /// Whether depth, normals, ray distance, displacement, flow and rest depth see the ground
+    /// (else they hold 0 there, as for the background). The mask never includes it.
+    pub in_depth: bool,
+    /// The ground's id in the part images (`segmentation.part_ids`).
+    pub part_id: usize,
+    /// The ground's id in the instance images (`segmentation.instance_ids`).
+    pub instance_id: usize,
 }
 
 /// Size of the sample's deformed mesh.
@@ -548,6 +575,22 @@ fn layout(dataset: &DatasetSpec) -> String {
     )
 }
 
+/// The record of a sample's ground, when the dataset has one.
+fn ground_record<'a>(dataset: &'a DatasetSpec, sample: &BuiltSample) -> Option<GroundRecord<'a>> {
+    let (spec, built) = (dataset.ground.as_ref()?, sample.ground?);
+    let part = sample.part[built.first_triangle];
+    let shader = sample.pieces[sample.piece[built.first_triangle] as usize].0;
+    Some(GroundRecord {
+        material: &spec.material,
+        material_drawn: sample.shaders[shader as usize].drawn(),
+        height: built.height,
+        half_side: built.radius,
+        in_depth: spec.in_depth,
+        part_id: part as usize + 1,
+        instance_id: sample.scene.structures.len() + 1,
+    })
+}
+
 impl<'a> SampleRecord<'a> {
     /// The structures of `sample` with their labels, and its segmentation id tables.
     pub fn new(sample: &'a BuiltSample) -> Self {
@@ -582,6 +625,9 @@ impl<'a> SampleRecord<'a> {
                 },
             })
         }));
+        if sample.ground.is_some() {
+            instance_ids.push(Some(Instance::Ground));
+        }
         SampleRecord {
             structures,
             segmentation: Segmentation {
@@ -679,12 +725,13 @@ impl<'a> SampleRecord<'a> {
             segmentation: &self.segmentation,
             background: facts.backdrop,
             light: &sample.light_drawn,
+            ground: ground_record(&recipe.dataset, sample),
             scene: SceneRecord {
                 structures: &self.structures,
             },
             mesh: MeshRecord {
-                vertices: sample.mesh.positions.len(),
-                triangles: sample.mesh.triangles.len(),
+                vertices: sample.ground.map_or(sample.mesh.positions.len(), |g| g.first_vertex),
+                triangles: sample.structure_triangles(),
                 bounding_radius: sample.radius,
             },
             coverage: facts.coverage,

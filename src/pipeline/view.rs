@@ -65,12 +65,37 @@ pub fn view_camera(dataset: &DatasetSpec, sample: &BuiltSample, view: u32) -> Re
         Some(Eye::Right) => rig.right_eye(&left).expect("a stereo rig"),
         _ => left,
     };
+    above_ground(sample, &camera, &draw).map_err(|e| anyhow!("sample {}, view {view}: {e}", sample.index))?;
     Ok(ViewCamera {
         camera,
         draw,
         stereo: eye.map(|e| (pose, e)),
         left: (eye == Some(Eye::Right)).then_some(left),
     })
+}
+
+/// Refuses a camera at or below the ground: it would see the ground's underside, or nothing
+/// of the structure. Cameras a few millimetres above it are fine.
+pub fn above_ground(sample: &BuiltSample, camera: &Camera, draw: &ViewDraw) -> Result<(), String> {
+    let Some(ground) = sample.ground else {
+        return Ok(());
+    };
+    let clearance = camera.position.z - ground.height;
+    if clearance > 1e-6 * sample.radius {
+        return Ok(());
+    }
+    Err(format!(
+        "the camera stands at z = {:.3} m, {:.3} m below the ground at z = {:.3} m (dataset.ground); it was drawn at pitch {:.1}° and distance {:.3} m from the structure's centre at z = {:.3} m: raise dataset.camera.pitch's lower end above the ground (at this distance, above {:.1}°), or place the camera higher",
+        camera.position.z,
+        -clearance,
+        ground.height,
+        draw.pitch.to_degrees(),
+        draw.distance,
+        sample.centre.z,
+        (-((sample.centre.z - ground.height) / draw.distance).clamp(-1.0, 1.0))
+            .asin()
+            .to_degrees(),
+    ))
 }
 
 /// Everything a sample's views share: the BVH, the surface look of every structure and the
@@ -93,8 +118,12 @@ pub struct RenderedView<'a> {
     pub camera: Camera,
     /// The camera as drawn, with its place in a stereo pair.
     pub drawn: ViewCamera,
-    /// Depth and triangle id of every pixel, from its centre ray.
+    /// Depth and triangle id of every pixel, from its centre ray: the structures and the
+    /// ground, as the RGB image shows them.
     pub gbuffer: GBuffer,
+    /// The same without the ground (built when the sample has one and a layer asks).
+    structure: OnceLock<GBuffer>,
+    rest_structure: OnceLock<GBuffer>,
     backdrop: Backdrop,
     /// The background drawn for this view.
     pub backdrop_drawn: BackdropDraw,
@@ -111,7 +140,7 @@ impl<'a> SampleRenderer<'a> {
         SampleRenderer {
             dataset,
             sample,
-            trace_mesh: TraceMesh::build(&sample.mesh),
+            trace_mesh: TraceMesh::build_with_core(&sample.mesh, sample.structure_triangles()),
             surfaces: SampleSurfaces {
                 mesh: &sample.mesh,
                 rest: &sample.rest,
@@ -127,7 +156,10 @@ impl<'a> SampleRenderer<'a> {
     /// over the undeformed vertices.
     fn rest(&self) -> &Traced {
         self.rest
-            .get_or_init(|| Traced::with_positions(&self.sample.mesh, &self.sample.rest))
+        .get_or_init(|| {
+            let s = self.sample;
+            Traced::with_positions(&s.mesh, &s.rest, s.structure_triangles())
+        })
     }
 
     /// The loaded structure with the undeformed position of every vertex.
@@ -177,6 +209,8 @@ impl<'a> SampleRenderer<'a> {
             gbuffer,
             backdrop,
             backdrop_drawn,
+            structure: OnceLock::new(),
+            rest_structure: OnceLock::new(),
             rgb: OnceLock::new(),
             cracks: OnceLock::new(),
             rest_gbuffer: OnceLock::new(),
@@ -185,7 +219,67 @@ impl<'a> SampleRenderer<'a> {
     }
 }
 
+/// `g` with every pixel that sees the ground (a triangle from `first_ground` on) turned into
+/// one that sees nothing.
+fn without_ground(g: &GBuffer, first_ground: usize) -> GBuffer {
+    let (depth, triangle) = g
+        .depth
+        .iter()
+        .zip(&g.triangle)
+        .map(|(&d, &t)| {
+            if t != NO_HIT && t as usize >= first_ground {
+                (0.0, NO_HIT)
+            } else {
+                (d, t)
+            }
+        })
+        .unzip();
+    GBuffer {
+        width: g.width,
+        height: g.height,
+        depth,
+        triangle,
+    }
+}
+
 impl RenderedView<'_> {
+    /// What the structures alone are seen as: the trace without the ground (the mask's).
+    fn structure(&self) -> &GBuffer {
+        let sample = self.renderer.sample;
+        match sample.ground {
+            None => &self.gbuffer,
+            Some(g) => self
+                .structure
+                .get_or_init(|| without_ground(&self.gbuffer, g.first_triangle)),
+        }
+    }
+
+    /// What the geometric outputs (depth, normals, ray distance, displacement) see: the
+    /// ground too when the dataset asks for it in depth.
+    fn geometric(&self) -> &GBuffer {
+        if self.ground_in_depth() {
+            &self.gbuffer
+        } else {
+            self.structure()
+        }
+    }
+
+    /// The unloaded trace as the geometric outputs see it (`rest_depth`, `flow`).
+    fn rest_geometric(&self) -> &GBuffer {
+        let sample = self.renderer.sample;
+        match sample.ground {
+            Some(g) if !self.ground_in_depth() => self
+                .rest_structure
+                .get_or_init(|| without_ground(self.rest_gbuffer(), g.first_triangle)),
+            _ => self.rest_gbuffer(),
+        }
+    }
+
+    fn ground_in_depth(&self) -> bool {
+        let dataset = self.renderer.dataset;
+        dataset.ground.as_ref().is_some_and(|g| g.in_depth)
+    }
+
     /// Per-pixel id + 1 of what each triangle belongs to (0 = background).
     fn ids(&self, of_triangle: &[u32]) -> Vec<u32> {
         self.gbuffer
@@ -235,11 +329,11 @@ impl ViewLayers for RenderedView<'_> {
     }
 
     fn depth(&self) -> &[f32] {
-        &self.gbuffer.depth
+        &self.geometric().depth
     }
 
     fn mask(&self) -> Vec<u8> {
-        self.gbuffer
+        self.structure()
             .triangle
             .iter()
             .map(|&t| if t == NO_HIT { 0 } else { 255 })
@@ -258,7 +352,7 @@ impl ViewLayers for RenderedView<'_> {
         self.cracks.get_or_init(|| {
             let r = self.renderer;
             r.surfaces
-                .crack_mask(&self.gbuffer, &self.camera, &r.trace_mesh)
+                .crack_mask(self.structure(), &self.camera, &r.trace_mesh)
         })
     }
 
@@ -275,20 +369,20 @@ impl ViewLayers for RenderedView<'_> {
             NormalsFrame::Camera => self.camera.rotation.transpose(),
             NormalsFrame::World => glam::DMat3::IDENTITY,
         };
-        normals(&self.gbuffer, &self.renderer.trace_mesh, &self.camera, axes)
+        normals(self.geometric(), &self.renderer.trace_mesh, &self.camera, axes)
     }
 
     fn ray_distance(&self) -> Vec<f32> {
-        ray_distance(&self.gbuffer, &self.camera)
+        ray_distance(self.geometric(), &self.camera)
     }
 
     fn displacement(&self) -> Vec<[f32; 3]> {
-        displacement(&self.gbuffer, &self.camera, &self.renderer.deformed())
+        displacement(self.geometric(), &self.camera, &self.renderer.deformed())
     }
 
     fn flow(&self) -> Flow {
         let field = flow(
-            self.rest_gbuffer(),
+            self.rest_geometric(),
             &self.camera,
             self.renderer.rest(),
             &self.renderer.deformed(),
@@ -316,11 +410,11 @@ impl ViewLayers for RenderedView<'_> {
     }
 
     fn rest_depth(&self) -> &[f32] {
-        &self.rest_gbuffer().depth
+        &self.rest_geometric().depth
     }
 
     fn coverage(&self) -> f64 {
-        let triangles = &self.gbuffer.triangle;
+        let triangles = &self.structure().triangle;
         let hits = triangles.iter().filter(|&&t| t != NO_HIT).count();
         hits as f64 / triangles.len() as f64
     }

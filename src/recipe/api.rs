@@ -159,6 +159,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
         None => LightSpec::default(),
     };
     let antialias = o.flag("antialias", true)?;
+    let ground = super::ground_api::ground(o.take("ground"))?;
     let augment = super::augment_api::augment(o.take("augment"))?;
     let outputs = outputs(o.take("outputs"))?;
     check_flow_warps(&outputs, &augment)?;
@@ -193,6 +194,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
             augment,
             normals,
             points,
+            ground,
         },
         scene,
         site,

@@ -405,4 +405,8 @@ fn register_settings(engine: &mut Engine) {
             Ok(b.clone())
         },
     );
+    engine.register_fn("supports_drawn", |b: &mut BeamSpec, drawn: bool| -> BeamSpec {
+        b.supports_drawn = drawn;
+        b.clone()
+    });
 }

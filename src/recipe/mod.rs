@@ -16,6 +16,7 @@ mod beam_api;
 mod diagnostics;
 mod engine;
 mod files;
+mod ground_api;
 mod material_api;
 mod memory;
 mod options;

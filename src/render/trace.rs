@@ -30,9 +30,11 @@ pub struct TraceMesh {
     /// n · a for each original triangle (first vertex a, relative to `anchor`): its plane.
     offsets: Vec<f64>,
     anchor: DVec3,
-    local_bounds: (DVec3, DVec3),
     /// Radius about `anchor` of a sphere holding every vertex.
     reach: f64,
+    /// Diagonal of the bounds of the structures' triangles (all but a ground's), metres: the
+    /// scale shadow rays leave surfaces by.
+    core_diagonal: f64,
 }
 
 /// obvhs' slab test replaces direction components below f32::EPSILON by ±1/EPSILON, i.e. it
@@ -66,13 +68,14 @@ pub struct Traced {
 
 impl Traced {
     /// `mesh`'s triangles over other positions of its vertices (the unloaded ones, in the
-    /// same order), with their BVH.
-    pub fn with_positions(mesh: &Mesh, positions: &[DVec3]) -> Self {
+    /// same order), with their BVH; the first `core` triangles are the structures (see
+    /// [`TraceMesh::build_with_core`]).
+    pub fn with_positions(mesh: &Mesh, positions: &[DVec3], core: usize) -> Self {
         let mesh = Mesh {
             positions: positions.to_vec(),
             triangles: mesh.triangles.clone(),
         };
-        let bvh = TraceMesh::build(&mesh);
+        let bvh = TraceMesh::build_with_core(&mesh, core);
         Traced { mesh, bvh }
     }
 }
@@ -80,7 +83,23 @@ impl Traced {
 impl TraceMesh {
     /// Builds the BVH. The mesh must be non-empty with finite vertices (checked upstream).
     pub fn build(mesh: &Mesh) -> Self {
+        Self::build_with_core(mesh, mesh.triangles.len())
+    }
+
+    /// Builds the BVH of a mesh whose first `core` triangles are the structures and the rest a
+    /// ground far larger than them: shadow rays leave a surface by a step scaled to the
+    /// structures near the anchor, and to the distance from it far out on the ground, where
+    /// f32 coordinates are coarser.
+    pub fn build_with_core(mesh: &Mesh, core: usize) -> Self {
         let (lo, hi) = mesh.bounds().expect("scene mesh is non-empty");
+        let (core_lo, core_hi) = if core == mesh.triangles.len() {
+            (lo, hi)
+        } else {
+            mesh.triangles[..core]
+                .iter()
+                .flat_map(|t| t.map(|i| mesh.positions[i as usize]))
+                .fold((hi, lo), |(l, h), p| (l.min(p), h.max(p)))
+        };
         let anchor = 0.5 * (lo + hi);
         let local = |i: u32| (mesh.positions[i as usize] - anchor).as_vec3a();
         let tris: Vec<Triangle> = mesh
@@ -115,8 +134,8 @@ impl TraceMesh {
             normals,
             offsets,
             anchor,
-            local_bounds: (lo - anchor, hi - anchor),
             reach: 0.5 * (hi - lo).length(),
+            core_diagonal: (core_hi - core_lo).length(),
         }
     }
 
@@ -178,8 +197,9 @@ impl TraceMesh {
     /// towards `direction`. The ray starts a little off the surface so that it cannot hit the
     /// triangle it leaves.
     pub fn occluded(&self, p: DVec3, normal: DVec3, direction: DVec3) -> bool {
-        let (lo, hi) = self.local_bounds;
-        let lift = 1e-5 * (hi - lo).length();
+        // Without a ground the core is the whole mesh, and no point is farther from the anchor
+        // than half its diagonal.
+        let lift = 1e-5 * self.core_diagonal.max((p - self.anchor).length());
         let origin = (p - self.anchor + lift * normal).as_vec3a();
         let dir = traversal_direction(direction.as_vec3a());
         let sheared = ShearedRay::new(origin, dir);

@@ -94,6 +94,11 @@ pub struct BeamSpec {
     pub centre: [f64; 3],
     /// Rotation about the world z axis (radians); 0 puts the beam axis along +x.
     pub yaw: f64,
+    /// Whether the supports are drawn (`.supports_drawn(true)`): a pin or roller bearing on a
+    /// concrete abutment under each supported end, a concrete wall each clamped end is built
+    /// into, all reaching down to one level below the deflected beam. Absent: not drawn.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub supports_drawn: bool,
     /// The recipe call that last changed the beam's mechanics (its construction, supports,
     /// loads, target or material constants), where errors found when solving it point.
     #[serde(skip)]
@@ -122,6 +127,7 @@ impl BeamSpec {
             material: Material::default(),
             centre: [0.0; 3],
             yaw: 0.0,
+            supports_drawn: false,
             declared_at: None,
         }
     }

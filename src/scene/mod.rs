@@ -9,6 +9,7 @@
 mod assembly;
 mod augment;
 mod beam;
+mod ground;
 mod light;
 
 pub use assembly::{AssemblySpec, Bending, LabelledPattern, ShapeSpec};
@@ -18,6 +19,7 @@ pub use augment::{
     WarpSpec, operation_path,
 };
 pub use beam::{BeamSpec, Tessellation};
+pub use ground::{GROUND_PART, GroundSpec, ground_radius};
 pub use light::{
     Background, ImageRecord, LightSpec, OUTDOOR_AMBIENT, SkyGradient, SkySpec, SunSpec,
 };
@@ -85,6 +87,9 @@ pub struct DatasetSpec {
     pub normals: NormalsFrame,
     /// Points the `points` output draws on each sample's surface.
     pub points: u32,
+    /// The ground the structures stand on, if any (none by default, as in the paper).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ground: Option<GroundSpec>,
 }
 
 /// The axes surface normals are written in.
