@@ -7,8 +7,9 @@ use super::result::{Fallible, fail};
 use crate::cameras::{CameraRig, Distance, DistortionRanges, FixedCamera, Poses, Stereo};
 use crate::output::{DEFAULT_OUTPUTS, output_names};
 use crate::scene::{
-    AugmentSpec, Background, DEFAULT_POINTS, DatasetSpec, GeometryMode, ImageRecord, LightSpec,
-    NormalsFrame, OUTDOOR_AMBIENT, Operation, Outputs, SkyGradient, SkySpec, SourceSite, SunSpec,
+    AugmentSpec, Background, DEFAULT_POINTS, DatasetSpec, GeometryMode, GroundBounceSpec,
+    ImageRecord, LightSpec, NormalsFrame, OUTDOOR_AMBIENT, Operation, Outputs, SkyGradient,
+    SkySpec, SourceSite, SunSpec, Tone,
 };
 use crate::seeds::Stream;
 use crate::words::number as number_shown;
@@ -480,7 +481,8 @@ fn background(value: Option<Dynamic>, files: &RecipeFiles) -> OptResult<Backgrou
     Ok(result)
 }
 
-/// `light: #{ sun: #{ ... }, sky: #{ ... }, ambient, shadows, studio }`.
+/// `light: #{ sun: #{ ... }, sky: #{ ... }, ambient, shadows, studio, ground: #{ height,
+/// albedo }, exposure, tone }`.
 fn light(mut o: Options) -> OptResult<LightSpec> {
     let sun = match o.sub("sun")? {
         None => None,
@@ -491,6 +493,8 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
                 azimuth: s.range("azimuth", d.azimuth)?,
                 intensity: s.range("intensity", d.intensity)?,
                 colour: s.colour("colour", d.colour)?,
+                diameter: s.number("diameter", d.diameter)?,
+                shadow_rays: s.integer("shadow_rays", i64::from(d.shadow_rays), 1, 256)? as u32,
             };
             s.finish()?;
             Some(spec)
@@ -504,6 +508,8 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
                 intensity: s.range("intensity", d.intensity)?,
                 colour: s.colour("colour", d.colour)?,
                 ground: s.colour("ground", d.ground)?,
+                occlusion_rays: s.integer("occlusion_rays", i64::from(d.occlusion_rays), 0, 256)?
+                    as u32,
             };
             s.finish()?;
             Some(spec)
@@ -518,6 +524,22 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
     let ambient = o.range("ambient", default_ambient)?;
     let shadows = o.flag("shadows", outdoor)?;
     let studio = o.flag("studio", !outdoor)?;
+    let ground = match o.sub("ground")? {
+        None => None,
+        Some(mut g) => {
+            let spec = GroundBounceSpec {
+                height: g.number("height", 0.0)?,
+                albedo: g.colour("albedo", [0.35, 0.33, 0.3])?,
+            };
+            g.finish()?;
+            Some(spec)
+        }
+    };
+    let exposure = o.number("exposure", 0.0)?;
+    let tone = match o.choice("tone", &["clip", "filmic"], Some("clip"))? {
+        "filmic" => Tone::Filmic,
+        _ => Tone::Clip,
+    };
     o.finish()?;
     let spec = LightSpec {
         studio,
@@ -525,6 +547,9 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
         sky,
         ambient,
         shadows,
+        ground,
+        exposure,
+        tone,
     };
     spec.validate()?;
     Ok(spec)

@@ -11,6 +11,7 @@
 //! it sees meshes, cameras and materials only. One centre ray per pixel for every geometric
 //! label; nothing here draws random numbers.
 
+mod daylight;
 mod fields;
 mod shade;
 mod surfaces;

@@ -19,7 +19,8 @@ pub use augment::{
 };
 pub use beam::{BeamSpec, Tessellation};
 pub use light::{
-    Background, ImageRecord, LightSpec, OUTDOOR_AMBIENT, SkyGradient, SkySpec, SunSpec,
+    Background, GroundBounceSpec, ImageRecord, LightSpec, OUTDOOR_AMBIENT, SUN_DIAMETER,
+    SkyGradient, SkySpec, SunSpec, Tone,
 };
 
 use crate::cameras::CameraRig;
