@@ -161,6 +161,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
     };
     let antialias = o.flag("antialias", true)?;
     let augment = super::augment_api::augment(o.take("augment"))?;
+    let sensor = super::augment_api::sensor(o.take("sensor"))?;
     let outputs = outputs(o.take("outputs"))?;
     check_flow_warps(&outputs, &augment)?;
     let normals = normals_frame(o.string("normals", "camera")?)?;
@@ -192,6 +193,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
             light,
             antialias,
             augment,
+            sensor,
             normals,
             points,
         },
