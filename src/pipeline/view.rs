@@ -4,6 +4,7 @@
 //! BVH, built once per sample when a view first needs it.
 
 use super::augmented::{Applied, draw_sensor, photometric};
+use crate::augment::defocus_by_depth;
 use crate::build::{BackdropDraw, BuiltSample, draw_backdrop};
 use crate::cameras::{Camera, ViewDraw};
 use crate::materials::Backdrop;
@@ -218,6 +219,17 @@ impl RenderedView<'_> {
             r.dataset.antialias,
         );
         let size = (g.width as usize, g.height as usize);
+        if let Some(lens) = &r.dataset.camera.depth_of_field {
+            // Circles from the exact planar depth; the backdrop lies at infinity.
+            let k = &self.camera.intrinsics;
+            let radius: Vec<f32> = (g.depth.iter())
+                .map(|&d| (0.5 * lens.blur_diameter(k, f64::from(d))) as f32)
+                .collect();
+            let distance: Vec<f32> = (g.depth.iter())
+                .map(|&d| if d > 0.0 { d } else { f32::INFINITY })
+                .collect();
+            defocus_by_depth(&mut rgb, size.0, size.1, &radius, &distance);
+        }
         // The operations are validated; an encoder failing in memory is a bug.
         photometric(&mut rgb, size, &self.sensor, None).expect("sensor effects on a valid image");
         rgb

@@ -4,7 +4,9 @@
 use super::files::RecipeFiles;
 use super::options::{self, OptResult, Options, number, shown};
 use super::result::{Fallible, fail};
-use crate::cameras::{CameraRig, Distance, DistortionRanges, FixedCamera, Poses, Stereo};
+use crate::cameras::{
+    CameraRig, DepthOfField, Distance, DistortionRanges, FixedCamera, Poses, Stereo,
+};
 use crate::output::{DEFAULT_OUTPUTS, output_names};
 use crate::scene::{
     AugmentSpec, Background, DEFAULT_POINTS, DatasetSpec, GeometryMode, GroundBounceSpec,
@@ -284,6 +286,18 @@ fn check_flow_warps(outputs: &Outputs, augment: &AugmentSpec) -> OptResult<()> {
 /// `fixed: [...]`, `orbit: #{...}`, `line: #{...}`.
 fn camera(mut o: Options, views: u32) -> OptResult<CameraRig> {
     let d = CameraRig::default();
+    let depth_of_field = match o.sub("depth_of_field")? {
+        None => None,
+        Some(mut l) => {
+            let lens = DepthOfField {
+                f_number: l.number("f_number", 2.8)?,
+                focus_distance: l.required_number("focus_distance")?,
+                sensor_width: l.number("sensor_width", 0.036)?,
+            };
+            l.finish()?;
+            Some(lens)
+        }
+    };
     let width = o.integer("width", i64::from(d.width), 1, 16_384)? as u32;
     let height = o.integer("height", i64::from(d.height), 1, 16_384)? as u32;
     let fov_y = o.range("fov_y", d.fov_y)?;
@@ -332,8 +346,12 @@ fn camera(mut o: Options, views: u32) -> OptResult<CameraRig> {
         poses,
         aim_jitter,
         stereo,
+        depth_of_field,
     };
     rig.validate(views)?;
+    if let Some(lens) = &rig.depth_of_field {
+        lens.validate((width, height), fov_y[0])?;
+    }
     Ok(rig)
 }
 

@@ -365,9 +365,10 @@ mod tests {
         let (_, below) = hemisphere_visibility(&mesh, ground, p, DVec3::X, &hemisphere, (1.0, 0.0));
         assert_eq!(below, 1.0);
         let (_, blocked) = hemisphere_visibility(&mesh, None, p, DVec3::X, &hemisphere, (1.0, 0.0));
-        assert_eq!(
-            blocked, 0.0,
-            "without the plane declared, the floor is a blocker"
+        // Only rays grazing past the 50 m floor's edge escape.
+        assert!(
+            blocked < 0.05,
+            "without the plane declared, the floor blocks: {blocked}"
         );
     }
 
