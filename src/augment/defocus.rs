@@ -34,6 +34,12 @@ pub fn defocus_by_depth(
         return;
     }
     let reach = clipped(widest).ceil() as isize;
+    // How far each pixel must look: the widest circle within the farthest reach of it.
+    let near_reach = widest_nearby(
+        &radius.iter().map(|&r| clipped(r)).collect::<Vec<_>>(),
+        width,
+        reach as usize,
+    );
     let decode = srgb::decode_table();
     let linear: Vec<[f32; 3]> = rgb
         .chunks_exact(3)
@@ -48,6 +54,7 @@ pub fn defocus_by_depth(
                 let at = (y * w + x) as usize;
                 let (own, here) = (clipped(radius[at]), distance[at]);
                 let (mut sum, mut weights) = ([0f32; 3], 0f32);
+                let reach = near_reach[at].ceil() as isize;
                 for qy in (y - reach).max(0)..=(y + reach).min(h - 1) {
                     for qx in (x - reach).max(0)..=(x + reach).min(w - 1) {
                         let q = (qy * w + qx) as usize;
@@ -72,6 +79,28 @@ pub fn defocus_by_depth(
                 }
             }
         });
+}
+
+/// For every pixel, the largest of `values` within `reach` pixels along both axes (a square
+/// window), as a row pass and a column pass.
+fn widest_nearby(values: &[f32], width: usize, reach: usize) -> Vec<f32> {
+    let height = values.len() / width;
+    let mut rows = vec![0f32; values.len()];
+    rows.par_chunks_mut(width).enumerate().for_each(|(y, out)| {
+        let line = &values[y * width..(y + 1) * width];
+        for (x, o) in out.iter_mut().enumerate() {
+            let span = &line[x.saturating_sub(reach)..(x + reach + 1).min(width)];
+            *o = span.iter().copied().fold(0.0, f32::max);
+        }
+    });
+    let mut both = vec![0f32; values.len()];
+    both.par_chunks_mut(width).enumerate().for_each(|(y, out)| {
+        for (x, o) in out.iter_mut().enumerate() {
+            let ys = y.saturating_sub(reach)..(y + reach + 1).min(height);
+            *o = ys.map(|qy| rows[qy * width + x]).fold(0.0, f32::max);
+        }
+    });
+    both
 }
 
 #[cfg(test)]

@@ -135,7 +135,7 @@ pub struct ViewRecord<'a> {
     pub augmentation: Option<AugmentationRecord<'a>>,
     /// What the sensor did to the RGB images (`dataset.sensor`), in order, with every value
     /// drawn; left out when the dataset declares no sensor effects.
-    #[serde(skip_serializing_if = "<[Applied]>::is_empty")]
+    #[serde(default, skip_serializing_if = "<[Applied]>::is_empty")]
     pub sensor: &'a [Applied],
 }
 

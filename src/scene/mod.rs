@@ -84,7 +84,7 @@ pub struct DatasetSpec {
     pub augment: AugmentSpec,
     /// What the camera's sensor and lens do to every clean image (vignetting, noise, blur,
     /// ...): photometric operations drawn once per view, before any augmentation.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub sensor: Vec<Operation>,
     /// The axes the `normals` output is written in.
     pub normals: NormalsFrame,
