@@ -226,6 +226,17 @@ impl Stages {
     }
 }
 
+/// The surfaces of a built sample, as the renderer reads them.
+fn surfaces_of(sample: &BuiltSample) -> SampleSurfaces<'_> {
+    SampleSurfaces {
+        mesh: &sample.mesh,
+        rest: &sample.rest,
+        piece: &sample.piece,
+        pieces: &sample.pieces,
+        shaders: &sample.shaders,
+    }
+}
+
 /// The stages of one view of a built sample, timed.
 fn view_stages(
     sample: &BuiltSample,
@@ -235,13 +246,7 @@ fn view_stages(
     stages: &mut Stages,
 ) -> GBuffer {
     let g = stages.time("trace", || mesh.trace(camera));
-    let surfaces = SampleSurfaces {
-        mesh: &sample.mesh,
-        rest: &sample.rest,
-        piece: &sample.piece,
-        pieces: &sample.pieces,
-        shaders: &sample.shaders,
-    };
+    let surfaces = surfaces_of(sample);
     let black = Backdrop::Colour([0, 0, 0]);
     let rgb = stages.time("shade (anti-aliased)", || {
         shade(&g, mesh, camera, &sample.lighting, &surfaces, &black, true)
@@ -312,13 +317,7 @@ fn daylight_costs(views: u32) {
         .unwrap();
     let sample = prepare(&recipe, 0).unwrap();
     let mesh = TraceMesh::build(&sample.mesh);
-    let surfaces = SampleSurfaces {
-        mesh: &sample.mesh,
-        rest: &sample.rest,
-        piece: &sample.piece,
-        pieces: &sample.pieces,
-        shaders: &sample.shaders,
-    };
+    let surfaces = surfaces_of(&sample);
     let black = Backdrop::Colour([0, 0, 0]);
     let up = 0.7f64;
     let outdoor = Lighting {
@@ -414,13 +413,7 @@ fn daylight_costs(views: u32) {
                     ..lens.clone()
                 };
                 timed(k, &mut |image| {
-                    let k = &camera.intrinsics;
-                    let radius: Vec<f32> = (g.depth.iter())
-                        .map(|&d| (0.5 * lens.blur_diameter(k, f64::from(d))) as f32)
-                        .collect();
-                    let distance: Vec<f32> = (g.depth.iter())
-                        .map(|&d| if d > 0.0 { d } else { f32::INFINITY })
-                        .collect();
+                    let (radius, distance) = lens.circles(&camera.intrinsics, &g.depth);
                     defocus_by_depth(image, w, h, &radius, &distance);
                 });
             };

@@ -44,6 +44,19 @@ impl DepthOfField {
         on_sensor * k.fx / f
     }
 
+    /// Radius (pixels) of every pixel's circle of confusion given a planar `depth` image (0 =
+    /// no surface: the backdrop, at infinity), and its distance for the gather's ordering
+    /// (infinite for the backdrop).
+    pub fn circles(&self, k: &Intrinsics, depth: &[f32]) -> (Vec<f32>, Vec<f32>) {
+        let radius = (depth.iter())
+            .map(|&d| (0.5 * self.blur_diameter(k, f64::from(d))) as f32)
+            .collect();
+        let distance = (depth.iter())
+            .map(|&d| if d > 0.0 { d } else { f32::INFINITY })
+            .collect();
+        (radius, distance)
+    }
+
     /// Checks the lens against the narrowest field of view `min_fov_y` (radians) a `width` ×
     /// `height` view may draw, where the focal length is longest: a positive f-number and
     /// sensor, and a focus beyond the focal length (a thin lens cannot focus nearer).

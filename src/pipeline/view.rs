@@ -221,13 +221,7 @@ impl RenderedView<'_> {
         let size = (g.width as usize, g.height as usize);
         if let Some(lens) = &r.dataset.camera.depth_of_field {
             // Circles from the exact planar depth; the backdrop lies at infinity.
-            let k = &self.camera.intrinsics;
-            let radius: Vec<f32> = (g.depth.iter())
-                .map(|&d| (0.5 * lens.blur_diameter(k, f64::from(d))) as f32)
-                .collect();
-            let distance: Vec<f32> = (g.depth.iter())
-                .map(|&d| if d > 0.0 { d } else { f32::INFINITY })
-                .collect();
+            let (radius, distance) = lens.circles(&self.camera.intrinsics, &g.depth);
             defocus_by_depth(&mut rgb, size.0, size.1, &radius, &distance);
         }
         // The operations are validated; an encoder failing in memory is a bug.
