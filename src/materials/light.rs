@@ -1,5 +1,6 @@
 //! Light and backdrops as shading sees them: directions and linear radiance, fixed for one
-//! sample (light) or one view (backdrop). Plain values, drawn by the build stage from what a
+//! sample (light) or one view (backdrop), and the film (exposure, tone curve) that turns
+//! linear light into display values. Plain values, drawn by the build stage from what a
 //! recipe declared and consumed by the renderer.
 
 use super::image::TextureImage;
@@ -82,7 +83,7 @@ impl Film {
 }
 
 /// Narkowicz's ACES fit, x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14), clamped to [0, 1]
-/// (it passes 1 at x ≈ 10.4 and tends to 2.51/2.43 beyond).
+/// (it passes 1 at x ≈ 7.24 and tends to 2.51/2.43 beyond).
 pub fn filmic(x: f64) -> f64 {
     if !x.is_finite() {
         return 1.0;
@@ -158,4 +159,46 @@ pub enum Backdrop {
         /// Width and height of the window, in image units.
         size: (f64, f64),
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_film_is_clipping_and_keeps_every_bit() {
+        let film = Film::default();
+        for x in [-0.5, 0.0, 1e-300, 0.123_456_789, 0.999_999_999, 1.0, 7.0] {
+            assert_eq!(film.display(x).to_bits(), x.clamp(0.0, 1.0).to_bits());
+        }
+        let brighter = Film {
+            exposure: 2.0,
+            ..film
+        };
+        assert_eq!(brighter.display(0.25), 0.5);
+    }
+
+    /// The ACES fit has a toe (darker than the identity below about 0.1), lifts mid-tones
+    /// (0.18 grey → 0.27) and rolls highlights off: monotone, below white until x ≈ 7.24,
+    /// white beyond.
+    #[test]
+    fn the_filmic_curve_rolls_highlights_off_towards_white() {
+        assert_eq!(filmic(0.0), 0.0);
+        assert!(filmic(0.02) < 0.02, "toe");
+        assert!(
+            (filmic(0.18) - 0.267).abs() < 0.005,
+            "mid grey {}",
+            filmic(0.18)
+        );
+        let mut last = 0.0;
+        for i in 1..=2000 {
+            let x = f64::from(i) * 0.01;
+            let y = filmic(x);
+            assert!(y >= last, "monotone at {x}");
+            assert!(x >= 7.24 || y < 1.0, "below white at {x}: {y}");
+            last = y;
+        }
+        assert_eq!(filmic(11.0), 1.0);
+        assert_eq!(filmic(f64::INFINITY), 1.0);
+    }
 }
