@@ -9,7 +9,8 @@
 //! Rows: the A1 smoke run with the paper's prompts, the quickstart, the A2 smoke run, an
 //! imported mesh of a million triangles (written by the benchmark), a streaming run of tiny
 //! views at growing sample counts (throughput and peak resident memory, each count in its own
-//! process), and the time per pair at 3840×3840 against 960×960.
+//! process), and the time per pair at 3840×3840 against 960×960. Then the cost per view of
+//! each daylight and camera effect, on and off (`SHMGEN_BENCH_ONLY=daylight`: only that).
 
 use shmgen::build::BuiltSample;
 use shmgen::cameras::Camera;
@@ -225,6 +226,17 @@ impl Stages {
     }
 }
 
+/// The surfaces of a built sample, as the renderer reads them.
+fn surfaces_of(sample: &BuiltSample) -> SampleSurfaces<'_> {
+    SampleSurfaces {
+        mesh: &sample.mesh,
+        rest: &sample.rest,
+        piece: &sample.piece,
+        pieces: &sample.pieces,
+        shaders: &sample.shaders,
+    }
+}
+
 /// The stages of one view of a built sample, timed.
 fn view_stages(
     sample: &BuiltSample,
@@ -234,13 +246,7 @@ fn view_stages(
     stages: &mut Stages,
 ) -> GBuffer {
     let g = stages.time("trace", || mesh.trace(camera));
-    let surfaces = SampleSurfaces {
-        mesh: &sample.mesh,
-        rest: &sample.rest,
-        piece: &sample.piece,
-        pieces: &sample.pieces,
-        shaders: &sample.shaders,
-    };
+    let surfaces = surfaces_of(sample);
     let black = Backdrop::Colour([0, 0, 0]);
     let rgb = stages.time("shade (anti-aliased)", || {
         shade(&g, mesh, camera, &sample.lighting, &surfaces, &black, true)
@@ -297,9 +303,156 @@ fn breakdown(name: &str, recipe: &Recipe, samples: u64) {
     );
 }
 
+/// Median milliseconds per view (one thread, 960×960, anti-aliased) of shading a1's first beam
+/// outdoors under each lighting, every row one effect added to the hard-shadowed sun and sky;
+/// then of each image effect on the shaded view.
+fn daylight_costs(views: u32) {
+    use shmgen::augment::{self, Blur, Noise, NoiseModel, Vignette, defocus_by_depth};
+    use shmgen::cameras::DepthOfField;
+    use shmgen::materials::{GroundBounce, Lighting, Sky, Sun, ToneCurve};
+    let recipe = load(&scripts().join("a1_beams.rhai"), &[("samples", "1")]);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let sample = prepare(&recipe, 0).unwrap();
+    let mesh = TraceMesh::build(&sample.mesh);
+    let surfaces = surfaces_of(&sample);
+    let black = Backdrop::Colour([0, 0, 0]);
+    let up = 0.7f64;
+    let outdoor = Lighting {
+        ambient: 0.02,
+        studio: None,
+        sun: Some(Sun {
+            direction: glam::DVec3::new(up.cos() * 0.6, up.cos() * 0.8, up.sin()),
+            colour: [1.2, 1.1, 1.0],
+            angular_diameter: 0.0,
+            shadow_rays: 1,
+        }),
+        sky: Some(Sky {
+            sky: [0.16, 0.2, 0.27],
+            ground: [0.05, 0.04, 0.03],
+            occlusion_rays: 0,
+        }),
+        shadows: true,
+        ground: None,
+        film: Default::default(),
+    };
+    let with = |change: &dyn Fn(&mut Lighting)| {
+        let mut l = outdoor.clone();
+        change(&mut l);
+        l
+    };
+    let lightings: Vec<(&str, Lighting)> = vec![
+        ("studio (A1's default)", sample.lighting.clone()),
+        ("sun with a hard shadow, sky", outdoor.clone()),
+        (
+            "+ soft sun, 0.53°, 8 shadow rays",
+            with(&|l| {
+                let sun = l.sun.as_mut().unwrap();
+                (sun.angular_diameter, sun.shadow_rays) = (0.53f64.to_radians(), 8);
+            }),
+        ),
+        (
+            "+ sky occlusion, 16 rays",
+            with(&|l| l.sky.as_mut().unwrap().occlusion_rays = 16),
+        ),
+        (
+            "+ ground bounce",
+            with(&|l| {
+                l.ground = Some(GroundBounce {
+                    height: -3.0,
+                    albedo: [0.2; 3],
+                })
+            }),
+        ),
+        (
+            "+ filmic tone, +1 EV",
+            with(&|l| {
+                l.film.tone = ToneCurve::Filmic;
+                l.film.exposure = 2.0;
+            }),
+        ),
+    ];
+    let mut shade_ms = vec![Vec::new(); lightings.len()];
+    let effects = [
+        "depth of field, f/8 (focus on the nearest surface)",
+        "depth of field, f/2.8 (the same)",
+        "sensor vignette",
+        "sensor noise",
+        "sensor blur, σ 1 px",
+    ];
+    let mut effect_ms = vec![Vec::new(); effects.len()];
+    pool.install(|| {
+        for view in 0..views {
+            let camera = view_camera(&recipe.dataset, &sample, view).unwrap().camera;
+            let g = mesh.trace(&camera);
+            let mut rgb = Vec::new();
+            for (k, (_, lighting)) in lightings.iter().enumerate() {
+                let start = Instant::now();
+                rgb = shade(&g, &mesh, &camera, lighting, &surfaces, &black, true);
+                shade_ms[k].push(1e3 * start.elapsed().as_secs_f64());
+            }
+            let (w, h) = (g.width as usize, g.height as usize);
+            // Focused on the nearest surface: the far side of the beam and the backdrop blur.
+            let nearest = (g.depth.iter().copied().filter(|&d| d > 0.0)).fold(f32::MAX, f32::min);
+            let lens = DepthOfField {
+                f_number: 2.8,
+                focus_distance: f64::from(nearest),
+                sensor_width: 0.036,
+            };
+            let mut timed = |k: usize, effect: &mut dyn FnMut(&mut [u8])| {
+                let mut image = rgb.clone();
+                let start = Instant::now();
+                effect(&mut image);
+                effect_ms[k].push(1e3 * start.elapsed().as_secs_f64());
+            };
+            let mut defocus = |k: usize, f_number: f64| {
+                let lens = DepthOfField {
+                    f_number,
+                    ..lens.clone()
+                };
+                timed(k, &mut |image| {
+                    let (radius, distance) = lens.circles(&camera.intrinsics, &g.depth);
+                    defocus_by_depth(image, w, h, &radius, &distance);
+                });
+            };
+            defocus(0, 8.0);
+            defocus(1, 2.8);
+            timed(2, &mut |image| {
+                augment::vignette(image, w, h, &Vignette { strength: 0.3 })
+            });
+            timed(3, &mut |image| {
+                let model = NoiseModel::Gaussian { sigma: 3.0 };
+                augment::add_noise(image, w, h, &Noise { model, seed: 1 })
+            });
+            timed(4, &mut |image| {
+                augment::blur(image, w, h, &Blur::Gaussian { sigma: 1.0 })
+            });
+        }
+    });
+    println!(
+        "daylight and camera effects, ms per 960×960 view (1 thread, a1's first beam, {views} views):"
+    );
+    println!("| shading | ms | against the row it adds to |");
+    let medians: Vec<f64> = shade_ms.into_iter().map(median).collect();
+    for (k, (name, _)) in lightings.iter().enumerate() {
+        // The outdoor rows each add one effect to the hard-shadowed sun and sky.
+        let base = if k >= 2 { medians[1] } else { medians[0] };
+        println!("| {name} | {:.1} | {:+.1} |", medians[k], medians[k] - base);
+    }
+    println!("| image effect, on the shaded view | ms | |");
+    for (name, times) in effects.iter().zip(effect_ms) {
+        println!("| {name} | {:.1} | |", median(times));
+    }
+}
+
 fn main() {
     if let Ok(samples) = std::env::var(CHILD) {
         return stream_child(&samples);
+    }
+    if std::env::var("SHMGEN_BENCH_ONLY").as_deref() == Ok("daylight") {
+        return daylight_costs(setting("SHMGEN_BENCH_VIEWS", 10) as u32);
     }
     let runs = setting("SHMGEN_BENCH_RUNS", 3);
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -345,4 +498,5 @@ fn main() {
     for (name, recipe) in &rows {
         breakdown(name, recipe, 3);
     }
+    daylight_costs(setting("SHMGEN_BENCH_VIEWS", 10) as u32);
 }

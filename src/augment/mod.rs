@@ -4,7 +4,8 @@
 //! Owns: the photometric operations on an sRGB8 image (3 bytes a pixel, row-major, `width` ×
 //! `height`) — colour jitter with torchvision's `ColorJitter` semantics ([`colour`]),
 //! exposure, gamma and vignetting ([`tone`]), Gaussian and Poisson–Gaussian sensor noise
-//! ([`noise`]), Gaussian, motion and defocus blur ([`blur`]), JPEG re-compression
+//! ([`noise`]), Gaussian, motion and defocus blur ([`blur`]), blur by a per-pixel circle of
+//! confusion (a lens's depth of field, [`defocus`]), JPEG re-compression
 //! ([`jpeg`]); occlusion by random erasing with its erased mask ([`erase`]); the image-space
 //! similarity warp of RGB and label layers with the intrinsics and camera rotation that make
 //! it exact ([`warp`]); and for each operation a parameter struct holding the values drawn
@@ -25,6 +26,7 @@
 
 pub mod blur;
 pub mod colour;
+pub mod defocus;
 pub mod draw;
 pub mod erase;
 pub mod jpeg;
@@ -35,6 +37,7 @@ pub mod warp;
 
 pub use blur::{Blur, BlurSpec, blur};
 pub use colour::{ColourJitter, ColourJitterSpec, ColourOp, colour_jitter};
+pub use defocus::defocus_by_depth;
 pub use draw::Range;
 pub use erase::{Erasing, ErasingSpec, Fill, Filled, Rect, erase};
 pub use jpeg::{Jpeg, JpegSpec, jpeg};

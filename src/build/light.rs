@@ -1,8 +1,10 @@
 //! Drawing the light of a sample and the backdrop of a view from what the recipe declared,
 //! with a record of every value drawn.
 
-use crate::materials::{Backdrop, Lighting, Sky, Sun, srgb_to_linear};
-use crate::scene::{Background, LightSpec, SkyGradient};
+use crate::materials::{
+    Backdrop, Film, GroundBounce, Lighting, Sky, Sun, ToneCurve, srgb_to_linear,
+};
+use crate::scene::{Background, LightSpec, SkyGradient, Tone};
 use crate::seeds::Stream;
 use glam::DVec3;
 use serde::Serialize;
@@ -86,6 +88,8 @@ pub fn draw_light(spec: &LightSpec, stream: &mut Stream) -> (Lighting, LightDraw
         let light = Sun {
             direction,
             colour: s.colour.map(|c| srgb_to_linear(c) * intensity),
+            angular_diameter: s.diameter,
+            shadow_rays: s.shadow_rays,
         };
         let drawn = SunDraw {
             elevation,
@@ -100,6 +104,7 @@ pub fn draw_light(spec: &LightSpec, stream: &mut Stream) -> (Lighting, LightDraw
         let light = Sky {
             sky: s.colour.map(|c| srgb_to_linear(c) * intensity),
             ground: s.ground.map(|c| srgb_to_linear(c) * intensity),
+            occlusion_rays: s.occlusion_rays,
         };
         (light, SkyDraw { intensity })
     });
@@ -116,6 +121,17 @@ pub fn draw_light(spec: &LightSpec, stream: &mut Stream) -> (Lighting, LightDraw
         sun: sun.map(|s| s.0),
         sky: sky.map(|s| s.0),
         shadows: spec.shadows,
+        ground: spec.ground.as_ref().map(|g| GroundBounce {
+            height: g.height,
+            albedo: g.albedo.map(srgb_to_linear),
+        }),
+        film: Film {
+            exposure: libm::exp2(spec.exposure),
+            tone: match spec.tone {
+                Tone::Clip => ToneCurve::Clip,
+                Tone::Filmic => ToneCurve::Filmic,
+            },
+        },
     };
     (lighting, drawn)
 }

@@ -7,13 +7,16 @@
 //! need (world-to-camera, OpenGL/nerfstudio axes), ray directions through pixel centres (pixel
 //! (i, j) has its centre at (j + 0.5, i + 0.5)), and the rigs ([`CameraRig`]): poses on a
 //! sphere or band, fixed inspection cameras, orbits and flight lines, drawn fields of view,
-//! principal points and lenses, stereo pairs, and the checks that refuse degenerate ones.
+//! principal points and lenses, stereo pairs, the checks that refuse degenerate ones, and a
+//! thin lens's depth of field (`focus`).
 //! Must not touch: meshes, tracing or files.
 
 mod distortion;
+mod focus;
 mod rig;
 
 pub use distortion::{Distortion, LensFault};
+pub use focus::DepthOfField;
 pub use rig::{
     CameraRig, Distance, DistortionRanges, FixedCamera, MIN_FOV, Orbit, Poses, Stereo, ViewDraw,
     orbit_camera,

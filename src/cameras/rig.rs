@@ -140,6 +140,10 @@ pub struct CameraRig {
     pub aim_jitter: f64,
     /// A stereo pair per pose (null: one camera).
     pub stereo: Option<Stereo>,
+    /// A thin lens's depth of field blurring RGB by each pixel's depth (none: a pinhole,
+    /// everything sharp).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth_of_field: Option<super::DepthOfField>,
 }
 
 impl Default for CameraRig {
@@ -159,6 +163,7 @@ impl Default for CameraRig {
             },
             aim_jitter: 0.0,
             stereo: None,
+            depth_of_field: None,
         }
     }
 }

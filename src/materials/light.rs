@@ -1,5 +1,6 @@
 //! Light and backdrops as shading sees them: directions and linear radiance, fixed for one
-//! sample (light) or one view (backdrop). Plain values, drawn by the build stage from what a
+//! sample (light) or one view (backdrop), and the film (exposure, tone curve) that turns
+//! linear light into display values. Plain values, drawn by the build stage from what a
 //! recipe declared and consumed by the renderer.
 
 use super::image::TextureImage;
@@ -20,6 +21,74 @@ pub struct Lighting {
     pub sky: Option<Sky>,
     /// Whether the sun casts shadows.
     pub shadows: bool,
+    /// Light bounced up once by a ground plane lit by the sun and sky, if the scene has one;
+    /// without it, the sky's own `ground` colour lights faces from below.
+    pub ground: Option<GroundBounce>,
+    /// How linear light becomes a pixel: exposure and tone curve.
+    pub film: Film,
+}
+
+/// An infinite horizontal Lambertian ground plane below the structure that bounces the sun's
+/// and the sky's light once onto faces turned down to it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroundBounce {
+    /// Height of the plane (world z, metres).
+    pub height: f64,
+    /// Linear albedo of the plane, per channel.
+    pub albedo: [f64; 3],
+}
+
+/// How linear radiance becomes a displayed value in [0, 1] before sRGB encoding.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Film {
+    /// Factor on linear radiance (2^EV).
+    pub exposure: f64,
+    /// The tone curve applied after exposure.
+    pub tone: ToneCurve,
+}
+
+/// Tone curves from scene-linear to display-linear values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ToneCurve {
+    /// Values above 1 clip to 1 (the paper's look; identity below 1).
+    Clip,
+    /// Narkowicz's (2015) fit of the ACES filmic curve: a toe, a shoulder rolling off towards 1.
+    Filmic,
+}
+
+impl Default for Film {
+    /// No exposure change, clipping: the renderer's look before exposure existed.
+    fn default() -> Self {
+        Film {
+            exposure: 1.0,
+            tone: ToneCurve::Clip,
+        }
+    }
+}
+
+impl Film {
+    /// Display-linear value in [0, 1] of a non-negative linear radiance.
+    pub fn display(&self, linear: f64) -> f64 {
+        // An exposure of exactly 1 multiplies by nothing, so the default keeps every bit.
+        let x = if self.exposure == 1.0 {
+            linear
+        } else {
+            linear * self.exposure
+        };
+        match self.tone {
+            ToneCurve::Clip => x.clamp(0.0, 1.0),
+            ToneCurve::Filmic => filmic(x.max(0.0)),
+        }
+    }
+}
+
+/// Narkowicz's ACES fit, x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14), clamped to [0, 1]
+/// (it passes 1 at x ≈ 7.24 and tends to 2.51/2.43 beyond).
+pub fn filmic(x: f64) -> f64 {
+    if !x.is_finite() {
+        return 1.0;
+    }
+    (x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
 }
 
 /// A directional light fixed in the world.
@@ -29,6 +98,11 @@ pub struct Sun {
     pub direction: DVec3,
     /// Linear radiance per channel.
     pub colour: [f64; 3],
+    /// Angular diameter of the sun's disk, radians (0.53° for the real sun; 0 = a point).
+    pub angular_diameter: f64,
+    /// Shadow rays per shaded point, spread over the disk: the penumbra's steps (1 = a hard
+    /// shadow along `direction`).
+    pub shadow_rays: u32,
 }
 
 /// Hemispherical light: a face gets `sky` weighted by (1 + n_z)/2 and `ground` by (1 − n_z)/2.
@@ -38,6 +112,9 @@ pub struct Sky {
     pub sky: [f64; 3],
     /// Linear radiance of the ground, per channel.
     pub ground: [f64; 3],
+    /// Occlusion rays per shaded point over its hemisphere (0 = the sky reaches every face
+    /// unobstructed).
+    pub occlusion_rays: u32,
 }
 
 impl Default for Lighting {
@@ -52,6 +129,8 @@ impl Default for Lighting {
             sun: None,
             sky: None,
             shadows: false,
+            ground: None,
+            film: Film::default(),
         }
     }
 }
@@ -80,4 +159,46 @@ pub enum Backdrop {
         /// Width and height of the window, in image units.
         size: (f64, f64),
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_film_is_clipping_and_keeps_every_bit() {
+        let film = Film::default();
+        for x in [-0.5, 0.0, 1e-300, 0.123_456_789, 0.999_999_999, 1.0, 7.0] {
+            assert_eq!(film.display(x).to_bits(), x.clamp(0.0, 1.0).to_bits());
+        }
+        let brighter = Film {
+            exposure: 2.0,
+            ..film
+        };
+        assert_eq!(brighter.display(0.25), 0.5);
+    }
+
+    /// The ACES fit has a toe (darker than the identity below about 0.1), lifts mid-tones
+    /// (0.18 grey → 0.27) and rolls highlights off: monotone, below white until x ≈ 7.24,
+    /// white beyond.
+    #[test]
+    fn the_filmic_curve_rolls_highlights_off_towards_white() {
+        assert_eq!(filmic(0.0), 0.0);
+        assert!(filmic(0.02) < 0.02, "toe");
+        assert!(
+            (filmic(0.18) - 0.267).abs() < 0.005,
+            "mid grey {}",
+            filmic(0.18)
+        );
+        let mut last = 0.0;
+        for i in 1..=2000 {
+            let x = f64::from(i) * 0.01;
+            let y = filmic(x);
+            assert!(y >= last, "monotone at {x}");
+            assert!(x >= 7.24 || y < 1.0, "below white at {x}: {y}");
+            last = y;
+        }
+        assert_eq!(filmic(11.0), 1.0);
+        assert_eq!(filmic(f64::INFINITY), 1.0);
+    }
 }

@@ -21,7 +21,7 @@ pub mod noise;
 pub mod procedural;
 pub mod prompt;
 
-pub use light::{Backdrop, Lighting, Sky, Sun};
+pub use light::{Backdrop, Film, GroundBounce, Lighting, Sky, Sun, ToneCurve};
 pub use procedural::{Grain, MaterialDraw, Shader, Surface, SurfacePoint};
 
 use serde::Serialize;

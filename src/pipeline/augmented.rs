@@ -78,21 +78,46 @@ struct CopyOf {
 /// changes an operation's draws. A geometric operation draws per pose, so that both eyes of
 /// a stereo pair move alike and stay a rigid pair; the others per view. Operations the
 /// probabilities skip are left out.
-fn draw_copy(
-    spec: &AugmentSpec,
+fn draw_copy(spec: &AugmentSpec, seed: u64, of: CopyOf, size: (u32, u32)) -> Vec<Applied> {
+    draw_operations(
+        &spec.operations,
+        &format!("augment {}", of.copy),
+        seed,
+        of,
+        size,
+    )
+}
+
+/// The sensor's operations for view `view` of sample `sample`, each drawn from its own stream
+/// ("sensor vignette 0", ...) keyed by the view, as a copy's are.
+pub fn draw_sensor(dataset: &DatasetSpec, sample: u64, view: u32) -> Vec<Applied> {
+    let of = CopyOf {
+        sample,
+        view,
+        pose: view,
+        copy: 0,
+    };
+    let size = (dataset.camera.width, dataset.camera.height);
+    draw_operations(&dataset.sensor, "sensor", dataset.seed, of, size)
+}
+
+/// `operations` drawn for `of`, each from the stream "{prefix} {kind} {occurrence}".
+fn draw_operations(
+    operations: &[Operation],
+    prefix: &str,
     seed: u64,
     of: CopyOf,
     (width, height): (u32, u32),
 ) -> Vec<Applied> {
     let (w, h) = (width as usize, height as usize);
     let mut seen: Vec<&str> = Vec::new();
-    spec.operations
+    operations
         .iter()
         .filter_map(|op| {
             let kind = op.name();
             let occurrence = seen.iter().filter(|k| **k == kind).count();
             seen.push(kind);
-            let name = format!("augment {} {kind} {occurrence}", of.copy);
+            let name = format!("{prefix} {kind} {occurrence}");
             let at = if op.is_geometric() { of.pose } else { of.view };
             let stream = &mut Stream::new(seed, Scope::View(of.sample, at), &name);
             match op {
@@ -265,29 +290,40 @@ impl<'a> AugmentedView<'a> {
     /// there.
     fn photometric(&self, rgb: &mut [u8], valid: Option<&[u8]>) -> Result<(), String> {
         let (w, h) = self.base.size();
-        let (w, h) = (w as usize, h as usize);
-        for op in self.operations {
-            match op {
-                Applied::Warp(_) | Applied::Crop(_) => {}
-                Applied::ColourJitter(p) => augment::colour_jitter(rgb, w, h, p, valid),
-                Applied::Exposure(p) => augment::exposure(rgb, w, h, p),
-                Applied::Gamma(p) => augment::gamma(rgb, w, h, p),
-                Applied::Vignette(p) => augment::vignette(rgb, w, h, p),
-                Applied::Noise(p) => augment::add_noise(rgb, w, h, p),
-                Applied::Blur(p) => augment::blur(rgb, w, h, p),
-                Applied::Jpeg(p) => augment::jpeg(rgb, w, h, p)?,
-                Applied::Erase(p) => {
-                    augment::erase(rgb, w, h, p, valid);
-                }
+        photometric(rgb, (w as usize, h as usize), self.operations, valid)
+    }
+}
+
+/// The photometric `operations`, in order, on an RGB image of `(w, h)` pixels (geometric ones
+/// are skipped: they act before). `valid` marks the pixels a warp gave a source: statistics
+/// leave the others out, and they are black again at the end.
+pub fn photometric(
+    rgb: &mut [u8],
+    (w, h): (usize, usize),
+    operations: &[Applied],
+    valid: Option<&[u8]>,
+) -> Result<(), String> {
+    for op in operations {
+        match op {
+            Applied::Warp(_) | Applied::Crop(_) => {}
+            Applied::ColourJitter(p) => augment::colour_jitter(rgb, w, h, p, valid),
+            Applied::Exposure(p) => augment::exposure(rgb, w, h, p),
+            Applied::Gamma(p) => augment::gamma(rgb, w, h, p),
+            Applied::Vignette(p) => augment::vignette(rgb, w, h, p),
+            Applied::Noise(p) => augment::add_noise(rgb, w, h, p),
+            Applied::Blur(p) => augment::blur(rgb, w, h, p),
+            Applied::Jpeg(p) => augment::jpeg(rgb, w, h, p)?,
+            Applied::Erase(p) => {
+                augment::erase(rgb, w, h, p, valid);
             }
         }
-        for (pixel, _) in
-            (rgb.chunks_exact_mut(3).zip(valid.into_iter().flatten())).filter(|(_, v)| **v == 0)
-        {
-            pixel.fill(0);
-        }
-        Ok(())
     }
+    for (pixel, _) in
+        (rgb.chunks_exact_mut(3).zip(valid.into_iter().flatten())).filter(|(_, v)| **v == 0)
+    {
+        pixel.fill(0);
+    }
+    Ok(())
 }
 
 impl ViewLayers for AugmentedView<'_> {

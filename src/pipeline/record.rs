@@ -136,6 +136,10 @@ pub struct ViewRecord<'a> {
     pub coverage: f64,
     /// For an augmented copy, what was done to it (null for a clean view).
     pub augmentation: Option<AugmentationRecord<'a>>,
+    /// What the sensor did to the RGB images (`dataset.sensor`), in order, with every value
+    /// drawn; left out when the dataset declares no sensor effects.
+    #[serde(default, skip_serializing_if = "<[Applied]>::is_empty")]
+    pub sensor: &'a [Applied],
 }
 
 /// How an augmented copy was made. Its camera (K and pose) is the one its files agree with.
@@ -164,6 +168,8 @@ pub struct ViewFacts<'a> {
     pub coverage: f64,
     /// How an augmented copy was made.
     pub augmentation: Option<AugmentationRecord<'a>>,
+    /// What the sensor did to the view's RGB images.
+    pub sensor: &'a [Applied],
 }
 
 impl ViewFacts<'_> {
@@ -736,6 +742,7 @@ impl<'a> SampleRecord<'a> {
             },
             coverage: facts.coverage,
             augmentation: facts.augmentation,
+            sensor: facts.sensor,
         }
     }
 }

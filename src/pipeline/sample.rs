@@ -121,6 +121,7 @@ pub fn for_each_image(
             backdrop: &clean.backdrop_drawn,
             coverage: clean.coverage(),
             augmentation: None,
+            sensor: &clean.sensor,
         };
         each(&clean, None, facts)?;
     }
@@ -149,6 +150,7 @@ pub fn for_each_image(
                 mode: augment.mode,
                 operations: &operations,
             }),
+            sensor: &base.sensor,
         };
         each(&copied, Some(copy), facts)?;
     }

@@ -3,6 +3,8 @@
 //! unloaded structure (for the rest image, its depth and the flow) is traced through a second
 //! BVH, built once per sample when a view first needs it.
 
+use super::augmented::{Applied, draw_sensor, photometric};
+use crate::augment::defocus_by_depth;
 use crate::build::{BackdropDraw, BuiltSample, draw_backdrop};
 use crate::cameras::{Camera, ViewDraw};
 use crate::materials::Backdrop;
@@ -127,6 +129,8 @@ pub struct RenderedView<'a> {
     backdrop: Backdrop,
     /// The background drawn for this view.
     pub backdrop_drawn: BackdropDraw,
+    /// What the sensor does to the view's RGB images, as drawn.
+    pub sensor: Vec<Applied>,
     rgb: OnceLock<Vec<u8>>,
     cracks: OnceLock<Vec<u8>>,
     /// The unloaded structure through the same camera.
@@ -201,6 +205,7 @@ impl<'a> SampleRenderer<'a> {
         );
         let frame = (dataset.camera.width, dataset.camera.height);
         let (backdrop, backdrop_drawn) = draw_backdrop(&dataset.background, &mut stream, frame);
+        let sensor = draw_sensor(dataset, self.sample.index, view);
         RenderedView {
             renderer: self,
             view,
@@ -211,6 +216,7 @@ impl<'a> SampleRenderer<'a> {
             backdrop_drawn,
             structure: OnceLock::new(),
             rest_structure: OnceLock::new(),
+            sensor,
             rgb: OnceLock::new(),
             cracks: OnceLock::new(),
             rest_gbuffer: OnceLock::new(),
@@ -296,10 +302,10 @@ impl RenderedView<'_> {
     }
 
     /// RGB of what `g` saw through this view's camera in the mesh `bvh`, with the sample's
-    /// light and this view's backdrop.
+    /// light and this view's backdrop, through the sensor.
     fn shaded(&self, g: &GBuffer, bvh: &TraceMesh, surfaces: &SampleSurfaces) -> Vec<u8> {
         let r = self.renderer;
-        shade(
+        let mut rgb = shade(
             g,
             bvh,
             &self.camera,
@@ -307,7 +313,16 @@ impl RenderedView<'_> {
             surfaces,
             &self.backdrop,
             r.dataset.antialias,
-        )
+        );
+        let size = (g.width as usize, g.height as usize);
+        if let Some(lens) = &r.dataset.camera.depth_of_field {
+            // Circles from the exact planar depth; the backdrop lies at infinity.
+            let (radius, distance) = lens.circles(&self.camera.intrinsics, &g.depth);
+            defocus_by_depth(&mut rgb, size.0, size.1, &radius, &distance);
+        }
+        // The operations are validated; an encoder failing in memory is a bug.
+        photometric(&mut rgb, size, &self.sensor, None).expect("sensor effects on a valid image");
+        rgb
     }
 
     fn rest_gbuffer(&self) -> &GBuffer {

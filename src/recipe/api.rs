@@ -4,11 +4,14 @@
 use super::files::RecipeFiles;
 use super::options::{self, OptResult, Options, number, shown};
 use super::result::{Fallible, fail};
-use crate::cameras::{CameraRig, Distance, DistortionRanges, FixedCamera, Poses, Stereo};
+use crate::cameras::{
+    CameraRig, DepthOfField, Distance, DistortionRanges, FixedCamera, Poses, Stereo,
+};
 use crate::output::{DEFAULT_OUTPUTS, output_names};
 use crate::scene::{
-    AugmentSpec, Background, DEFAULT_POINTS, DatasetSpec, GeometryMode, ImageRecord, LightSpec,
-    NormalsFrame, OUTDOOR_AMBIENT, Operation, Outputs, SkyGradient, SkySpec, SourceSite, SunSpec,
+    AugmentSpec, Background, DEFAULT_POINTS, DatasetSpec, GeometryMode, GroundBounceSpec,
+    ImageRecord, LightSpec, NormalsFrame, OUTDOOR_AMBIENT, Operation, Outputs, SkyGradient,
+    SkySpec, SourceSite, SunSpec, Tone,
 };
 use crate::seeds::Stream;
 use crate::words::number as number_shown;
@@ -161,6 +164,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
     let antialias = o.flag("antialias", true)?;
     let ground = super::ground_api::ground(o.take("ground"))?;
     let augment = super::augment_api::augment(o.take("augment"))?;
+    let sensor = super::augment_api::sensor(o.take("sensor"))?;
     let outputs = outputs(o.take("outputs"))?;
     check_flow_warps(&outputs, &augment)?;
     let normals = normals_frame(o.string("normals", "camera")?)?;
@@ -192,6 +196,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
             light,
             antialias,
             augment,
+            sensor,
             normals,
             points,
             ground,
@@ -283,6 +288,18 @@ fn check_flow_warps(outputs: &Outputs, augment: &AugmentSpec) -> OptResult<()> {
 /// `fixed: [...]`, `orbit: #{...}`, `line: #{...}`.
 fn camera(mut o: Options, views: u32) -> OptResult<CameraRig> {
     let d = CameraRig::default();
+    let depth_of_field = match o.sub("depth_of_field")? {
+        None => None,
+        Some(mut l) => {
+            let lens = DepthOfField {
+                f_number: l.number("f_number", 2.8)?,
+                focus_distance: l.required_number("focus_distance")?,
+                sensor_width: l.number("sensor_width", 0.036)?,
+            };
+            l.finish()?;
+            Some(lens)
+        }
+    };
     let width = o.integer("width", i64::from(d.width), 1, 16_384)? as u32;
     let height = o.integer("height", i64::from(d.height), 1, 16_384)? as u32;
     let fov_y = o.range("fov_y", d.fov_y)?;
@@ -331,8 +348,12 @@ fn camera(mut o: Options, views: u32) -> OptResult<CameraRig> {
         poses,
         aim_jitter,
         stereo,
+        depth_of_field,
     };
     rig.validate(views)?;
+    if let Some(lens) = &rig.depth_of_field {
+        lens.validate((width, height), fov_y[0])?;
+    }
     Ok(rig)
 }
 
@@ -482,7 +503,8 @@ fn background(value: Option<Dynamic>, files: &RecipeFiles) -> OptResult<Backgrou
     Ok(result)
 }
 
-/// `light: #{ sun: #{ ... }, sky: #{ ... }, ambient, shadows, studio }`.
+/// `light: #{ sun: #{ ... }, sky: #{ ... }, ambient, shadows, studio, ground: #{ height,
+/// albedo }, exposure, tone }`.
 fn light(mut o: Options) -> OptResult<LightSpec> {
     let sun = match o.sub("sun")? {
         None => None,
@@ -493,6 +515,8 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
                 azimuth: s.range("azimuth", d.azimuth)?,
                 intensity: s.range("intensity", d.intensity)?,
                 colour: s.colour("colour", d.colour)?,
+                diameter: s.number("diameter", d.diameter)?,
+                shadow_rays: s.integer("shadow_rays", i64::from(d.shadow_rays), 1, 256)? as u32,
             };
             s.finish()?;
             Some(spec)
@@ -506,6 +530,8 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
                 intensity: s.range("intensity", d.intensity)?,
                 colour: s.colour("colour", d.colour)?,
                 ground: s.colour("ground", d.ground)?,
+                occlusion_rays: s.integer("occlusion_rays", i64::from(d.occlusion_rays), 0, 256)?
+                    as u32,
             };
             s.finish()?;
             Some(spec)
@@ -520,6 +546,22 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
     let ambient = o.range("ambient", default_ambient)?;
     let shadows = o.flag("shadows", outdoor)?;
     let studio = o.flag("studio", !outdoor)?;
+    let ground = match o.sub("ground")? {
+        None => None,
+        Some(mut g) => {
+            let spec = GroundBounceSpec {
+                height: g.number("height", 0.0)?,
+                albedo: g.colour("albedo", [0.35, 0.33, 0.3])?,
+            };
+            g.finish()?;
+            Some(spec)
+        }
+    };
+    let exposure = o.number("exposure", 0.0)?;
+    let tone = match o.choice("tone", &["clip", "filmic"], Some("clip"))? {
+        "filmic" => Tone::Filmic,
+        _ => Tone::Clip,
+    };
     o.finish()?;
     let spec = LightSpec {
         studio,
@@ -527,6 +569,9 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
         sky,
         ambient,
         shadows,
+        ground,
+        exposure,
+        tone,
     };
     spec.validate()?;
     Ok(spec)

@@ -7,7 +7,7 @@ use super::options::{OptResult, Options};
 use crate::scene::{
     AugmentSpec, BlurSpec, ColourJitterSpec, CropSpec, ErasingSpec, ExposureSpec, Fill, GammaSpec,
     GeometryMode, JpegSpec, NoiseSpec, OPERATION_NAMES, Operation, Range, SigmaUnit, VignetteSpec,
-    WarpSpec, operation_path,
+    WarpSpec,
 };
 use rhai::{Array, Dynamic, Map};
 
@@ -72,9 +72,34 @@ fn declared(mut o: Options) -> OptResult<AugmentSpec> {
 
 /// `operations: [#{ op: "warp", ... }, ...]`.
 fn operations(list: Dynamic) -> OptResult<Vec<Operation>> {
+    operation_list(list, "dataset.augment.operations")
+}
+
+/// `sensor: [#{ op: "vignette", ... }, #{ op: "noise", ... }, ...]`: what the camera's sensor
+/// and lens do to every clean image, the augmentations' photometric operations drawn once per
+/// view (none by default).
+pub fn sensor(value: Option<Dynamic>) -> OptResult<Vec<Operation>> {
+    let Some(list) = value else {
+        return Ok(Vec::new());
+    };
+    let operations = operation_list(list, "dataset.sensor")?;
+    for (i, op) in operations.iter().enumerate() {
+        let at = format!("dataset.sensor[{i}] ({})", op.name());
+        if op.is_geometric() || matches!(op, Operation::Erase(_)) {
+            return Err(format!(
+                "{at}: a sensor only changes the picture's light (colour_jitter, exposure, gamma, vignette, noise, blur, jpeg); warps, crops and cut-outs belong in dataset.augment"
+            ));
+        }
+        op.validate(&at)?;
+    }
+    Ok(operations)
+}
+
+/// A list of operations at `list_path`.
+fn operation_list(list: Dynamic, list_path: &str) -> OptResult<Vec<Operation>> {
     let items = list.clone().try_cast::<Array>().ok_or_else(|| {
         format!(
-            "dataset.augment.operations = {} ({}) must be a list like [#{{ op: \"warp\", ... }}, #{{ op: \"noise\", ... }}]",
+            "{list_path} = {} ({}) must be a list like [#{{ op: \"vignette\", ... }}, #{{ op: \"noise\", ... }}]",
             super::options::shown(&list),
             list.type_name()
         )
@@ -82,23 +107,23 @@ fn operations(list: Dynamic) -> OptResult<Vec<Operation>> {
     items
         .into_iter()
         .enumerate()
-        .map(|(i, item)| operation(i, item))
+        .map(|(i, item)| operation(list_path, i, item))
         .collect()
 }
 
-/// Operation `i` of the list.
-fn operation(i: usize, item: Dynamic) -> OptResult<Operation> {
-    let place = format!("dataset.augment.operations[{i}]");
+/// Operation `i` of the list at `list_path`.
+fn operation(list_path: &str, i: usize, item: Dynamic) -> OptResult<Operation> {
+    let place = format!("{list_path}[{i}]");
     let map = item.clone().try_cast::<Map>().ok_or_else(|| {
         format!(
             "{place} = {} must be a map like #{{ op: \"gamma\", gamma: [0.8, 1.25], probability: 0.5 }}",
             super::options::shown(&item)
         )
     })?;
-    let mut o = Options::new(map, place);
+    let mut o = Options::new(map, place.clone());
     let name = o.choice("op", &OPERATION_NAMES, None)?;
     // Every other option of the operation is named by the operation's place and kind.
-    let mut o = o.renamed(operation_path(i, name));
+    let mut o = o.renamed(format!("{place} ({name})"));
     let op = match name {
         "warp" => Operation::Warp(warp(&mut o)?),
         "crop" => Operation::Crop(CropSpec {

@@ -6,11 +6,13 @@
 //! triangle) and the fields that follow the same centre ray (normals, distance along the ray,
 //! displacement from the unloaded structure, optical flow from its image), texture lookup on
 //! the undeformed surface (through `materials`), shading into RGB with sun, sky, studio lights
-//! and shadows, anti-aliased with fixed sub-pixel rays only where the image changes, and
-//! backdrops. Must not touch: recipes, scenes, mechanics or files;
+//! and shadows (soft over the sun's disk), sky occlusion and a ground's bounce (`daylight`),
+//! exposure and tone curve, anti-aliased with fixed sub-pixel rays only where the image
+//! changes, and backdrops. Must not touch: recipes, scenes, mechanics or files;
 //! it sees meshes, cameras and materials only. One centre ray per pixel for every geometric
 //! label; nothing here draws random numbers.
 
+mod daylight;
 mod fields;
 mod shade;
 mod surfaces;

@@ -1,6 +1,8 @@
 //! Shading into RGB: diffuse and glossy reflection of the sun, the sky, an ambient term and
-//! (by default) a studio key and fill light fixed to the camera, with optional sun shadows;
-//! the background is a colour, a sky gradient or an image.
+//! (by default) a studio key and fill light fixed to the camera, with optional sun shadows
+//! (soft over the sun's disk), sky occlusion and a ground's bounce (`daylight`); the
+//! background is a colour, a sky gradient or an image. Linear light becomes a pixel through
+//! the film's exposure and tone curve, then sRGB.
 //!
 //! Anti-aliasing: a first pass shades one centre ray per pixel, as for the geometric labels.
 //! Where a pixel differs from a neighbour in what it sees (surface or background, or an
@@ -8,9 +10,10 @@
 //! boundaries), it is re-shaded from four fixed sub-pixel rays averaged in linear light.
 //! Texture detail is filtered by the materials themselves, so it never triggers extra rays.
 
+use super::daylight::{DiskPattern, pixel_turn, sky_light, sun_visibility};
 use super::trace::{GBuffer, NO_HIT, TraceMesh};
 use crate::cameras::Camera;
-use crate::materials::{Backdrop, Lighting, Surface, srgb_to_linear};
+use crate::materials::{Backdrop, Film, Lighting, Surface, srgb_to_linear};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -61,9 +64,10 @@ struct Light {
     specular: [f64; 3],
 }
 
-/// Reflected linear colour of `albedo` under `diffuse` irradiance plus `specular`, clamped.
-fn reflected(albedo: [f64; 3], diffuse: [f64; 3], specular: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|k| (albedo[k] * diffuse[k] + specular[k]).clamp(0.0, 1.0))
+/// Reflected colour of `albedo` under `diffuse` irradiance plus `specular`, through the film
+/// (display-linear, 0–1).
+fn reflected(film: &Film, albedo: [f64; 3], diffuse: [f64; 3], specular: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|k| film.display(albedo[k] * diffuse[k] + specular[k]))
 }
 
 /// Everything a ray needs to be shaded.
@@ -76,6 +80,10 @@ struct Shading<'a, S: Surfaces> {
     background: [f64; 3],
     /// The studio lights in world axes, for this view.
     studio: Option<[(DVec3, f64); 2]>,
+    /// Shadow rays over the sun's disk.
+    sun_disk: DiskPattern,
+    /// Occlusion rays over a shaded point's hemisphere.
+    hemisphere: DiskPattern,
 }
 
 /// RGB8 image (sRGB) of the G-buffer.
@@ -101,6 +109,8 @@ pub fn shade(
         studio: lighting
             .studio
             .map(|lights| lights.map(|(d, i)| (camera.rotation * d, i))),
+        sun_disk: DiskPattern::new(lighting.sun.map_or(0, |s| s.shadow_rays)),
+        hemisphere: DiskPattern::new(lighting.sky.map_or(0, |s| s.occlusion_rays)),
     };
     let width = g.width as usize;
     let plain_background = matches!(backdrop, Backdrop::Colour(_)).then(|| encode(s.background));
@@ -170,7 +180,13 @@ impl<S: Surfaces> Shading<'_, S> {
             if let Some(flat) = flat.as_deref_mut() {
                 let flat_colour = match hit {
                     Some((_, tri)) if self.surfaces.textured(tri) => {
-                        encode(reflected(self.surfaces.flat(tri), unshadowed, [0.0; 3]))
+                        let film = &self.lighting.film;
+                        encode(reflected(
+                            film,
+                            self.surfaces.flat(tri),
+                            unshadowed,
+                            [0.0; 3],
+                        ))
                     }
                     _ => colour,
                 };
@@ -242,16 +258,29 @@ impl<S: Surfaces> Shading<'_, S> {
         let (point, normal, footprint) =
             hit_geometry(self.camera, self.mesh, tri, view, f64::from(depth));
         let surface = self.surfaces.at(tri, point, footprint);
-        let light = self.light(view, &surface, point, normal);
+        let light = self.light(view, &surface, point, normal, (u, v));
         (
-            reflected(surface.albedo, light.diffuse, light.specular),
+            reflected(
+                &self.lighting.film,
+                surface.albedo,
+                light.diffuse,
+                light.specular,
+            ),
             light.unshadowed,
         )
     }
 
-    /// The light a surface at `point` with facing `n` receives along `view`: diffuse
-    /// irradiance with and without the sun's shadow, and the glossy reflection.
-    fn light(&self, view: DVec3, surface: &Surface, point: DVec3, n: DVec3) -> Light {
+    /// The light a surface at `point` with facing `n` receives along `view`, seen through
+    /// image point `pixel`: diffuse irradiance with and without the sun's shadow and the
+    /// sky's occlusion, and the glossy reflection.
+    fn light(
+        &self,
+        view: DVec3,
+        surface: &Surface,
+        point: DVec3,
+        n: DVec3,
+        pixel: (f64, f64),
+    ) -> Light {
         let l = self.lighting;
         let gloss = (surface.specular > 0.0).then_some(surface);
         let to_eye = gloss.map(|_| -(self.camera.rotation * view).normalize());
@@ -261,7 +290,8 @@ impl<S: Surfaces> Shading<'_, S> {
             specular: [0.0; 3],
         };
         // Each light in a fixed order, so both sums round alike where no shadow falls.
-        let mut add = |direction: DVec3, colour: [f64; 3], reaches: bool| {
+        // `reaches`: the share of the light not shadowed.
+        let mut add = |direction: DVec3, colour: [f64; 3], reaches: f64| {
             let cos = n.dot(direction);
             if cos <= 0.0 {
                 return;
@@ -269,9 +299,11 @@ impl<S: Surfaces> Shading<'_, S> {
             for k in 0..3 {
                 light.unshadowed[k] += colour[k] * cos;
             }
-            if !reaches {
+            if reaches == 0.0 {
                 return;
             }
+            // A whole light multiplies by nothing: the same bits as before soft shadows.
+            let cos = if reaches == 1.0 { cos } else { cos * reaches };
             for k in 0..3 {
                 light.diffuse[k] += colour[k] * cos;
             }
@@ -284,23 +316,25 @@ impl<S: Surfaces> Shading<'_, S> {
         };
         if let Some(lights) = &self.studio {
             for (direction, intensity) in lights {
-                add(*direction, [*intensity; 3], true);
+                add(*direction, [*intensity; 3], 1.0);
             }
         }
+        let turn = || pixel_turn(pixel.0, pixel.1);
         if let Some(sun) = &l.sun {
             // A face turned away from the sun needs no shadow ray: it is unlit either way.
-            let shadowed = l.shadows
-                && n.dot(sun.direction) > 0.0
-                && self.mesh.occluded(point, n, sun.direction);
-            add(sun.direction, sun.colour, !shadowed);
+            let seen = if l.shadows && n.dot(sun.direction) > 0.0 {
+                sun_visibility(self.mesh, point, n, sun, &self.sun_disk, turn())
+            } else {
+                1.0
+            };
+            add(sun.direction, sun.colour, seen);
         }
-        if let Some(sky) = &l.sky {
+        if l.sky.is_some() || l.ground.is_some() {
             // Irradiance of a sky dome and a ground below, for a surface tilted by n.z.
-            let up = 0.5 * (1.0 + n.z);
+            let (seen, open) = sky_light(self.mesh, l, point, n, &self.hemisphere, turn);
             for k in 0..3 {
-                let sky = sky.sky[k] * up + sky.ground[k] * (1.0 - up);
-                light.diffuse[k] += sky;
-                light.unshadowed[k] += sky;
+                light.diffuse[k] += seen[k];
+                light.unshadowed[k] += open[k];
             }
         }
         light
@@ -315,11 +349,12 @@ impl<S: Surfaces> Shading<'_, S> {
                 ground,
             } => {
                 let up = (self.camera.rotation * view).normalize().z;
+                let film = &self.lighting.film;
                 if up < 0.0 {
-                    *ground
+                    ground.map(|c| film.display(c))
                 } else {
                     let t = up.sqrt();
-                    std::array::from_fn(|k| horizon[k] + (zenith[k] - horizon[k]) * t)
+                    std::array::from_fn(|k| film.display(horizon[k] + (zenith[k] - horizon[k]) * t))
                 }
             }
             Backdrop::Image {

@@ -197,13 +197,19 @@ impl TraceMesh {
     /// towards `direction`. The ray starts a little off the surface so that it cannot hit the
     /// triangle it leaves.
     pub fn occluded(&self, p: DVec3, normal: DVec3, direction: DVec3) -> bool {
+        self.occluded_within(p, normal, direction, f64::INFINITY)
+    }
+
+    /// Whether anything blocks the way from `p` towards unit `direction` closer than `reach`
+    /// (metres; infinite for any distance), the ray leaving the surface as in `occluded`.
+    pub fn occluded_within(&self, p: DVec3, normal: DVec3, direction: DVec3, reach: f64) -> bool {
         // Without a ground the core is the whole mesh, and no point is farther from the anchor
         // than half its diagonal.
         let lift = 1e-5 * self.core_diagonal.max((p - self.anchor).length());
         let origin = (p - self.anchor + lift * normal).as_vec3a();
         let dir = traversal_direction(direction.as_vec3a());
         let sheared = ShearedRay::new(origin, dir);
-        let ray = Ray::new(origin, dir, 0.0, f32::INFINITY);
+        let ray = Ray::new(origin, dir, 0.0, reach as f32);
         // Stops at the first blocker found.
         !self.bvh.ray_traverse_miss(ray, |r, id| {
             let [a, b, c] = self.triangles[id];

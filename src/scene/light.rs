@@ -22,6 +22,32 @@ pub struct LightSpec {
     pub ambient: [f64; 2],
     /// Whether the sun casts shadows (default: on with a sun or sky).
     pub shadows: bool,
+    /// A ground plane that bounces the sun's and sky's light once onto faces turned down to
+    /// it, if any (replaces the sky's `ground` colour).
+    pub ground: Option<GroundBounceSpec>,
+    /// Exposure in stops (EV): linear light × 2^exposure (default 0).
+    pub exposure: f64,
+    /// The tone curve from linear light to the display (default clip).
+    pub tone: Tone,
+}
+
+/// A ground plane bouncing light, as declared.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct GroundBounceSpec {
+    /// Height of the plane (world z, metres).
+    pub height: f64,
+    /// sRGB colour (0–1) of the ground's albedo.
+    pub albedo: [f64; 3],
+}
+
+/// Tone curves from linear light to the display.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum Tone {
+    /// Light above white clips to white (the paper's look).
+    Clip,
+    /// The ACES filmic curve as fitted by Narkowicz (2015): highlights roll off.
+    Filmic,
 }
 
 /// A directional sun as declared: each number a range [min, max] drawn once per sample.
@@ -36,6 +62,11 @@ pub struct SunSpec {
     pub intensity: [f64; 2],
     /// sRGB colour of the light, components 0–1.
     pub colour: [f64; 3],
+    /// Angular diameter of the sun's disk, radians (default 0.53°, the real sun's): the
+    /// width of a shadow's soft edge is the distance to its caster times this angle.
+    pub diameter: f64,
+    /// Shadow rays per shaded point over the disk (default 8; 1 = a hard shadow).
+    pub shadow_rays: u32,
 }
 
 /// Hemispherical sky and ground light as declared: a face gets the sky colour weighted by
@@ -48,10 +79,16 @@ pub struct SkySpec {
     pub colour: [f64; 3],
     /// sRGB colour (0–1) of the light the ground bounces up from below.
     pub ground: [f64; 3],
+    /// Occlusion rays per shaded point (default 16; 0 = no ambient occlusion): the sky and
+    /// ground light reach a face only along directions the structure leaves open.
+    pub occlusion_rays: u32,
 }
 
 /// Uniform light outdoors, where the sky already lights every face from some side.
 pub const OUTDOOR_AMBIENT: f64 = 0.02;
+
+/// The real sun's mean angular diameter, 0.53° (32 arc minutes), in radians.
+pub const SUN_DIAMETER: f64 = 0.53 * std::f64::consts::PI / 180.0;
 
 impl Default for LightSpec {
     /// The paper's look: studio lights, no sun, no shadows.
@@ -62,6 +99,9 @@ impl Default for LightSpec {
             sky: None,
             ambient: [Lighting::default().ambient; 2],
             shadows: false,
+            ground: None,
+            exposure: 0.0,
+            tone: Tone::Clip,
         }
     }
 }
@@ -78,6 +118,28 @@ impl LightSpec {
                     sun.elevation[0], sun.elevation[1]
                 ));
             }
+        }
+        if let Some(sun) = &self.sun
+            && !(0.0..=0.5).contains(&sun.diameter)
+        {
+            return Err(format!(
+                "dataset.light.sun.diameter = {} must lie within [0, 0.5] radians (the real sun: 0.00925)",
+                sun.diameter
+            ));
+        }
+        if !(-20.0..=20.0).contains(&self.exposure) {
+            return Err(format!(
+                "dataset.light.exposure = {} stops must lie within [-20, 20]",
+                self.exposure
+            ));
+        }
+        if let Some(g) = &self.ground
+            && !g.height.is_finite()
+        {
+            return Err(format!(
+                "dataset.light.ground.height = {} must be a finite number of metres",
+                g.height
+            ));
         }
         for (name, [lo, _]) in [("ambient", self.ambient)]
             .into_iter()
@@ -102,6 +164,8 @@ impl Default for SunSpec {
             azimuth: [0.0, std::f64::consts::TAU],
             intensity: [1.2; 2],
             colour: [1.0, 0.96, 0.9],
+            diameter: SUN_DIAMETER,
+            shadow_rays: 8,
         }
     }
 }
@@ -113,6 +177,7 @@ impl Default for SkySpec {
             intensity: [0.3; 2],
             colour: [0.75, 0.83, 0.95],
             ground: [0.4, 0.36, 0.3],
+            occlusion_rays: 16,
         }
     }
 }

@@ -21,7 +21,8 @@ pub use augment::{
 pub use beam::{BeamSpec, Tessellation};
 pub use ground::{GROUND_PART, GroundSpec, ground_radius};
 pub use light::{
-    Background, ImageRecord, LightSpec, OUTDOOR_AMBIENT, SkyGradient, SkySpec, SunSpec,
+    Background, GroundBounceSpec, ImageRecord, LightSpec, OUTDOOR_AMBIENT, SUN_DIAMETER,
+    SkyGradient, SkySpec, SunSpec, Tone,
 };
 
 use crate::cameras::CameraRig;
@@ -83,6 +84,10 @@ pub struct DatasetSpec {
     pub antialias: bool,
     /// Augmented copies of every view.
     pub augment: AugmentSpec,
+    /// What the camera's sensor and lens do to every clean image (vignetting, noise, blur,
+    /// ...): photometric operations drawn once per view, before any augmentation.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sensor: Vec<Operation>,
     /// The axes the `normals` output is written in.
     pub normals: NormalsFrame,
     /// Points the `points` output draws on each sample's surface.
