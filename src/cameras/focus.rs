@@ -34,6 +34,11 @@ impl DepthOfField {
     pub fn blur_diameter(&self, k: &Intrinsics, depth: f64) -> f64 {
         let f = self.focal_length(k);
         let (a, s) = (f / self.f_number, self.focus_distance);
+        if s <= f {
+            // A lens zoomed in past its focus (an exact zoom copy can lengthen f beyond what
+            // the recipe's check saw) focuses nothing: everything is as blurred as allowed.
+            return f64::INFINITY;
+        }
         // |d − s| / d, which tends to 1 at infinity.
         let defocus = if depth > 0.0 && depth.is_finite() {
             (depth - s).abs() / depth
@@ -146,5 +151,9 @@ mod tests {
         let err = lens.validate((960, 960), 2f64.to_radians()).unwrap_err();
         assert!(err.contains("focus_distance"), "{err}");
         assert!(lens.validate((960, 960), 1.0).is_ok());
+        // Zoomed in past it anyway (f = 0.036 · 4000 / 960 = 0.15 m > 0.05 m): the widest
+        // blur, never a negative or NaN circle.
+        let (radius, _) = lens.circles(&intrinsics(4000.0), &[0.0, 0.05, 1.0]);
+        assert!(radius.iter().all(|&r| r == f32::INFINITY), "{radius:?}");
     }
 }
