@@ -56,7 +56,12 @@ fn structures_stand_on_the_ground_within_a_pixel() {
     for structure in ["beam", "silo"] {
         let dir = tempfile::tempdir().unwrap();
         let outputs = r#""rgb", "depth", "mask", "parts", "instances""#;
-        let path = recipe(dir.path(), structure, r#"#{ material: "gravel", in_depth: true }"#, outputs);
+        let path = recipe(
+            dir.path(),
+            structure,
+            r#"#{ material: "gravel", in_depth: true }"#,
+            outputs,
+        );
         let out = dir.path().join("out");
         ok(run(&path, &out, &[]));
         for v in 0..4 {
@@ -87,17 +92,27 @@ fn structures_stand_on_the_ground_within_a_pixel() {
                         assert_eq!(instances[i], instance);
                         assert_eq!(view.mask[i], 0, "the mask is the structure's alone");
                         let tolerance = 1e-5 * f64::from(view.depth[i]) + 1e-6;
-                        assert!((p[2] - height).abs() < tolerance, "{structure} view {v}: ground pixel at z = {} against {height}", p[2]);
+                        assert!(
+                            (p[2] - height).abs() < tolerance,
+                            "{structure} view {v}: ground pixel at z = {} against {height}",
+                            p[2]
+                        );
                     } else {
                         assert_eq!(view.mask[i], 255);
-                        assert!(p[2] > height - 1e-6, "{structure}: a structure point below the ground");
+                        assert!(
+                            p[2] > height - 1e-6,
+                            "{structure}: a structure point below the ground"
+                        );
                         if p[2] < lowest.0 {
                             lowest = (p[2], footprint);
                         }
                     }
                 }
             }
-            assert!(ground_pixels > view.width * view.height / 10, "{structure} view {v}: {ground_pixels}");
+            assert!(
+                ground_pixels > view.width * view.height / 10,
+                "{structure} view {v}: {ground_pixels}"
+            );
             let (z, footprint) = lowest;
             assert!(
                 z - height <= footprint,
@@ -146,7 +161,12 @@ fn a_ground_outside_depth_leaves_every_structure_layer_unchanged() {
 fn a_ground_renders_the_same_on_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();
     let outputs = r#""rgb", "depth", "mask", "parts", "instances", "normals""#;
-    let path = recipe(dir.path(), "beam", r#"#{ material: "asphalt", in_depth: true }"#, outputs);
+    let path = recipe(
+        dir.path(),
+        "beam",
+        r#"#{ material: "asphalt", in_depth: true }"#,
+        outputs,
+    );
     let (one, two) = (dir.path().join("one"), dir.path().join("two"));
     ok(run(&path, &one, &["--threads", "1"]));
     ok(run(&path, &two, &["--threads", "2"]));
@@ -168,11 +188,17 @@ fn cameras_below_the_ground_and_unknown_grounds_are_refused() {
     let output = run(&below, &dir.path().join("o1"), &[]);
     assert!(!output.status.success());
     let err = stderr(&output);
-    assert!(err.contains("below the ground") && err.contains("view 0"), "{err}");
+    assert!(
+        err.contains("below the ground") && err.contains("view 0"),
+        "{err}"
+    );
     for (ground, expected) in [
         (r#""gras""#, "did you mean \"grass\""),
         (r#"#{ material: "lava" }"#, "unknown ground \"lava\""),
-        (r#"#{ material: "soil", in_dept: true }"#, "did you mean `in_depth`"),
+        (
+            r#"#{ material: "soil", in_dept: true }"#,
+            "did you mean `in_depth`",
+        ),
     ] {
         let bad = write(
             dir.path(),

@@ -12,9 +12,8 @@ use glam::DVec3;
 /// structures then meets two ground boxes in the BVH rather than every slice of a fan (a fan of
 /// 96 made a view four times slower).
 pub fn ground_square(centre: DVec3, z: f64, half_side: f64) -> Mesh {
-    let corner = |sx: f64, sy: f64| {
-        DVec3::new(centre.x + sx * half_side, centre.y + sy * half_side, z)
-    };
+    let corner =
+        |sx: f64, sy: f64| DVec3::new(centre.x + sx * half_side, centre.y + sy * half_side, z);
     Mesh {
         positions: vec![
             corner(-1.0, -1.0),

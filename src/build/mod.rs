@@ -18,8 +18,8 @@ mod tessellation;
 pub use assembly::{BuiltShape, assembly_radius, mesh_assembly};
 pub use beam::{BuiltBeam, beam_radius, mesh_beam, problem, section_outline, stations};
 pub use ground::ground_square;
-pub use supports::{SupportMaterial, SupportPiece, drawn_supports};
 pub use light::{BackdropDraw, LightDraw, SkyDraw, SunDraw, draw_backdrop, draw_light};
+pub use supports::{SupportMaterial, SupportPiece, drawn_supports};
 pub use tessellation::{chord_tolerance, segments_for_chord};
 
 use crate::geometry::{self, MAX_COORDINATE, MAX_TRIANGLES, Mesh};

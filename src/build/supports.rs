@@ -183,7 +183,9 @@ mod tests {
         let parts: Vec<&str> = pieces.iter().map(|p| p.part).collect();
         assert_eq!(
             parts,
-            ["pin", "pin", "pin", "abutment", "roller", "roller", "roller", "abutment"]
+            [
+                "pin", "pin", "pin", "abutment", "roller", "roller", "roller", "abutment"
+            ]
         );
         for p in &pieces {
             assert!(p.mesh.is_closed_and_oriented(), "{}", p.part);
@@ -200,7 +202,12 @@ mod tests {
         let level = lowest_z(&pieces);
         assert!(level < lowest - 0.2 * 0.4 + 1e-12, "{level}");
         for p in pieces.iter().filter(|p| p.part == "abutment") {
-            let z = p.mesh.positions.iter().map(|q| q.z).fold(f64::INFINITY, f64::min);
+            let z = p
+                .mesh
+                .positions
+                .iter()
+                .map(|q| q.z)
+                .fold(f64::INFINITY, f64::min);
             assert_eq!(z, level);
         }
     }

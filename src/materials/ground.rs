@@ -20,7 +20,10 @@ const GROUNDS: [(&str, &[&str]); 6] = [
     ("grass", &["grass", "lawn", "meadow"]),
     ("gravel", &["gravel", "ballast", "shingle"]),
     ("asphalt", &["asphalt", "tarmac", "road"]),
-    ("concrete slab", &["concrete slab", "concrete", "slab", "pavement"]),
+    (
+        "concrete slab",
+        &["concrete slab", "concrete", "slab", "pavement"],
+    ),
     ("soil", &["soil", "earth", "dirt", "mud"]),
     ("water", &["water", "river", "lake"]),
 ];
@@ -38,7 +41,10 @@ pub fn ground_material(prompt: &str) -> Result<Material, String> {
         .iter()
         .find(|(_, names)| names.contains(&words.as_str()))
     else {
-        let every: Vec<&str> = GROUNDS.iter().flat_map(|(_, n)| n.iter().copied()).collect();
+        let every: Vec<&str> = GROUNDS
+            .iter()
+            .flat_map(|(_, n)| n.iter().copied())
+            .collect();
         let hint = crate::words::nearest(&words, &every)
             .map(|k| format!("; did you mean \"{k}\"?"))
             .unwrap_or_default();
@@ -48,39 +54,11 @@ pub fn ground_material(prompt: &str) -> Result<Material, String> {
         ));
     };
     let (base, colour, roughness, specular, scale, conditions) = match *name {
-        "grass" => (
-            Base::Concrete,
-            [0.46, 0.57, 0.28],
-            1.0,
-            0.02,
-            2.0,
-            vec![],
-        ),
+        "grass" => (Base::Concrete, [0.46, 0.57, 0.28], 1.0, 0.02, 2.0, vec![]),
         "gravel" => (Base::Stone, [0.58, 0.56, 0.52], 1.0, 0.03, 0.15, vec![]),
-        "asphalt" => (
-            Base::Concrete,
-            [0.33, 0.33, 0.34],
-            0.9,
-            0.04,
-            0.5,
-            vec![],
-        ),
-        "concrete slab" => (
-            Base::Concrete,
-            [0.62, 0.61, 0.58],
-            0.9,
-            0.04,
-            1.0,
-            vec![],
-        ),
-        "soil" => (
-            Base::Concrete,
-            [0.48, 0.4, 0.31],
-            1.0,
-            0.02,
-            2.0,
-            vec![],
-        ),
+        "asphalt" => (Base::Concrete, [0.33, 0.33, 0.34], 0.9, 0.04, 0.5, vec![]),
+        "concrete slab" => (Base::Concrete, [0.62, 0.61, 0.58], 0.9, 0.04, 1.0, vec![]),
+        "soil" => (Base::Concrete, [0.48, 0.4, 0.31], 1.0, 0.02, 2.0, vec![]),
         _ => (Base::Plain, [0.24, 0.3, 0.32], 0.1, 0.02, 1.0, vec![]),
     };
     Ok(Material {
@@ -121,7 +99,10 @@ mod tests {
 
     #[test]
     fn synonyms_and_case_name_one_ground_and_typos_get_a_suggestion() {
-        assert_eq!(ground_material(" Tarmac ").unwrap().prompt.as_deref(), Some("asphalt"));
+        assert_eq!(
+            ground_material(" Tarmac ").unwrap().prompt.as_deref(),
+            Some("asphalt")
+        );
         let err = ground_material("grasss").unwrap_err();
         assert!(err.contains("did you mean \"grass\""), "{err}");
         assert!(ground_material("lava").is_err());

@@ -3,10 +3,10 @@
 //! surface from the sample's own stream, so they are the same on any thread or shard.
 
 use crate::build::{BuiltSample, StructureMesh};
-use glam::DVec3;
 use crate::output::{MeshLayer, PointLayer, SampleLayers};
 use crate::scene::DatasetSpec;
 use crate::seeds::{self, Scope, Stream};
+use glam::DVec3;
 
 /// The geometry of one sample of a dataset: its structures, without a ground.
 pub struct SampleGeometry<'a> {

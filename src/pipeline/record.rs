@@ -8,8 +8,8 @@ use super::view::{Eye, ViewCamera};
 use crate::augment::Similarity;
 use crate::build::{BackdropDraw, BuiltSample, LightDraw};
 use crate::cameras::{Camera, CameraRig, Distortion, ViewDraw, rows4};
-use crate::materials::{Material, MaterialDraw};
 use crate::materials::procedural::CRACK_LABEL_COVER;
+use crate::materials::{Material, MaterialDraw};
 use crate::mechanics::{Labels, SectionProperties};
 use crate::output::{DEPTH_CHANNEL, SAMPLE_WRITERS, WRITERS};
 use crate::recipe::Recipe;
@@ -736,7 +736,9 @@ impl<'a> SampleRecord<'a> {
                 structures: &self.structures,
             },
             mesh: MeshRecord {
-                vertices: sample.ground.map_or(sample.mesh.positions.len(), |g| g.first_vertex),
+                vertices: sample
+                    .ground
+                    .map_or(sample.mesh.positions.len(), |g| g.first_vertex),
                 triangles: sample.structure_triangles(),
                 bounding_radius: sample.radius,
             },

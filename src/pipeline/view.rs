@@ -67,7 +67,8 @@ pub fn view_camera(dataset: &DatasetSpec, sample: &BuiltSample, view: u32) -> Re
         Some(Eye::Right) => rig.right_eye(&left).expect("a stereo rig"),
         _ => left,
     };
-    above_ground(sample, &camera, &draw).map_err(|e| anyhow!("sample {}, view {view}: {e}", sample.index))?;
+    above_ground(sample, &camera, &draw)
+        .map_err(|e| anyhow!("sample {}, view {view}: {e}", sample.index))?;
     Ok(ViewCamera {
         camera,
         draw,
@@ -159,8 +160,7 @@ impl<'a> SampleRenderer<'a> {
     /// The unloaded structure and its BVH, built on first use: the loaded mesh's triangles
     /// over the undeformed vertices.
     fn rest(&self) -> &Traced {
-        self.rest
-        .get_or_init(|| {
+        self.rest.get_or_init(|| {
             let s = self.sample;
             Traced::with_positions(&s.mesh, &s.rest, s.structure_triangles())
         })
@@ -384,7 +384,12 @@ impl ViewLayers for RenderedView<'_> {
             NormalsFrame::Camera => self.camera.rotation.transpose(),
             NormalsFrame::World => glam::DMat3::IDENTITY,
         };
-        normals(self.geometric(), &self.renderer.trace_mesh, &self.camera, axes)
+        normals(
+            self.geometric(),
+            &self.renderer.trace_mesh,
+            &self.camera,
+            axes,
+        )
     }
 
     fn ray_distance(&self) -> Vec<f32> {

@@ -405,8 +405,11 @@ fn register_settings(engine: &mut Engine) {
             Ok(b.clone())
         },
     );
-    engine.register_fn("supports_drawn", |b: &mut BeamSpec, drawn: bool| -> BeamSpec {
-        b.supports_drawn = drawn;
-        b.clone()
-    });
+    engine.register_fn(
+        "supports_drawn",
+        |b: &mut BeamSpec, drawn: bool| -> BeamSpec {
+            b.supports_drawn = drawn;
+            b.clone()
+        },
+    );
 }

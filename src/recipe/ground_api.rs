@@ -12,8 +12,8 @@ pub fn ground(value: Option<Dynamic>) -> OptResult<Option<GroundSpec>> {
         return Ok(None);
     };
     if value.is_string() {
-        let material = ground_material(&value.to_string())
-            .map_err(|e| format!("dataset.ground: {e}"))?;
+        let material =
+            ground_material(&value.to_string()).map_err(|e| format!("dataset.ground: {e}"))?;
         return Ok(Some(GroundSpec {
             material,
             height: None,
