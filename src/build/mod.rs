@@ -23,7 +23,7 @@ pub use supports::{SupportMaterial, SupportPiece, drawn_supports};
 pub use tessellation::{chord_tolerance, segments_for_chord};
 
 use crate::geometry::{self, MAX_COORDINATE, MAX_TRIANGLES, Mesh};
-use crate::materials::{Grain, Lighting, Material, Shader, prompt};
+use crate::materials::{Grain, GroundBounce, Lighting, Material, Shader, prompt, srgb_to_linear};
 use crate::mechanics::Labels;
 use crate::scene::{DatasetSpec, GROUND_PART, SceneSpec, SourceSite, Structure, ground_radius};
 use crate::seeds::{self, Scope, Stream};
@@ -244,10 +244,18 @@ pub fn build_sample(
         .chain(&extras)
         .map(|m| Shader::new(m, &mut materials))
         .collect();
-    let (lighting, light_drawn) = draw_light(
+    let (mut lighting, light_drawn) = draw_light(
         &dataset.light,
         &mut Stream::new(dataset.seed, Scope::Sample(index), seeds::LIGHT),
     );
+    // A ground under the structures bounces the light that falls on it, unless the recipe
+    // declared its own bounce plane: its mean colour, at its height.
+    if let (Some(built), Some(spec), None) = (&ground, &dataset.ground, &lighting.ground) {
+        lighting.ground = Some(GroundBounce {
+            height: built.height,
+            albedo: spec.material.colour.map(srgb_to_linear),
+        });
+    }
     Ok(BuiltSample {
         index,
         scene,
