@@ -35,6 +35,10 @@ pub struct TraceMesh {
     /// Diagonal of the bounds of the structures' triangles (all but a ground's), metres: the
     /// scale shadow rays leave surfaces by.
     core_diagonal: f64,
+    /// Those bounds, relative to `anchor` and grown by a millionth of the diagonal: a shadow
+    /// or occlusion ray that misses them can meet nothing but the ground, which never blocks
+    /// one (see `occluded_within`).
+    core_bounds: (DVec3, DVec3),
 }
 
 /// obvhs' slab test replaces direction components below f32::EPSILON by ±1/EPSILON, i.e. it
@@ -136,6 +140,10 @@ impl TraceMesh {
             anchor,
             reach: 0.5 * (hi - lo).length(),
             core_diagonal: (core_hi - core_lo).length(),
+            core_bounds: {
+                let margin = DVec3::splat(1e-6 * (core_hi - core_lo).length());
+                (core_lo - anchor - margin, core_hi - anchor + margin)
+            },
         }
     }
 
@@ -206,7 +214,14 @@ impl TraceMesh {
         // Without a ground the core is the whole mesh, and no point is farther from the anchor
         // than half its diagonal.
         let lift = 1e-5 * self.core_diagonal.max((p - self.anchor).length());
-        let origin = (p - self.anchor + lift * normal).as_vec3a();
+        let start = p - self.anchor + lift * normal;
+        // Rays towards the sun and the sky rise, and rays down to a ground stop at it
+        // (`reach`), so a ground never blocks: a ray that misses the structures' bounds is
+        // free. Most of a ground's pixels are decided here, without entering the BVH.
+        if !ray_meets_box(start, direction, reach, self.core_bounds) {
+            return false;
+        }
+        let origin = start.as_vec3a();
         let dir = traversal_direction(direction.as_vec3a());
         let sheared = ShearedRay::new(origin, dir);
         let ray = Ray::new(origin, dir, 0.0, reach as f32);
@@ -355,5 +370,51 @@ impl<'a> PrimaryRays<'a> {
                 self.camera.rotation * k.ray_through_pixel(row as u32, col as u32)
             }
         }
+    }
+}
+
+/// Whether the ray from `origin` along `direction` meets the box `(lo, hi)` within `reach`
+/// (the slab test, Kay & Kajiya 1986): the largest entry along the axes before the smallest
+/// exit. An axis the ray runs parallel to is met only from inside its slab.
+fn ray_meets_box(origin: DVec3, direction: DVec3, reach: f64, (lo, hi): (DVec3, DVec3)) -> bool {
+    let (mut enter, mut exit) = (0.0f64, reach);
+    for axis in 0..3 {
+        let (o, d) = (origin[axis], direction[axis]);
+        if d == 0.0 {
+            if o < lo[axis] || o > hi[axis] {
+                return false;
+            }
+            continue;
+        }
+        let (a, b) = ((lo[axis] - o) / d, (hi[axis] - o) / d);
+        enter = enter.max(a.min(b));
+        exit = exit.min(a.max(b));
+    }
+    enter <= exit
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rays_meet_a_box_as_the_slab_test_says() {
+        let unit = (DVec3::splat(-1.0), DVec3::splat(1.0));
+        let meets = |o: [f64; 3], d: [f64; 3], reach: f64| {
+            ray_meets_box(DVec3::from(o), DVec3::from(d), reach, unit)
+        };
+        // Straight at it, from inside, and short of it.
+        assert!(meets([-5.0, 0.0, 0.0], [1.0, 0.0, 0.0], f64::INFINITY));
+        assert!(meets([0.5, 0.5, 0.5], [0.0, 0.0, -1.0], 0.1));
+        assert!(!meets([-5.0, 0.0, 0.0], [1.0, 0.0, 0.0], 3.9));
+        assert!(meets([-5.0, 0.0, 0.0], [1.0, 0.0, 0.0], 4.0));
+        // Pointing away, parallel outside a slab, and passing beside the box.
+        assert!(!meets([-5.0, 0.0, 0.0], [-1.0, 0.0, 0.0], f64::INFINITY));
+        assert!(!meets([-5.0, 1.5, 0.0], [1.0, 0.0, 0.0], f64::INFINITY));
+        let diagonal = DVec3::new(1.0, 1.0, 0.0).normalize();
+        assert!(meets([-3.0, -3.0, 0.0], diagonal.into(), f64::INFINITY));
+        assert!(!meets([-3.0, -3.0 + 2.0 + 1e-9, 0.0], [1.0, -1.0, 0.0], f64::INFINITY));
+        // A grazing ray along a face is inside its slab: it meets the box.
+        assert!(meets([-5.0, 1.0, 0.0], [1.0, 0.0, 0.0], f64::INFINITY));
     }
 }
