@@ -762,6 +762,8 @@ fn test_grain() -> Grain {
     Grain {
         axis: glam::DMat3::from_rotation_z(0.35) * DVec3::X,
         centre: DVec3::new(0.4, -0.3, 1.1),
+        bottom: 0.85,
+        top: 1.35,
     }
 }
 
