@@ -128,6 +128,8 @@ const RUST_AGE: Field = Field::new(1, 0.16, 2);
 /// Paint chalking and dirt, on the rungs paint's own field evaluates (free lanes 1 and 2).
 const CHALK: Field = Field::new(1, 0.08, 3);
 const GRIME: Field = Field::new(2, 0.08, 3);
+/// Corrosion pits: the peaks of centimetre noise (rungs the rust's ragged edge evaluates).
+const PITS: Field = Field::new(1, 0.01, 2);
 const BLOTCH: Field = Field::new(4, 0.64, 4);
 const WORN_SUBSTRATE: Field = Field::new(4, 0.04, 3);
 const MOSS_PATCH: Field = Field::new(5, 0.32, 5);
@@ -377,7 +379,10 @@ impl Point<'_> {
                 let mottle = self.field(STEEL_MOTTLE);
                 let fine = self.field(BASE_FINE);
                 let flaked = smoothstep(0.15, 0.35, -mottle - 0.4 * fine);
-                scale(colour, (1.0 + 0.08 * mottle + 0.06 * fine) * (1.0 + 0.22 * flaked))
+                scale(
+                    colour,
+                    (1.0 + 0.08 * mottle + 0.06 * fine) * (1.0 + 0.22 * flaked),
+                )
             }
             Base::GalvanisedSteel => {
                 // Spangle: zinc crystals a centimetre across, each with its own sheen. Within
@@ -414,23 +419,28 @@ impl Point<'_> {
 
     /// Share of the pixel a line `width` wide covers, `d` from its centre line.
     fn line(&self, d: f64, width: f64) -> f64 {
-        ((0.5 * width - d) / self.footprint + 0.5).clamp(0.0, 1.0) * (width / self.footprint).min(1.0)
+        ((0.5 * width - d) / self.footprint + 0.5).clamp(0.0, 1.0)
+            * (width / self.footprint).min(1.0)
     }
 
     /// Share of the pixel a round hole of `radius` covers, `d` from its centre.
     fn disk(&self, d: f64, radius: f64) -> f64 {
-        ((radius - d) / self.footprint + 0.5).clamp(0.0, 1.0) * (radius / self.footprint).min(1.0).powi(2)
+        ((radius - d) / self.footprint + 0.5).clamp(0.0, 1.0)
+            * (radius / self.footprint).min(1.0).powi(2)
     }
 
     /// Streaks that run down the surface: noise stretched 20× vertically (features about
-    /// 3 cm across and 60 cm long), four independent lanes from one lattice evaluation,
+    /// 3 cm across and 60 cm long, two octaves), four independent lanes from one lattice evaluation,
     /// each roughly in [−1, 1]. Evaluated once per point, whoever asks first.
     fn streaks(&self) -> [f64; 4] {
         if let Some(v) = self.streaks.get() {
             return v;
         }
         let q = DVec3::new(self.p.x / 0.03, self.p.y / 0.03, self.p.z / 0.6);
-        let v = self.shader.noise.fractals::<4>(q, 1.0, 3, self.footprint / 0.03);
+        let v = self
+            .shader
+            .noise
+            .fractals::<4>(q, 1.0, 1, self.footprint / 0.03);
         self.streaks.set(Some(v));
         v
     }
@@ -462,7 +472,11 @@ impl Point<'_> {
         let to_lower = (u - course) * COURSE_HEIGHT;
         let to_upper = COURSE_HEIGHT - to_lower;
         let sheet = std::f64::consts::TAU / SHEETS_PER_RING;
-        let stagger = if course.rem_euclid(2.0) == 1.0 { 0.5 } else { 0.0 };
+        let stagger = if course.rem_euclid(2.0) == 1.0 {
+            0.5
+        } else {
+            0.0
+        };
         let around = libm::atan2(radial.y, radial.x) / sheet + stagger;
         let vertical = to_joint(around, 1.0) * sheet * radius / scale_m;
         let seam = weight * self.line(to_lower.min(to_upper).min(vertical), SEAM_WIDTH);
@@ -536,6 +550,11 @@ impl Point<'_> {
         if clean <= 0.0 {
             return;
         }
+        // Bare steel weathers by rusting (the rust condition's runs); paint and concrete
+        // collect dirt where water runs.
+        if base == Base::Steel {
+            return;
+        }
         let streak = self.streaks();
         let runs = smoothstep(0.05, 0.5, streak[0]) * fade_below(below) * clean;
         match base {
@@ -554,7 +573,6 @@ impl Point<'_> {
                 let dirt = age * splash * splash * (0.7 + 0.3 * self.field(GRIME));
                 s.albedo = scale(s.albedo, (1.0 - 0.45 * dirt) * (1.0 - 0.35 * age * runs));
             }
-            Base::Steel => s.albedo = scale(s.albedo, 1.0 - 0.25 * runs),
             _ => {
                 s.albedo = scale(s.albedo, 1.0 - (0.15 + 0.3 * stained) * runs);
                 let deposit = (stained + weathered).min(1.0);
@@ -687,13 +705,13 @@ impl Point<'_> {
                 } else {
                     mix(PALETTE.rust_mid, PALETTE.rust_dark, 2.0 * age - 1.0)
                 };
-                // Pitting: small dark pits in the rust, more and wider the deeper the attack.
-                let (pit_radius, pit_share) = if corroded {
-                    (0.0015, 0.6)
-                } else {
-                    (0.0008 + 0.0008 * i, 0.15 + 0.3 * i)
-                };
-                rust = scale(rust, 1.0 - 0.6 * self.pores(0.004, pit_radius, pit_share));
+                // Pitting: small dark pits in the rust, more the deeper the attack. Peaks of
+                // fine noise, so pits finer than a pixel fade with their octaves.
+                let pits = smoothstep(0.55 - 0.2 * reach, 0.75 - 0.2 * reach, self.field(PITS));
+                rust = scale(rust, 1.0 - 0.55 * pits);
+                if corroded {
+                    rust = scale(rust, 1.0 - 0.6 * self.pores(0.004, 0.0015, 0.6));
+                }
                 let metal = self.shader.material.is_metal();
                 let opacity = if metal { 1.0 } else { 0.6 };
                 if self.shader.material.base == Base::Painted {
@@ -705,9 +723,11 @@ impl Point<'_> {
                 // Outside the patches, a brown bloom dulls the surface, and rust washed out
                 // of the top edge and the patches above runs down in streaks.
                 let bloom = 0.55 * reach * smoothstep(-0.6, 0.2, -field);
-                let runs = reach
-                    * smoothstep(0.0, 0.45, self.streaks()[1])
-                    * fade_below(self.below_top());
+                let runs = if patch < 1.0 {
+                    reach * smoothstep(0.0, 0.45, self.streaks()[1]) * fade_below(self.below_top())
+                } else {
+                    0.0
+                };
                 let cover = (patch + (1.0 - patch) * (bloom + 0.8 * runs).min(1.0)) * opacity;
                 s.albedo = mix(s.albedo, rust, cover);
                 s.roughness = lerp(s.roughness, 0.95, cover);
@@ -748,7 +768,9 @@ impl Point<'_> {
             }
             ConditionKind::Wet => {
                 // A water film darkens porous surfaces and adds a glossy layer (F0 ≈ 0.02).
-                s.albedo = s.albedo.map(|c| libm::pow(c, 1.0 + 0.6 * i) * (1.0 - 0.25 * i));
+                s.albedo = s
+                    .albedo
+                    .map(|c| libm::pow(c, 1.0 + 0.6 * i) * (1.0 - 0.25 * i));
                 s.roughness *= 1.0 - 0.7 * i;
                 s.specular = s.specular.max(0.02 + 0.03 * i);
             }
