@@ -762,6 +762,8 @@ fn test_grain() -> Grain {
     Grain {
         axis: glam::DMat3::from_rotation_z(0.35) * DVec3::X,
         centre: DVec3::new(0.4, -0.3, 1.1),
+        bottom: 0.85,
+        top: 1.35,
     }
 }
 
@@ -1405,4 +1407,417 @@ fn each_view_shows_the_background_image_its_json_names() {
         2,
         "both images are drawn over 12 views: {seen:?}"
     );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Issue 14: materials that look like the prompt. Albedo statistics are taken over patches of
+// the undeformed surface straight from the shader (no light), encoded to sRGB by the sRGB
+// standard's formula, so the bounds read as colours a person would name.
+
+/// Linear light → sRGB (IEC 61966-2-1), 0–1.
+fn encode_srgb(c: f64) -> f64 {
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// A horizontal piece lying along x (a beam's side face is a vertical wall facing −y), 1 m
+/// from the ground to its top at z = 1.4.
+fn beam_grain() -> Grain {
+    Grain {
+        axis: DVec3::X,
+        centre: DVec3::new(0.0, 0.0, 1.2),
+        bottom: 1.0,
+        top: 1.4,
+    }
+}
+
+/// A point on the wall facing −y at (x, z), seen with pixels `footprint` wide.
+fn wall_point(x: f64, z: f64, footprint: f64) -> SurfacePoint {
+    SurfacePoint {
+        rest: DVec3::new(x, 0.0, z),
+        rest_normal: -DVec3::Y,
+        footprint,
+    }
+}
+
+/// sRGB albedos over a `width` × `height` m patch of that wall whose top edge is `top`, on a
+/// 2 mm-footprint grid of `n` × `n` points.
+fn patch(s: &Shader, grain: &Grain, top: f64, width: f64, height: f64, n: usize) -> Vec<[f64; 3]> {
+    let mut out = Vec::with_capacity(n * n);
+    for i in 0..n {
+        for j in 0..n {
+            let (x, z) = (
+                width * (i as f64 + 0.5) / n as f64,
+                top - height * (j as f64 + 0.5) / n as f64,
+            );
+            out.push(
+                s.surface(&wall_point(x, z, 2e-3), grain)
+                    .albedo
+                    .map(encode_srgb),
+            );
+        }
+    }
+    out
+}
+
+/// Mean colour, mean hue of that colour, HSV value and saturation of the mean, and the
+/// standard deviation of luma.
+fn colour_stats(px: &[[f64; 3]]) -> ([f64; 3], f64, f64, f64, f64) {
+    let n = px.len() as f64;
+    let m: [f64; 3] = std::array::from_fn(|k| px.iter().map(|c| c[k]).sum::<f64>() / n);
+    let luma = |c: &[f64; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    let ml = px.iter().map(luma).sum::<f64>() / n;
+    let sd = (px.iter().map(|c| (luma(c) - ml).powi(2)).sum::<f64>() / n).sqrt();
+    let (max, min) = (m[0].max(m[1]).max(m[2]), m[0].min(m[1]).min(m[2]));
+    (m, hue(m), max, (max - min) / max, sd)
+}
+
+#[test]
+fn each_prompt_has_the_colour_statistics_of_what_it_names() {
+    // Bounds from what the named things look like in daylight photographs (sRGB):
+    // (prompt, hue range °, value range, saturation range, luma std range).
+    let cases: [(&str, (f64, f64), (f64, f64), (f64, f64), (f64, f64)); 10] = [
+        // Rust: orange-brown to dark brown (hue 10–40°), never near-white, textured.
+        (
+            "A photo of rusty steel beam for construction",
+            (10.0, 40.0),
+            (0.25, 0.6),
+            (0.3, 0.8),
+            (0.03, 0.2),
+        ),
+        // Plastic board: near-white, almost uniform.
+        (
+            "A photo of plastic board for construction",
+            (0.0, 360.0),
+            (0.75, 1.0),
+            (0.0, 0.12),
+            (0.0, 0.03),
+        ),
+        // Timber: light brown (hue 20–45°), wood grain.
+        (
+            "A photo of cracked timber for construction",
+            (20.0, 45.0),
+            (0.5, 0.9),
+            (0.3, 0.7),
+            (0.02, 0.2),
+        ),
+        // Rosewood: dark red-brown.
+        // (Its 1.5 mm rings are finer than the 2 mm footprint: only the figure remains.)
+        (
+            "A photo of a rosewood block for construction",
+            (0.0, 30.0),
+            (0.2, 0.6),
+            (0.4, 0.9),
+            (0.004, 0.2),
+        ),
+        // Bare steel under mill scale: dark blue-grey (blue the largest channel, hue 190–260°),
+        // barely saturated, mottled.
+        (
+            "A photo of a steel water silo",
+            (190.0, 260.0),
+            (0.3, 0.55),
+            (0.02, 0.2),
+            (0.005, 0.1),
+        ),
+        // Blue and yellow paint: their hues, saturated.
+        (
+            "A photo of a blue water silo",
+            (200.0, 245.0),
+            (0.3, 0.8),
+            (0.5, 1.0),
+            (0.002, 0.1),
+        ),
+        (
+            "A photo of a yellow water silo",
+            (40.0, 60.0),
+            (0.6, 1.0),
+            (0.6, 1.0),
+            (0.002, 0.1),
+        ),
+        // Heavy corrosion: rust everywhere, darker on average than rusty steel.
+        (
+            "heavily corroded steel",
+            (10.0, 40.0),
+            (0.2, 0.5),
+            (0.4, 0.85),
+            (0.02, 0.2),
+        ),
+        // Stained concrete: grey, streaked.
+        (
+            "stained concrete",
+            (0.0, 360.0),
+            (0.35, 0.7),
+            (0.0, 0.12),
+            (0.02, 0.15),
+        ),
+        // Weathered blue paint: still blue, chalked paler than new paint.
+        (
+            "weathered blue paint",
+            (200.0, 245.0),
+            (0.3, 0.85),
+            (0.3, 1.0),
+            (0.002, 0.12),
+        ),
+    ];
+    for (prompt, h, v, sat, sd) in cases {
+        let px = patch(&shader(prompt), &beam_grain(), 1.4, 1.5, 0.4, 80);
+        let (m, hh, vv, ss, dd) = colour_stats(&px);
+        let within = |x: f64, (lo, hi): (f64, f64)| (lo..=hi).contains(&x);
+        assert!(
+            within(hh, h) && within(vv, v) && within(ss, sat) && within(dd, sd),
+            "{prompt}: mean {m:.3?} hue {hh:.1} value {vv:.3} saturation {ss:.3} luma sd {dd:.4}"
+        );
+        if prompt.contains("rusty") {
+            // No "cow print": hardly a point is near-white (all channels above 0.75).
+            let white = px.iter().filter(|c| c.iter().all(|&x| x > 0.75)).count();
+            assert!(
+                white * 100 < px.len(),
+                "{white} near-white points of {}",
+                px.len()
+            );
+        }
+    }
+    // Chalking makes weathered paint paler (higher luma) than paint said to be new.
+    let lightness = |p: &str| {
+        let m = colour_stats(&patch(&shader(p), &beam_grain(), 1.4, 1.5, 0.4, 60)).0;
+        0.2126 * m[0] + 0.7152 * m[1] + 0.0722 * m[2]
+    };
+    let (weathered, new) = (
+        lightness("weathered blue paint"),
+        lightness("new blue paint"),
+    );
+    assert!(weathered > new + 0.01, "weathered {weathered}, new {new}");
+}
+
+/// Mean absolute luma change between points `step` apart along x and along z over the top
+/// `depth` metres of the wall: streaks running down change across, not along, themselves.
+fn streak_anisotropy(s: &Shader, depth: f64) -> (f64, f64) {
+    let g = beam_grain();
+    let l = |x: f64, z: f64| {
+        let c = s.surface(&wall_point(x, z, 5e-4), &g).albedo;
+        0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+    };
+    let step = 0.01;
+    let (mut across, mut along) = (0.0, 0.0);
+    for i in 0..300 {
+        for j in 0..30 {
+            let (x, z) = (0.013 * i as f64, g.top - 0.01 - depth * j as f64 / 30.0);
+            across += (l(x + step, z) - l(x, z)).abs();
+            along += (l(x, z - step) - l(x, z)).abs();
+        }
+    }
+    (across, along)
+}
+
+#[test]
+fn runs_and_stains_streak_downward_and_fade_below_the_top_edge() {
+    // Rain washes stains down a face: within the top 30 cm, luma changes at least 1.5 times
+    // as much over 1 cm across the streaks (horizontally) as along them (vertically).
+    for prompt in ["stained concrete", "A photo of a blue water silo"] {
+        let (across, along) = streak_anisotropy(&shader(prompt), 0.3);
+        assert!(
+            across > 1.5 * along,
+            "{prompt}: across {across}, along {along}"
+        );
+    }
+    // Rust runs start at the top edge: over a 20 m wide face the share of rust-coloured
+    // points in the top 5 cm exceeds the share 30–35 cm lower (where a run has faded to under
+    // half) by at least 3 points; the patches alone are the same at every height.
+    let s = shader("slightly rusty steel");
+    let g = Grain {
+        bottom: 0.0,
+        top: 2.0,
+        ..beam_grain()
+    };
+    let share = |below: (f64, f64)| {
+        let n = 20_000;
+        let rusty = (0..n)
+            .filter(|&i| {
+                let t = i as f64;
+                let (x, z) = (
+                    20.0 * (t * 0.618_034).fract(),
+                    g.top - below.0 - (below.1 - below.0) * (t * 0.414_214).fract(),
+                );
+                let c = s
+                    .surface(&wall_point(x, z, 2e-3), &g)
+                    .albedo
+                    .map(encode_srgb);
+                c[0] > 1.5 * c[2]
+            })
+            .count();
+        rusty as f64 / n as f64
+    };
+    let (top, lower) = (share((0.0, 0.05)), share((0.3, 0.35)));
+    assert!(top > lower + 0.03, "top {top}, lower {lower}");
+}
+
+#[test]
+fn formwork_joints_and_tie_holes_repeat_at_the_panel_and_tie_spacing() {
+    use shmgen::materials::procedural::{FORM_PANEL, TIE_SPACING};
+    let s = shader("concrete");
+    let g = beam_grain();
+    let l = |x: f64, z: f64| {
+        let c = s.surface(&wall_point(x, z, 5e-4), &g).albedo;
+        0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+    };
+    // Dark runs along a line, as (start, end) in x, where `dark` holds.
+    let runs = |dark: &dyn Fn(f64) -> bool| {
+        let mut out: Vec<(f64, f64)> = Vec::new();
+        let mut start = None;
+        for i in 0..12_000 {
+            let x = 5e-4 * i as f64;
+            match (dark(x), start) {
+                (true, None) => start = Some(x),
+                (false, Some(a)) => {
+                    out.push((a, x));
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+        out
+    };
+    let spacings = |r: &[(f64, f64)]| -> Vec<f64> {
+        let centres: Vec<f64> = r.iter().map(|(a, b)| 0.5 * (a + b)).collect();
+        centres.windows(2).map(|w| w[1] - w[0]).collect()
+    };
+    // Joints: vertical lines, so dark over a whole band clear of the tie row (10 cm of z
+    // averaged: pores and mottle average out, a joint does not).
+    let band = |x: f64| {
+        (0..20)
+            .map(|k| l(x, g.centre.z + 0.05 + 0.005 * k as f64))
+            .sum::<f64>()
+            / 20.0
+    };
+    let typical = (0..200).map(|i| band(0.03 * i as f64)).sum::<f64>() / 200.0;
+    let joints = runs(&|x| band(x) < 0.75 * typical);
+    assert!(joints.len() >= 4, "{joints:?}");
+    for d in spacings(&joints) {
+        assert!(
+            (d - FORM_PANEL).abs() < 0.005,
+            "joint spacing {d}: {joints:?}"
+        );
+    }
+    // Tie holes: round dark spots on the mid-height row, wider than any pore (≥ 1 cm).
+    let ties: Vec<_> = runs(&|x| l(x, g.centre.z) < 0.6 * typical)
+        .into_iter()
+        .filter(|(a, b)| b - a > 0.01)
+        .collect();
+    assert!(ties.len() >= 8, "{ties:?}");
+    for d in spacings(&ties) {
+        assert!((d - TIE_SPACING).abs() < 0.005, "tie spacing {d}: {ties:?}");
+    }
+    // Half a tie spacing from each joint.
+    let offset =
+        (0.5 * (ties[0].0 + ties[0].1) - 0.5 * (joints[0].0 + joints[0].1)).rem_euclid(TIE_SPACING);
+    assert!((offset - 0.5 * TIE_SPACING).abs() < 0.005, "{offset}");
+}
+
+#[test]
+fn timber_checks_are_labelled_at_the_a1_footprint_and_run_along_the_grain() {
+    // An A1 camera stands about 4 m from the beam: 2·4·tan(30°)/960 ≈ 5 mm per pixel.
+    let footprint = 2.0 * 4.0 * (30f64.to_radians()).tan() / 960.0;
+    let s = shader("A photo of cracked timber for construction");
+    let g = beam_grain();
+    let (nx, nz) = (800, 80);
+    let on: Vec<Vec<bool>> = (0..nz)
+        .map(|j| {
+            (0..nx)
+                .map(|i| {
+                    s.crack(
+                        &wall_point(footprint * i as f64, 1.0 + footprint * j as f64, footprint),
+                        &g,
+                    )
+                })
+                .collect()
+        })
+        .collect();
+    let labelled = on.iter().flatten().filter(|&&b| b).count() as f64 / (nx * nz) as f64;
+    // Checks are thin: a few per cent of the pixels, but clearly present.
+    assert!((0.005..0.15).contains(&labelled), "{labelled}");
+    // Along the grain (x) a check stays labelled over several pixels; across it (z), one or
+    // two: the mean run of labelled pixels is at least twice as long along as across.
+    let mean_run = |lines: Vec<Vec<bool>>| {
+        let (mut total, mut count) = (0usize, 0usize);
+        for line in lines {
+            let mut run = 0;
+            for b in line.into_iter().chain([false]) {
+                if b {
+                    run += 1;
+                } else if run > 0 {
+                    total += run;
+                    count += 1;
+                    run = 0;
+                }
+            }
+        }
+        total as f64 / count.max(1) as f64
+    };
+    let along = mean_run(on.clone());
+    let across = mean_run(
+        (0..nx)
+            .map(|i| on.iter().map(|row| row[i]).collect())
+            .collect(),
+    );
+    assert!(
+        along > 2.0 * across && along >= 4.0,
+        "along {along}, across {across}"
+    );
+}
+
+#[test]
+fn a_silo_shell_shows_its_sheet_courses() {
+    use shmgen::materials::procedural::COURSE_HEIGHT;
+    // A shell 3 m in radius standing on z = 8 (the stdlib silo's), 8 m high.
+    let g = Grain {
+        axis: DVec3::Z,
+        centre: DVec3::new(0.0, 0.0, 12.0),
+        bottom: 8.0,
+        top: 16.0,
+    };
+    for prompt in [
+        "A photo of a steel water silo",
+        "A photo of a blue water silo",
+    ] {
+        let s = shader(prompt);
+        let at = |angle: f64, z: f64| {
+            let (sin, cos) = angle.sin_cos();
+            let p = SurfacePoint {
+                rest: DVec3::new(3.0 * cos, 3.0 * sin, z),
+                rest_normal: DVec3::new(cos, sin, 0.0),
+                footprint: 1e-3,
+            };
+            let c = s.surface(&p, &g).albedo;
+            0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+        };
+        // Averaged round a sixth of the ring (angles between vertical seams vary), ring seams
+        // are dark levels of z.
+        let ring = |z: f64| (0..40).map(|k| at(0.1 + 0.02 * k as f64, z)).sum::<f64>() / 40.0;
+        let zs: Vec<f64> = (0..8000).map(|i| 8.0 + 1e-3 * i as f64).collect();
+        let values: Vec<f64> = zs.iter().map(|&z| ring(z)).collect();
+        let typical = values.iter().sum::<f64>() / values.len() as f64;
+        let mut seams: Vec<f64> = Vec::new();
+        for (z, v) in zs.iter().zip(&values) {
+            if *v < 0.8 * typical && seams.last().is_none_or(|last| z - last > 0.05) {
+                seams.push(*z);
+            }
+        }
+        // 8 m of shell in 1.25 m courses: seams at its bottom and 1.25, 2.5, … 7.5 m above.
+        assert_eq!(seams.len(), 7, "{prompt}: {seams:?}");
+        for (k, z) in seams.iter().enumerate() {
+            let want = g.bottom + COURSE_HEIGHT * k as f64;
+            assert!((z - want).abs() < 0.01, "{prompt}: seam {z} vs {want}");
+        }
+        // Not flat paint: the courses differ in tone (means of two adjacent courses' middles
+        // differ by at least 1 %, for some pair).
+        let course_mean = |k: f64| ring(g.bottom + COURSE_HEIGHT * (k + 0.5));
+        let differs = (0..5).any(|k| {
+            let (a, b) = (course_mean(k as f64), course_mean(k as f64 + 1.0));
+            (a - b).abs() > 0.01 * a.max(b)
+        });
+        assert!(differs, "{prompt}");
+    }
 }

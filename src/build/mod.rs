@@ -154,9 +154,12 @@ pub fn build_sample(
                     .nearest_pixel_footprint(DVec3::from_array(beam.centre), beam_radius(beam));
                 let built = mesh_beam(beam, footprint).map_err(failed)?;
                 within_range(&built.mesh).map_err(failed)?;
+                let (bottom, top) = heights(&built.rest);
                 let grain = Grain {
                     axis: DMat3::from_rotation_z(beam.yaw) * DVec3::X,
                     centre: DVec3::from_array(beam.centre),
+                    bottom,
+                    top,
                 };
                 assembled.add(&built.mesh, &built.rest, i, "beam", grain);
                 if beam.supports_drawn {
@@ -320,7 +323,15 @@ fn grain_of(rest: &[DVec3]) -> Grain {
     Grain {
         axis,
         centre: 0.5 * (lo + hi),
+        bottom: lo.z,
+        top: hi.z,
     }
+}
+
+/// Lowest and highest z of a piece's undeformed surface (where runs and dirt start).
+fn heights(rest: &[DVec3]) -> (f64, f64) {
+    let (lo, hi) = geometry::bounds(rest).unwrap_or_default();
+    (lo.z, hi.z)
 }
 
 impl Assembled {

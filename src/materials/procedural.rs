@@ -43,6 +43,10 @@ pub struct Grain {
     pub axis: DVec3,
     /// A point on the piece's axis, world coordinates before deformation, metres.
     pub centre: DVec3,
+    /// Lowest z of the piece's undeformed surface, metres: dirt gathers above it.
+    pub bottom: f64,
+    /// Highest z of the piece's undeformed surface, metres: rain runs down from it.
+    pub top: f64,
 }
 
 /// What shading needs to know about a surface point.
@@ -77,6 +81,28 @@ pub struct Shader {
 /// Share of a pixel a crack must cover for the pixel to be labelled a crack.
 pub const CRACK_LABEL_COVER: f64 = 0.2;
 
+/// Steel sheet courses of a shell (silo, tank): plates 1.25 m high (the 1250 mm width of
+/// rolled plate and of bolted-silo sheets), eight round a ring, alternate courses staggered by
+/// half a sheet.
+pub const COURSE_HEIGHT: f64 = 1.25;
+/// Sheets round one course of a shell.
+pub const SHEETS_PER_RING: f64 = 8.0;
+/// Width of a weld seam or lap joint, metres.
+const SEAM_WIDTH: f64 = 0.008;
+/// Formwork: joints between plywood panels 1.2 m wide (the 1220 × 2440 mm sheet standing
+/// across the piece), form ties every 0.6 m along it in rows 0.6 m apart from mid-height.
+pub const FORM_PANEL: f64 = 1.2;
+/// Spacing of form ties (and their holes), metres.
+pub const TIE_SPACING: f64 = 0.6;
+/// Radius of the cone-snap-tie holes left in the face, metres.
+const TIE_RADIUS: f64 = 0.011;
+/// Width of the grout line a panel joint leaves, metres.
+const FORM_JOINT: f64 = 0.003;
+/// Distance below its source (an edge, a seam) at which a run or stain has faded to a half.
+const RUN_LENGTH: f64 = 0.35;
+/// How weathered any outdoor paint is without a condition saying so (chalking, dirt, runs).
+const PAINT_AGE: f64 = 0.35;
+
 // The fractal fields of the bases and conditions, on the octave ladder (wavelengths are rungs:
 // 1.28 m halved). Fields of one lane share the octaves they have in common, so lanes go by
 // role: 0 a base's coarse pattern (and the rust tone, finer than any base's coarse pattern
@@ -97,15 +123,28 @@ const PAINT: Field = Field::new(0, 0.08, 3);
 const RUST: Field = Field::new(2, 0.32, 6);
 const RUST_EDGE: Field = Field::new(3, 0.02, 3);
 const RUST_TONE: Field = Field::new(0, 0.04, 5);
+/// Broad rust tone: whole patches lean orange or dark brown (rungs rust already evaluates).
+const RUST_AGE: Field = Field::new(1, 0.16, 2);
+/// Paint chalking and dirt, on the rungs paint's own field evaluates (free lanes 1 and 2).
+const CHALK: Field = Field::new(1, 0.08, 3);
+const GRIME: Field = Field::new(2, 0.08, 3);
+/// Corrosion pits: the peaks of centimetre noise (rungs the rust's ragged edge evaluates).
+const PITS: Field = Field::new(1, 0.01, 2);
 const BLOTCH: Field = Field::new(4, 0.64, 4);
 const WORN_SUBSTRATE: Field = Field::new(4, 0.04, 3);
 const MOSS_PATCH: Field = Field::new(5, 0.32, 5);
 const MOSS_TONE: Field = Field::new(6, 0.01, 3);
 const WEAR: Field = Field::new(7, 0.16, 5);
 
-/// Rust as it forms on structural steel: orange-brown to dark brown (sRGB).
-const RUST_LIGHT: [f64; 3] = [0.5, 0.27, 0.14];
-const RUST_DARK: [f64; 3] = [0.22, 0.11, 0.06];
+/// Rust as it forms on structural steel: fresh orange-brown (lepidocrocite-rich), through
+/// brown, to the dark brown of old compact rust (sRGB).
+const RUST_LIGHT: [f64; 3] = [0.56, 0.3, 0.13];
+const RUST_MID: [f64; 3] = [0.38, 0.2, 0.09];
+const RUST_DARK: [f64; 3] = [0.2, 0.1, 0.055];
+/// Paint that has chalked (binder eroded, pigment loose at the surface): pale and matte.
+const CHALK_WHITE: [f64; 3] = [0.86, 0.86, 0.84];
+/// Efflorescence: calcium carbonate washed out of concrete and dried white.
+const EFFLORESCENCE: [f64; 3] = [0.88, 0.88, 0.85];
 const MOSS: [f64; 3] = [0.27, 0.36, 0.12];
 const MORTAR: [f64; 3] = [0.66, 0.64, 0.6];
 /// Bare steel showing where paint has worn away.
@@ -114,7 +153,10 @@ const BARE_STEEL: [f64; 3] = [0.45, 0.45, 0.46];
 /// The colours above in linear light, decoded once rather than at every point.
 struct Palette {
     rust_light: [f64; 3],
+    rust_mid: [f64; 3],
     rust_dark: [f64; 3],
+    chalk: [f64; 3],
+    efflorescence: [f64; 3],
     moss: [f64; 3],
     mortar: [f64; 3],
     bare_steel: [f64; 3],
@@ -122,7 +164,10 @@ struct Palette {
 
 static PALETTE: LazyLock<Palette> = LazyLock::new(|| Palette {
     rust_light: linear(RUST_LIGHT),
+    rust_mid: linear(RUST_MID),
     rust_dark: linear(RUST_DARK),
+    chalk: linear(CHALK_WHITE),
+    efflorescence: linear(EFFLORESCENCE),
     moss: linear(MOSS),
     mortar: linear(MORTAR),
     bare_steel: linear(BARE_STEEL),
@@ -209,6 +254,7 @@ impl Shader {
             footprint: p.footprint / m.scale,
             grain,
             shader: self,
+            streaks: std::cell::Cell::new(None),
         };
         s.albedo = match &m.texture {
             Texture::Image { pixels, size, .. } => {
@@ -216,6 +262,9 @@ impl Shader {
             }
             Texture::Procedural => at.base(m.base, base),
         };
+        if m.texture == Texture::Procedural {
+            at.exposure(&mut s);
+        }
         let calm = m
             .conditions
             .iter()
@@ -250,8 +299,10 @@ impl Shader {
     /// visibly darker (cracks much thinner than a pixel are invisible, and stay unlabelled).
     fn cracks(&self, q: DVec3, intensity: f64, footprint: f64, grain: &Grain) -> (f64, bool) {
         let timber = matches!(self.material.base, Base::Timber(_));
+        // Checks open along the grain as the wood dries: cells drawn out six times along it
+        // give splits 10–50 cm long.
         let q = if timber {
-            q - grain.axis * (q.dot(grain.axis) * 7.0 / 8.0)
+            q - grain.axis * (q.dot(grain.axis) * 5.0 / 6.0)
         } else {
             q
         };
@@ -262,7 +313,12 @@ impl Shader {
         if unit(edge, 7) > 0.3 + 0.5 * intensity {
             return (0.0, false);
         }
-        let width = (0.4e-3 + 2.5e-3 * intensity) * (0.4 + 1.2 * unit(edge, 8));
+        // Concrete cracks are 0.4–3 mm wide; drying checks in timber 2–6 mm at the surface.
+        let width = if timber {
+            (1.5e-3 + 4e-3 * intensity) * (0.5 + unit(edge, 8))
+        } else {
+            (0.4e-3 + 2.5e-3 * intensity) * (0.4 + 1.2 * unit(edge, 8))
+        };
         let covered = ((0.5 * (width + footprint) - c.border) / footprint).clamp(0.0, 1.0)
             * (width / footprint).min(1.0);
         (covered, covered >= CRACK_LABEL_COVER)
@@ -280,6 +336,30 @@ struct Point<'a> {
     footprint: f64,
     grain: &'a Grain,
     shader: &'a Shader,
+    /// The vertical streak noise, once a pattern has asked for it.
+    streaks: std::cell::Cell<Option<[f64; 4]>>,
+}
+
+/// What the sheet courses of a shell give a point.
+struct Courses {
+    /// Share of the pixel a seam covers.
+    seam: f64,
+    /// Relative tone of the point's sheet course (within ±6 %).
+    tone: f64,
+    /// Distance below the ring seam above, texture metres (water runs from it).
+    below_ring: f64,
+}
+
+/// How much of a run is left `d` metres below its source: a half at `RUN_LENGTH`.
+fn fade_below(d: f64) -> f64 {
+    let x = d / RUN_LENGTH;
+    1.0 / (1.0 + x * x)
+}
+
+/// Distance from `x` to the nearest multiple of `period`.
+fn to_joint(x: f64, period: f64) -> f64 {
+    let f = x.rem_euclid(period);
+    f.min(period - f)
 }
 
 impl Point<'_> {
@@ -292,10 +372,18 @@ impl Point<'_> {
     fn base(&self, base: Base, colour: [f64; 3]) -> [f64; 3] {
         match base {
             Base::Plain => colour,
-            Base::Steel => scale(
-                colour,
-                1.0 + 0.12 * self.field(STEEL_MOTTLE) + 0.05 * self.field(BASE_FINE),
-            ),
+            Base::Steel => {
+                // Mill scale, the blue-grey oxide skin of hot rolling (the base colour); where
+                // it is thin or has flaked — where rust starts first, low in the same field —
+                // the paler grey steel shows.
+                let mottle = self.field(STEEL_MOTTLE);
+                let fine = self.field(BASE_FINE);
+                let flaked = smoothstep(0.15, 0.35, -mottle - 0.4 * fine);
+                scale(
+                    colour,
+                    (1.0 + 0.08 * mottle + 0.06 * fine) * (1.0 + 0.22 * flaked),
+                )
+            }
             Base::GalvanisedSteel => {
                 // Spangle: zinc crystals a centimetre across, each with its own sheen. Within
                 // half a pixel of a grain boundary the two crystals' sheens blend, equally on
@@ -317,7 +405,8 @@ impl Point<'_> {
                 scale(
                     colour,
                     (1.0 + 0.1 * self.field(CONCRETE_MOTTLE) + 0.05 * self.field(CONCRETE_FINE))
-                        * (1.0 - 0.55 * pores),
+                        * (1.0 - 0.55 * pores)
+                        * self.formwork(),
                 )
             }
             Base::Timber(species) => self.wood(species, colour),
@@ -325,6 +414,173 @@ impl Point<'_> {
             Base::Brick => self.brick(colour),
             Base::Stone => self.stone(colour),
             Base::Painted => scale(colour, 1.0 + 0.03 * self.field(PAINT)),
+        }
+    }
+
+    /// Share of the pixel a line `width` wide covers, `d` from its centre line.
+    fn line(&self, d: f64, width: f64) -> f64 {
+        ((0.5 * width - d) / self.footprint + 0.5).clamp(0.0, 1.0)
+            * (width / self.footprint).min(1.0)
+    }
+
+    /// Share of the pixel a round hole of `radius` covers, `d` from its centre.
+    fn disk(&self, d: f64, radius: f64) -> f64 {
+        ((radius - d) / self.footprint + 0.5).clamp(0.0, 1.0)
+            * (radius / self.footprint).min(1.0).powi(2)
+    }
+
+    /// Streaks that run down the surface: noise stretched 20× vertically (features about
+    /// 3 cm across and 60 cm long, two octaves), four independent lanes from one lattice evaluation,
+    /// each roughly in [−1, 1]. Evaluated once per point, whoever asks first.
+    fn streaks(&self) -> [f64; 4] {
+        if let Some(v) = self.streaks.get() {
+            return v;
+        }
+        let q = DVec3::new(self.p.x / 0.03, self.p.y / 0.03, self.p.z / 0.6);
+        let v = self
+            .shader
+            .noise
+            .fractals::<4>(q, 1.0, 1, self.footprint / 0.03);
+        self.streaks.set(Some(v));
+        v
+    }
+
+    /// Distance below the top of the piece, texture metres.
+    fn below_top(&self) -> f64 {
+        ((self.grain.top - self.rest.z) / self.shader.material.scale).max(0.0)
+    }
+
+    /// Sheet courses of a large vertical shell (a silo's or tank's wall): ring seams every
+    /// `COURSE_HEIGHT` up from the piece's bottom, vertical seams between the sheets of a
+    /// ring, and a slightly different tone per course (plates from different heats). Pieces
+    /// lying down, and slender ones (legs, under 0.4 m from their axis), have none.
+    fn courses(&self) -> Option<Courses> {
+        let g = self.grain;
+        if g.axis.z.abs() < 0.9 {
+            return None;
+        }
+        let scale_m = self.shader.material.scale;
+        let off_axis = self.rest - g.centre;
+        let radial = off_axis - off_axis.dot(g.axis) * g.axis;
+        let radius = radial.length();
+        let weight = smoothstep(0.4, 0.8, radius);
+        if weight == 0.0 {
+            return None;
+        }
+        let u = (self.rest.z - g.bottom) / scale_m / COURSE_HEIGHT;
+        let course = u.floor();
+        let to_lower = (u - course) * COURSE_HEIGHT;
+        let to_upper = COURSE_HEIGHT - to_lower;
+        let sheet = std::f64::consts::TAU / SHEETS_PER_RING;
+        let stagger = if course.rem_euclid(2.0) == 1.0 {
+            0.5
+        } else {
+            0.0
+        };
+        let around = libm::atan2(radial.y, radial.x) / sheet + stagger;
+        let vertical = to_joint(around, 1.0) * sheet * radius / scale_m;
+        let seam = weight * self.line(to_lower.min(to_upper).min(vertical), SEAM_WIDTH);
+        // Tones blend over the seam (or a pixel) around each ring, equally on the ring, so
+        // the albedo stays continuous across it.
+        let salt = self.shader.offset.x.to_bits();
+        let tone_of = |k: f64| 0.12 * (unit(pair(k as i64 as u64, salt), 11) - 0.5);
+        let blend = self.footprint.max(SEAM_WIDTH).min(0.25 * COURSE_HEIGHT);
+        let down = 0.5 * (1.0 - to_lower / blend).clamp(0.0, 1.0);
+        let up = 0.5 * (1.0 - to_upper / blend).clamp(0.0, 1.0);
+        let tone = (1.0 - down - up) * tone_of(course)
+            + down * tone_of(course - 1.0)
+            + up * tone_of(course + 1.0);
+        Some(Courses {
+            seam,
+            tone: weight * tone,
+            below_ring: to_upper,
+        })
+    }
+
+    /// Formwork marks on cast concrete, as a factor on the albedo: grout lines at the joints
+    /// between panels (across the piece, every `FORM_PANEL` along its grain) and, on pieces
+    /// lying down, the holes of the form ties: `TIE_SPACING` apart along the piece, half a
+    /// spacing from the joints, in rows at mid-height and every spacing above and below.
+    fn formwork(&self) -> f64 {
+        let along = self.p.dot(self.grain.axis);
+        let joint = self.line(to_joint(along, FORM_PANEL), FORM_JOINT);
+        let tie = if self.grain.axis.z.abs() < 0.5 {
+            let da = to_joint(along + 0.5 * TIE_SPACING, TIE_SPACING);
+            let height = (self.rest.z - self.grain.centre.z) / self.shader.material.scale;
+            let dz = to_joint(height, TIE_SPACING);
+            self.disk((da * da + dz * dz).sqrt(), TIE_RADIUS)
+        } else {
+            0.0
+        };
+        (1.0 - 0.45 * joint) * (1.0 - 0.7 * tie)
+    }
+
+    /// The intensity of condition `kind` (0 without it).
+    fn intensity(&self, kind: ConditionKind) -> f64 {
+        self.shader
+            .material
+            .conditions
+            .iter()
+            .filter(|c| c.kind == kind)
+            .map(|c| c.intensity)
+            .fold(0.0, f64::max)
+    }
+
+    /// What standing outdoors does to steel, paint and concrete before any named condition:
+    /// the seams and courses of a sheeted shell; water running down from the top edge and
+    /// from ring seams, carrying dirt (darker streaks); on paint, chalking (paler, matte
+    /// where the binder has weathered) and dirt splashed up near the piece's bottom; on
+    /// concrete, dark water stains and, when stained or weathered, white efflorescence.
+    /// "new" keeps a surface clean.
+    fn exposure(&self, s: &mut Surface) {
+        let base = self.shader.material.base;
+        if !matches!(base, Base::Steel | Base::Painted | Base::Concrete) {
+            return;
+        }
+        let clean = 1.0 - self.intensity(ConditionKind::New);
+        let weathered = self.intensity(ConditionKind::Weathered);
+        let stained = self.intensity(ConditionKind::Stained);
+        let mut below = self.below_top();
+        if base != Base::Concrete {
+            if let Some(c) = self.courses() {
+                s.albedo = scale(s.albedo, (1.0 + c.tone) * (1.0 - 0.6 * c.seam));
+                below = below.min(c.below_ring);
+            }
+        }
+        if clean <= 0.0 {
+            return;
+        }
+        // Bare steel weathers by rusting (the rust condition's runs); paint and concrete
+        // collect dirt where water runs.
+        if base == Base::Steel {
+            return;
+        }
+        let streak = self.streaks();
+        let runs = smoothstep(0.05, 0.5, streak[0]) * fade_below(below) * clean;
+        match base {
+            Base::Painted => {
+                let age = (PAINT_AGE + 0.65 * weathered) * clean;
+                // Chalking is broad and even, a little stronger in places.
+                let chalk = age * (0.6 + 0.4 * smoothstep(-0.5, 0.5, self.field(CHALK)));
+                s.albedo = mix(s.albedo, PALETTE.chalk, 0.08 * chalk);
+                s.roughness = lerp(s.roughness, 1.0, chalk);
+                s.specular = lerp(s.specular, 0.02, chalk);
+                let scale_m = self.shader.material.scale;
+                let height = (self.grain.top - self.grain.bottom) / scale_m;
+                let above_bottom = (self.rest.z - self.grain.bottom) / scale_m;
+                let band = (0.25 * height).clamp(1e-3, 1.0);
+                let splash = (1.0 - above_bottom / band).clamp(0.0, 1.0);
+                let dirt = age * splash * splash * (0.7 + 0.3 * self.field(GRIME));
+                s.albedo = scale(s.albedo, (1.0 - 0.45 * dirt) * (1.0 - 0.35 * age * runs));
+            }
+            _ => {
+                s.albedo = scale(s.albedo, 1.0 - (0.15 + 0.3 * stained) * runs);
+                let deposit = (stained + weathered).min(1.0);
+                if deposit > 0.0 {
+                    let white = smoothstep(0.1, 0.6, streak[2]) * fade_below(below);
+                    s.albedo = mix(s.albedo, PALETTE.efflorescence, 0.6 * deposit * white);
+                }
+            }
         }
     }
 
@@ -350,9 +606,7 @@ impl Point<'_> {
         if unit(c.id, 4) > share {
             return 0.0;
         }
-        let r = radius * (0.3 + unit(c.id, 5));
-        let edge = ((r - c.f1) / self.footprint + 0.5).clamp(0.0, 1.0);
-        edge * (r / self.footprint).min(1.0).powi(2)
+        self.disk(c.f1, radius * (0.3 + unit(c.id, 5)))
     }
 
     /// Growth rings around a pith running along the grain, a little outside the piece (as in
@@ -407,13 +661,8 @@ impl Point<'_> {
             0.0
         };
         let column = (shifted / length).floor();
-        let to_joint = |x: f64, period: f64| {
-            let f = x.rem_euclid(period);
-            f.min(period - f)
-        };
         let d = to_joint(shifted, length).min(to_joint(v, height));
-        let mortar = ((0.5 * joint - d) / self.footprint + 0.5).clamp(0.0, 1.0)
-            * (joint / self.footprint).min(1.0);
+        let mortar = self.line(d, joint);
         let id = pair(course as i64 as u64, column as i64 as u64);
         let brick = scale(
             colour,
@@ -425,9 +674,7 @@ impl Point<'_> {
     /// Random-rubble stone: Voronoi blocks about 0.3 m across, each its own shade, with joints.
     fn stone(&self, colour: [f64; 3]) -> [f64; 3] {
         let c = self.shader.noise.cells(self.p, 0.3);
-        let joint = 0.006;
-        let mortar = ((0.5 * joint - c.border) / self.footprint + 0.5).clamp(0.0, 1.0)
-            * (joint / self.footprint).min(1.0);
+        let mortar = self.line(c.border, 0.006);
         let block = scale(
             colour,
             1.0 + 0.3 * (unit(c.id, 9) - 0.5) + 0.08 * self.field(STONE),
@@ -444,20 +691,44 @@ impl Point<'_> {
                 // Patches cover about `reach` of the surface and have
                 // ragged edges: fine noise shifts the threshold locally.
                 let field = self.field(RUST) + 0.35 * self.field(RUST_EDGE);
-                let patch = smoothstep(-0.15, 0.15, coverage_threshold(reach) - field);
-                let tone = smoothstep(-0.7, 0.7, self.field(RUST_TONE));
-                let mut rust = mix(PALETTE.rust_light, PALETTE.rust_dark, tone);
+                let margin = coverage_threshold(reach) - field;
+                let patch = smoothstep(-0.3, 0.25, margin);
+                // Young rust is orange-brown, old compact rust dark brown; whole patches lean
+                // one way (the broad field), spots within them the other.
+                let age = smoothstep(
+                    -0.6,
+                    0.6,
+                    0.7 * self.field(RUST_TONE) + 0.8 * self.field(RUST_AGE),
+                );
+                let mut rust = if age < 0.5 {
+                    mix(PALETTE.rust_light, PALETTE.rust_mid, 2.0 * age)
+                } else {
+                    mix(PALETTE.rust_mid, PALETTE.rust_dark, 2.0 * age - 1.0)
+                };
+                // Pitting: small dark pits in the rust, more the deeper the attack. Peaks of
+                // fine noise, so pits finer than a pixel fade with their octaves.
+                let pits = smoothstep(0.55 - 0.2 * reach, 0.75 - 0.2 * reach, self.field(PITS));
+                rust = scale(rust, 1.0 - 0.55 * pits);
                 if corroded {
                     rust = scale(rust, 1.0 - 0.6 * self.pores(0.004, 0.0015, 0.6));
                 }
-                let opacity = if self.shader.material.is_metal() {
-                    1.0
+                let metal = self.shader.material.is_metal();
+                let opacity = if metal { 1.0 } else { 0.6 };
+                if self.shader.material.base == Base::Painted {
+                    // Where the coating fails, rust creeps under it: a rim of blistered,
+                    // lifted paint, paler, just outside each patch.
+                    let rim = smoothstep(-0.4, -0.2, margin) * (1.0 - patch);
+                    s.albedo = scale(s.albedo, 1.0 + 0.3 * rim);
+                }
+                // Outside the patches, a brown bloom dulls the surface, and rust washed out
+                // of the top edge and the patches above runs down in streaks.
+                let bloom = 0.55 * reach * smoothstep(-0.6, 0.2, -field);
+                let runs = if patch < 1.0 {
+                    reach * smoothstep(0.0, 0.45, self.streaks()[1]) * fade_below(self.below_top())
                 } else {
-                    0.6
+                    0.0
                 };
-                // Outside the patches, a brown bloom dulls the surface.
-                let bloom = 0.45 * reach * smoothstep(-0.6, 0.2, -field);
-                let cover = (patch + (1.0 - patch) * bloom) * opacity;
+                let cover = (patch + (1.0 - patch) * (bloom + 0.8 * runs).min(1.0)) * opacity;
                 s.albedo = mix(s.albedo, rust, cover);
                 s.roughness = lerp(s.roughness, 0.95, cover);
                 s.specular = lerp(s.specular, 0.03, cover);
@@ -475,13 +746,8 @@ impl Point<'_> {
                 s.roughness = lerp(s.roughness, 1.0, 0.5 * i);
             }
             ConditionKind::Stained => {
-                // Streaks run down: stretch the noise 30× vertically.
-                let q = DVec3::new(self.p.x / 0.03, self.p.y / 0.03, self.p.z / 0.9);
-                let streak = smoothstep(
-                    0.1,
-                    0.5,
-                    self.shader.noise.fractal(q, 1.0, 3, self.footprint / 0.03) + i - 0.6,
-                );
+                // Streaks run down the whole face (the noise stretched 20× vertically).
+                let streak = smoothstep(0.1, 0.5, self.streaks()[3] + i - 0.6);
                 s.albedo = scale(s.albedo, 1.0 - 0.45 * streak * i.sqrt());
             }
             ConditionKind::Mossy => {
@@ -502,7 +768,9 @@ impl Point<'_> {
             }
             ConditionKind::Wet => {
                 // A water film darkens porous surfaces and adds a glossy layer (F0 ≈ 0.02).
-                s.albedo = s.albedo.map(|c| libm::pow(c, 1.0 + 0.6 * i) * (1.0 - 0.25 * i));
+                s.albedo = s
+                    .albedo
+                    .map(|c| libm::pow(c, 1.0 + 0.6 * i) * (1.0 - 0.25 * i));
                 s.roughness *= 1.0 - 0.7 * i;
                 s.specular = s.specular.max(0.02 + 0.03 * i);
             }
@@ -584,6 +852,8 @@ mod tests {
     const GRAIN: Grain = Grain {
         axis: DVec3::X,
         centre: DVec3::ZERO,
+        bottom: 0.0,
+        top: 2.0,
     };
 
     /// Points spread over a 2 m × 2 m wall facing −y.

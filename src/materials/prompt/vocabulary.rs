@@ -91,7 +91,8 @@ const fn mineral(base: Base, family: Family, colour: [f64; 3], rough: f64) -> Ba
 // Bare (blast-cleaned or mill-scale) steel: mid grey, slightly blue, a metal.
 // Specular values are kept low: with a single sun and no reflected environment, a higher
 // F0 turns whole flat faces into glare.
-const STEEL: BaseDef = metal(Base::Steel, [0.52, 0.54, 0.57], 0.6, 0.15);
+// Hot-rolled steel as delivered: mill scale, a dark blue-grey oxide skin.
+const STEEL: BaseDef = metal(Base::Steel, [0.4, 0.41, 0.44], 0.6, 0.15);
 // Zinc coat: lighter and a little shinier than bare steel.
 const GALVANISED: BaseDef = metal(Base::GalvanisedSteel, [0.7, 0.72, 0.74], 0.5, 0.25);
 // The brown oxide patina is what is seen, and it is not metallic: rough and dull.
