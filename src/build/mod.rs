@@ -222,6 +222,8 @@ pub fn build_sample(
         let grain = Grain {
             axis: DVec3::X,
             centre: DVec3::new(centre.x, centre.y, built.height),
+            bottom: built.height,
+            top: built.height,
         };
         let structures = scene.structures.len();
         assembled.add_piece(&square, structures, GROUND_PART, grain, material);

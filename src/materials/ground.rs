@@ -54,11 +54,11 @@ pub fn ground_material(prompt: &str) -> Result<Material, String> {
         ));
     };
     let (base, colour, roughness, specular, scale, conditions) = match *name {
-        "grass" => (Base::Concrete, [0.46, 0.57, 0.28], 1.0, 0.02, 2.0, vec![]),
+        "grass" => (Base::Ground, [0.46, 0.57, 0.28], 1.0, 0.02, 2.0, vec![]),
         "gravel" => (Base::Stone, [0.58, 0.56, 0.52], 1.0, 0.03, 0.15, vec![]),
-        "asphalt" => (Base::Concrete, [0.33, 0.33, 0.34], 0.9, 0.04, 0.5, vec![]),
-        "concrete slab" => (Base::Concrete, [0.62, 0.61, 0.58], 0.9, 0.04, 1.0, vec![]),
-        "soil" => (Base::Concrete, [0.48, 0.4, 0.31], 1.0, 0.02, 2.0, vec![]),
+        "asphalt" => (Base::Ground, [0.33, 0.33, 0.34], 0.9, 0.04, 0.5, vec![]),
+        "concrete slab" => (Base::Ground, [0.62, 0.61, 0.58], 0.9, 0.04, 1.0, vec![]),
+        "soil" => (Base::Ground, [0.48, 0.4, 0.31], 1.0, 0.02, 2.0, vec![]),
         _ => (Base::Plain, [0.24, 0.3, 0.32], 0.1, 0.02, 1.0, vec![]),
     };
     Ok(Material {

@@ -78,6 +78,9 @@ pub enum Base {
     Stone,
     /// Paint over steel; the colour is the paint's.
     Painted,
+    /// Open ground or paving under a structure (grass, soil, asphalt, a slab): mottled at the
+    /// scale of metres and centimetres, without the joints or weathering of a built surface.
+    Ground,
 }
 
 /// Wood species, for colour and ring spacing. Spacings are at `scale` 1; every length of a

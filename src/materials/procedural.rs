@@ -414,6 +414,10 @@ impl Point<'_> {
             Base::Brick => self.brick(colour),
             Base::Stone => self.stone(colour),
             Base::Painted => scale(colour, 1.0 + 0.03 * self.field(PAINT)),
+            Base::Ground => scale(
+                colour,
+                1.0 + 0.18 * self.field(CONCRETE_MOTTLE) + 0.1 * self.field(CONCRETE_FINE),
+            ),
         }
     }
 
