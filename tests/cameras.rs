@@ -616,11 +616,17 @@ fn both_eyes_of_a_stereo_pair_photograph_one_backdrop() {
         assert_eq!(pair[0], pair[1], "left and right eye backdrops");
     }
     // Six poses draw their photographs independently: not all alike.
-    assert!(backdrops.iter().any(|b| b != &backdrops[0]), "{backdrops:?}");
+    assert!(
+        backdrops.iter().any(|b| b != &backdrops[0]),
+        "{backdrops:?}"
+    );
     for pair in 0..6 {
         let rgb = |view| read_png(&view_path(&out, 0, view, None, "rgb.png")).3;
         let (left, right) = (rgb(2 * pair), rgb(2 * pair + 1));
-        let (lm, rm) = (load(&out, 2 * pair, None).mask, load(&out, 2 * pair + 1, None).mask);
+        let (lm, rm) = (
+            load(&out, 2 * pair, None).mask,
+            load(&out, 2 * pair + 1, None).mask,
+        );
         // Away from the box: anti-aliasing blends silhouettes into the pixels next to them.
         let clear = |i: usize| {
             let (row, col) = ((i / 80) as i64, (i % 80) as i64);

@@ -413,7 +413,11 @@ mod tests {
         assert!(!meets([-5.0, 1.5, 0.0], [1.0, 0.0, 0.0], f64::INFINITY));
         let diagonal = DVec3::new(1.0, 1.0, 0.0).normalize();
         assert!(meets([-3.0, -3.0, 0.0], diagonal.into(), f64::INFINITY));
-        assert!(!meets([-3.0, -3.0 + 2.0 + 1e-9, 0.0], [1.0, -1.0, 0.0], f64::INFINITY));
+        assert!(!meets(
+            [-3.0, -3.0 + 2.0 + 1e-9, 0.0],
+            [1.0, -1.0, 0.0],
+            f64::INFINITY
+        ));
         // A grazing ray along a face is inside its slab: it meets the box.
         assert!(meets([-5.0, 1.0, 0.0], [1.0, 0.0, 0.0], f64::INFINITY));
     }

@@ -204,9 +204,19 @@ mod tests {
         let count = pts.len() as f64;
         let mean = pts.iter().sum::<DVec3>() / count;
         let var = pts.iter().map(|p| (*p - mean) * (*p - mean)).sum::<DVec3>() / count;
-        let cov = pts.iter().map(|p| (p.x - mean.x) * (p.y - mean.y)).sum::<f64>() / count;
-        assert!((mean - DVec3::splat(0.5)).abs().max_element() < 0.01, "{mean}");
-        assert!((var - DVec3::splat(1.0 / 12.0)).abs().max_element() < 0.003, "{var}");
+        let cov = pts
+            .iter()
+            .map(|p| (p.x - mean.x) * (p.y - mean.y))
+            .sum::<f64>()
+            / count;
+        assert!(
+            (mean - DVec3::splat(0.5)).abs().max_element() < 0.01,
+            "{mean}"
+        );
+        assert!(
+            (var - DVec3::splat(1.0 / 12.0)).abs().max_element() < 0.003,
+            "{var}"
+        );
         assert!(cov.abs() < 0.003, "{cov}");
     }
 }

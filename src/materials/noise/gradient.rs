@@ -83,7 +83,11 @@ impl Noise {
     /// Four independent gradient noises at lattice coordinates `q` under hash `key`.
     #[inline(always)]
     fn lanes(&self, q: DVec3, key: u64) -> [f32; LANES] {
-        let (x, y, z) = (Axis::new(q.x, 0, key), Axis::new(q.y, 1, key), Axis::new(q.z, 2, key));
+        let (x, y, z) = (
+            Axis::new(q.x, 0, key),
+            Axis::new(q.y, 1, key),
+            Axis::new(q.z, 2, key),
+        );
         let corner = |a: usize, b: usize, c: usize| {
             let h = corner_hash(x.words[a], y.words[b], z.words[c]);
             edge_dots(h, [x.offsets[a], y.offsets[b], z.offsets[c]])
@@ -247,8 +251,14 @@ impl Field {
             rung /= 2.0;
             first += 1;
         }
-        assert!(rung == wavelength, "the wavelength is not a rung of the ladder");
-        assert!(first + octaves as usize <= RUNGS, "beyond the ladder's last rung");
+        assert!(
+            rung == wavelength,
+            "the wavelength is not a rung of the ladder"
+        );
+        assert!(
+            first + octaves as usize <= RUNGS,
+            "beyond the ladder's last rung"
+        );
         Field {
             lane,
             first: first as u8,

@@ -16,11 +16,17 @@ use std::arch::x86_64::*;
 
 /// Four f32 lanes.
 #[derive(Clone, Copy, Debug)]
-pub struct F4(#[cfg(target_arch = "x86_64")] __m128, #[cfg(not(target_arch = "x86_64"))] [f32; 4]);
+pub struct F4(
+    #[cfg(target_arch = "x86_64")] __m128,
+    #[cfg(not(target_arch = "x86_64"))] [f32; 4],
+);
 
 /// Four u32 lanes (bit patterns and masks).
 #[derive(Clone, Copy, Debug)]
-pub struct U4(#[cfg(target_arch = "x86_64")] __m128i, #[cfg(not(target_arch = "x86_64"))] [u32; 4]);
+pub struct U4(
+    #[cfg(target_arch = "x86_64")] __m128i,
+    #[cfg(not(target_arch = "x86_64"))] [u32; 4],
+);
 
 #[cfg(target_arch = "x86_64")]
 impl F4 {
@@ -71,10 +77,7 @@ impl U4 {
     /// The four 16-bit words of `h`, lowest first, one per lane.
     #[inline(always)]
     pub fn words(h: u64) -> U4 {
-        U4(unsafe { _mm_unpacklo_epi16(
-            _mm_cvtsi64_si128(h as i64),
-            _mm_setzero_si128(),
-        ) })
+        U4(unsafe { _mm_unpacklo_epi16(_mm_cvtsi64_si128(h as i64), _mm_setzero_si128()) })
     }
 
     #[inline(always)]

@@ -108,7 +108,18 @@ mod tests {
 
     #[test]
     fn cells_floor_like_f64_floor() {
-        for x in [-2.5, -1.0, -1e-300, -0.0, 0.0, 0.3, 1.0, 7.999_999, 1e15 + 0.5, -1e15 - 0.5] {
+        for x in [
+            -2.5,
+            -1.0,
+            -1e-300,
+            -0.0,
+            0.0,
+            0.3,
+            1.0,
+            7.999_999,
+            1e15 + 0.5,
+            -1e15 - 0.5,
+        ] {
             let (i, f) = cell(x);
             assert_eq!(i as f64, x.floor(), "{x}");
             // A tiny negative x rounds up to the next cell's start: 1.0, continuous all the same.
@@ -130,24 +141,37 @@ mod tests {
         // diagonal, must be about equally frequent (chi-square near its degrees of freedom).
         let key = Noise::new(5).keys[0];
         let hash = |x: i64, y: i64, z: i64| {
-            let h = corner_hash(axis_word(x, 0, key), axis_word(y, 1, key), axis_word(z, 2, key));
+            let h = corner_hash(
+                axis_word(x, 0, key),
+                axis_word(y, 1, key),
+                axis_word(z, 2, key),
+            );
             (h >> 12) as usize & 15
         };
         let n = 40i64;
-        let block = || {
-            (-n..n).flat_map(move |x| (-n..n).flat_map(move |y| (0..n).map(move |z| (x, y, z))))
-        };
+        let block =
+            || (-n..n).flat_map(move |x| (-n..n).flat_map(move |y| (0..n).map(move |z| (x, y, z))));
         let chi2 = |counts: &[f64]| {
             let total: f64 = counts.iter().sum();
             let expected = total / counts.len() as f64;
-            counts.iter().map(|c| (c - expected).powi(2) / expected).sum::<f64>()
+            counts
+                .iter()
+                .map(|c| (c - expected).powi(2) / expected)
+                .sum::<f64>()
         };
         let mut single = [0.0; 16];
         for (x, y, z) in block() {
             single[hash(x, y, z)] += 1.0;
         }
         assert!(chi2(&single) < 45.0, "{single:?}");
-        for step in [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 0), (1, -1, 1), (2, 0, 0)] {
+        for step in [
+            (1, 0, 0),
+            (0, 1, 0),
+            (0, 0, 1),
+            (1, 1, 0),
+            (1, -1, 1),
+            (2, 0, 0),
+        ] {
             let mut joint = [0.0; 256];
             for (x, y, z) in block() {
                 let other = hash(x + step.0, y + step.1, z + step.2);
