@@ -3,6 +3,7 @@
 //! linear light into display values. Plain values, drawn by the build stage from what a
 //! recipe declared and consumed by the renderer.
 
+use super::environment::EnvironmentMap;
 use super::image::TextureImage;
 use glam::DVec3;
 use std::sync::Arc;
@@ -19,6 +20,8 @@ pub struct Lighting {
     pub sun: Option<Sun>,
     /// Hemispherical light: `sky` from above, `ground` bounce from below.
     pub sky: Option<Sky>,
+    /// Light from an environment map, if any (replaces `sky`).
+    pub environment: Option<EnvironmentLight>,
     /// Whether the sun casts shadows.
     pub shadows: bool,
     /// Light bounced up once by a ground plane lit by the sun and sky, if the scene has one;
@@ -117,6 +120,39 @@ pub struct Sky {
     pub occlusion_rays: u32,
 }
 
+/// Diffuse light from an environment map, fixed in the world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvironmentLight {
+    /// The map, with its SH coefficients computed once when it was read.
+    pub map: Arc<EnvironmentMap>,
+    /// Factor on the map's radiance.
+    pub intensity: f64,
+    /// Turn of the map about +z, radians: what the map shows at longitude φ lies at world
+    /// longitude φ + rotation.
+    pub rotation: f64,
+    /// Occlusion rays per shaded point over its hemisphere (0 = the map reaches every face
+    /// unobstructed).
+    pub occlusion_rays: u32,
+}
+
+impl EnvironmentLight {
+    /// Radiance a white Lambertian face with world normal `n` reflects under the map
+    /// (irradiance / π), unoccluded.
+    pub fn diffuse(&self, n: DVec3) -> [f64; 3] {
+        let lit = self.map.diffuse(turn_about_z(n, -self.rotation));
+        lit.map(|c| c * self.intensity)
+    }
+}
+
+/// `d` turned by `angle` radians about +z (counter-clockwise seen from above).
+pub fn turn_about_z(d: DVec3, angle: f64) -> DVec3 {
+    if angle == 0.0 {
+        return d;
+    }
+    let (s, c) = (libm::sin(angle), libm::cos(angle));
+    DVec3::new(c * d.x - s * d.y, s * d.x + c * d.y, d.z)
+}
+
 impl Default for Lighting {
     fn default() -> Self {
         Lighting {
@@ -128,6 +164,7 @@ impl Default for Lighting {
             ]),
             sun: None,
             sky: None,
+            environment: None,
             shadows: false,
             ground: None,
             film: Film::default(),
@@ -158,6 +195,15 @@ pub enum Backdrop {
         origin: (f64, f64),
         /// Width and height of the window, in image units.
         size: (f64, f64),
+    },
+    /// An environment map fixed in the world, seen along each pixel's ray.
+    Environment {
+        /// The map.
+        map: Arc<EnvironmentMap>,
+        /// Factor on the map's radiance.
+        intensity: f64,
+        /// Turn of the map about +z, radians (see `EnvironmentLight::rotation`).
+        rotation: f64,
     },
 }
 

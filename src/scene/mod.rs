@@ -22,7 +22,7 @@ pub use beam::{BeamSpec, Tessellation};
 pub use ground::{GROUND_PART, GroundSpec, ground_radius};
 pub use light::{
     Background, GroundBounceSpec, ImageRecord, LightSpec, OUTDOOR_AMBIENT, SUN_DIAMETER,
-    SkyGradient, SkySpec, SunSpec, Tone,
+    EnvironmentLightSpec, EnvironmentSpec, SkyGradient, SkySpec, SunSpec, Tone,
 };
 
 use crate::cameras::CameraRig;
