@@ -348,6 +348,7 @@ mod tests {
                 shadow_rays: 1,
             }),
             sky: None,
+            environment: None,
             shadows: true,
             ground: Some(GroundBounce {
                 height: 0.0,
