@@ -131,17 +131,39 @@ const BACKGROUND_RECIPE: &str = r#"dataset(#{
 "#;
 
 /// Every background pixel away from the structure's edge shows the map along its ray, the ray
-/// rebuilt here from the written K and camera-to-world pose (OpenCV axes).
+/// rebuilt here from the written K and camera-to-world pose (OpenCV axes); a Radiance .hdr and
+/// an OpenEXR map alike.
 #[test]
 fn background_pixels_show_the_map_along_their_world_rays() {
-    let (_dir, out, texels) = render_with_map(
-        BACKGROUND_RECIPE,
-        |dir| write_map(&dir.join("sky.hdr"), MAP_WIDTH, MAP_HEIGHT, telltale),
-        &[],
-    );
+    for format in ["hdr", "exr"] {
+        let recipe = BACKGROUND_RECIPE.replace("sky.hdr", &format!("sky.{format}"));
+        let (_dir, out, texels) = render_with_map(
+            &recipe,
+            |dir| match format {
+                "hdr" => write_map(&dir.join("sky.hdr"), MAP_WIDTH, MAP_HEIGHT, telltale),
+                _ => {
+                    let rgb = |x: usize, y: usize| {
+                        let [r, g, b] = telltale(y, x);
+                        (r, g, b)
+                    };
+                    exr::prelude::write_rgb_file(dir.join("sky.exr"), MAP_WIDTH, MAP_HEIGHT, rgb)
+                        .unwrap();
+                    (0..MAP_WIDTH * MAP_HEIGHT)
+                        .map(|i| telltale(i / MAP_WIDTH, i % MAP_WIDTH))
+                        .collect()
+                }
+            },
+            &[],
+        );
+        background_matches(&out, &texels);
+    }
+}
+
+/// Checks every background pixel of the three views of `out` against `texels`.
+fn background_matches(out: &Path, texels: &[[f32; 3]]) {
     for view in 0..3 {
-        let v = load(&out, view, None);
-        let pixels = rgb(&out, view);
+        let v = load(out, view, None);
+        let pixels = rgb(out, view);
         let (k, c2w) = (v.k(), v.c2w());
         let background = inside(&v.mask, v.width, 0);
         assert!(background.len() > 1000, "view {view}");
@@ -156,7 +178,7 @@ fn background_pixels_show_the_map_along_their_world_rays() {
             ];
             let far = transform(&c2w, camera);
             let d = [far[0] - origin[0], far[1] - origin[1], far[2] - origin[2]];
-            let want = lookup(&texels, d);
+            let want = lookup(texels, d);
             for ch in 0..3 {
                 worst = worst.max((f64::from(pixels[i][ch]) - encoded(want[ch])).abs());
             }

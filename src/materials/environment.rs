@@ -6,7 +6,7 @@
 //! grows from +x towards +y (like the sun's azimuth) to the right of the image, and wraps.
 //! Row 0's top edge looks straight up (+z), the last row's bottom edge straight down.
 //!
-//! Owns: decoding a map (Radiance .hdr) into linear radiance, bilinear lookup, the
+//! Owns: decoding a map (Radiance .hdr, or OpenEXR by its `.exr` name) into linear radiance, bilinear lookup, the
 //! projection onto nine SH coefficients and the irradiance they give. Must not touch:
 //! reading files (the recipe's `RecipeFiles` hands the bytes over), shading, cameras.
 
@@ -30,16 +30,30 @@ pub struct EnvironmentMap {
 }
 
 impl EnvironmentMap {
-    /// The width and height of an encoded map, without decoding it.
+    /// The width and height of an encoded map (Radiance .hdr, or OpenEXR when `name` ends in
+    /// `.exr`), from its header alone.
     pub fn size(bytes: &[u8], name: &Path) -> Result<(u32, u32), String> {
+        if is_exr(name) {
+            let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+                .map_err(|e| cannot_read(name, &e))?;
+            let header = meta
+                .headers
+                .first()
+                .ok_or_else(|| cannot_read(name, &"no layer"))?;
+            let (w, h) = (header.layer_size.width(), header.layer_size.height());
+            return Ok((
+                u32::try_from(w).unwrap_or(u32::MAX),
+                u32::try_from(h).unwrap_or(u32::MAX),
+            ));
+        }
         use image::ImageDecoder;
         let decoder = image::codecs::hdr::HdrDecoder::new(std::io::Cursor::new(bytes))
             .map_err(|e| cannot_read(name, &e))?;
         Ok(decoder.dimensions())
     }
 
-    /// Decodes a Radiance .hdr file and checks it is an equirectangular map: twice as wide as
-    /// high, finite non-negative radiance.
+    /// Decodes a map and checks it is equirectangular: twice as wide as high, finite
+    /// non-negative radiance.
     pub fn decode(bytes: &[u8], name: &Path) -> Result<Self, String> {
         let (w, h) = Self::size(bytes, name)?;
         if w == 0 || h == 0 || w != 2 * h {
@@ -55,12 +69,19 @@ impl EnvironmentMap {
                 MAX_ENVIRONMENT_PIXELS / 1_000_000
             ));
         }
-        let decoder = image::codecs::hdr::HdrDecoder::new(std::io::Cursor::new(bytes))
-            .map_err(|e| cannot_read(name, &e))?;
-        let image = image::DynamicImage::from_decoder(decoder)
-            .map_err(|e| cannot_read(name, &e))?
-            .into_rgb32f();
-        let texels: Vec<[f32; 3]> = image.pixels().map(|p| p.0).collect();
+        let texels = if is_exr(name) {
+            exr_texels(bytes, name)?
+        } else {
+            let decoder = image::codecs::hdr::HdrDecoder::new(std::io::Cursor::new(bytes))
+                .map_err(|e| cannot_read(name, &e))?;
+            let image = image::DynamicImage::from_decoder(decoder)
+                .map_err(|e| cannot_read(name, &e))?
+                .into_rgb32f();
+            image.pixels().map(|p| p.0).collect()
+        };
+        if texels.len() != (w as usize) * (h as usize) {
+            return Err(cannot_read(name, &"the pixels do not fill the image"));
+        }
         if texels.iter().flatten().any(|c| !c.is_finite() || *c < 0.0) {
             return Err(format!(
                 "environment map {}: radiance must be finite and not negative",
@@ -225,9 +246,42 @@ fn basis(n: DVec3) -> [f64; 9] {
     ]
 }
 
+/// Whether `name` is an OpenEXR file (by its extension; anything else is read as .hdr).
+fn is_exr(name: &Path) -> bool {
+    name.extension()
+        .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case("exr"))
+}
+
+/// The R, G and B channels of an OpenEXR file's first layer, row-major from the top.
+fn exr_texels(bytes: &[u8], name: &Path) -> Result<Vec<[f32; 3]>, String> {
+    use exr::prelude::{ReadChannels, ReadLayers, Text, read};
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .non_parallel()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| cannot_read(name, &e))?;
+    let list = &image.layer_data.channel_data.list;
+    let channel = |wanted: &str| -> Result<Vec<f32>, String> {
+        list.iter()
+            .find(|c| c.name == Text::from(wanted))
+            .map(|c| c.sample_data.values_as_f32().collect())
+            .ok_or_else(|| cannot_read(name, &format!("no channel {wanted:?}")))
+    };
+    let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
+    Ok(r.iter()
+        .zip(&g)
+        .zip(&b)
+        .map(|((r, g), b)| [*r, *g, *b])
+        .collect())
+}
+
 fn cannot_read(name: &Path, e: &dyn std::fmt::Display) -> String {
     format!(
-        "cannot read environment map {} as a Radiance .hdr image: {e}",
+        "cannot read environment map {} (Radiance .hdr, or OpenEXR named .exr): {e}",
         name.display()
     )
 }
@@ -317,6 +371,23 @@ mod tests {
                 "{n}: SH {got:.4}, exact {want:.4}, peak {peak:.4}"
             );
         }
+    }
+
+    /// An OpenEXR map decodes to the very floats written, row 0 at the top.
+    #[test]
+    fn an_openexr_map_decodes_to_the_floats_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("sky.exr");
+        let value = |x: usize, y: usize| (0.1 * x as f32, 0.01 * y as f32 + 0.5, 3.25);
+        exr::prelude::write_rgb_file(&path, 8, 4, value).unwrap();
+        let map = EnvironmentMap::decode(&std::fs::read(&path).unwrap(), &path).unwrap();
+        for (i, t) in map.texels.iter().enumerate() {
+            let (r, g, b) = value(i % 8, i / 8);
+            assert_eq!(*t, [r, g, b], "texel {i}");
+        }
+        exr::prelude::write_rgb_file(&path, 6, 4, value).unwrap();
+        let error = EnvironmentMap::decode(&std::fs::read(&path).unwrap(), &path).unwrap_err();
+        assert!(error.contains("sky.exr") && error.contains("2:1"), "{error}");
     }
 
     /// Lookups at texel centres give the texel, and longitude wraps across the seam.
