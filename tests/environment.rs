@@ -88,8 +88,8 @@ fn inside(mask: &[u8], width: usize, value: u8) -> Vec<usize> {
 const MAP_WIDTH: usize = 64;
 const MAP_HEIGHT: usize = 32;
 
-/// A smooth map that tells every direction apart: red follows longitude (one cycle), green
-/// the height above the horizon, blue half a cycle of longitude. All below 1, so the default
+/// A smooth map that tells every direction apart: red and blue the cosine and sine of the
+/// longitude, green the height above the horizon. All below 1, so the default
 /// clipping film shows it unchanged.
 fn telltale(r: usize, c: usize) -> [f32; 3] {
     let longitude = TAU * (c as f64 + 0.5) / MAP_WIDTH as f64;
@@ -97,7 +97,7 @@ fn telltale(r: usize, c: usize) -> [f32; 3] {
     [
         (0.45 + 0.4 * longitude.cos()) as f32,
         (0.45 + 0.4 * polar.cos()) as f32,
-        (0.45 + 0.4 * (0.5 * longitude).sin()) as f32,
+        (0.45 + 0.4 * longitude.sin()) as f32,
     ]
 }
 

@@ -211,6 +211,31 @@ pub enum Backdrop {
 mod tests {
     use super::*;
 
+    /// `rotation` moves what the map shows at longitude φ to φ + rotation: a map bright only
+    /// around +x, turned a quarter turn, lights a face looking along +y, not one along +x.
+    #[test]
+    fn a_turned_map_lights_the_turned_direction() {
+        let (width, height) = (64, 32);
+        let texels = (0..width * height)
+            .map(|i| {
+                let (r, c) = (i / width, i % width);
+                let near_x = (c < 4 || c >= width - 4) && (12..20).contains(&r);
+                [if near_x { 1.0 } else { 0.0 }; 3]
+            })
+            .collect();
+        let light = EnvironmentLight {
+            map: Arc::new(EnvironmentMap::from_texels(width, height, texels)),
+            intensity: 2.0,
+            rotation: std::f64::consts::FRAC_PI_2,
+            occlusion_rays: 0,
+        };
+        let along_y = light.diffuse(DVec3::Y)[0];
+        let along_x = light.diffuse(DVec3::X)[0];
+        assert!(along_y > 0.05 && along_x < 0.25 * along_y, "+y {along_y}, +x {along_x}");
+        let turned = turn_about_z(DVec3::X, std::f64::consts::FRAC_PI_2);
+        assert!((turned - DVec3::Y).length() < 1e-15, "{turned}");
+    }
+
     #[test]
     fn the_default_film_is_clipping_and_keeps_every_bit() {
         let film = Film::default();
