@@ -353,7 +353,11 @@ fn daylight_costs(views: u32) {
         (0..256 * 512)
             .map(|i| {
                 let up = 1.0 - (i / 512) as f32 / 128.0;
-                if up > 0.0 { [0.1 + 0.1 * up, 0.15 + 0.1 * up, 0.3] } else { [0.05; 3] }
+                if up > 0.0 {
+                    [0.1 + 0.1 * up, 0.15 + 0.1 * up, 0.3]
+                } else {
+                    [0.05; 3]
+                }
             })
             .collect(),
     ));
@@ -412,11 +416,7 @@ fn daylight_costs(views: u32) {
             environment(0),
             &black,
         ),
-        (
-            "+ environment occlusion, 16 rays",
-            environment(16),
-            &black,
-        ),
+        ("+ environment occlusion, 16 rays", environment(16), &black),
         (
             "+ environment map background",
             environment(16),

@@ -6,7 +6,8 @@
 mod common;
 
 use common::{
-    blake3_hex, hashes, load, ok, read_json, read_png, run, stderr, transform, view_path, write,
+    blake3_hex, encoded, hashes, inside, load, ok, read_json, rgb, run, stderr, transform,
+    view_path, write,
 };
 use std::f64::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
@@ -49,40 +50,6 @@ fn render_with_map(
     let out = dir.path().join("out");
     ok(run(&path, &out, extra));
     (dir, out, texels)
-}
-
-/// Linear → sRGB 0–255 (unrounded).
-fn encoded(l: f64) -> f64 {
-    let l = l.clamp(0.0, 1.0);
-    255.0
-        * if l <= 0.003_130_8 {
-            12.92 * l
-        } else {
-            1.055 * l.powf(1.0 / 2.4) - 0.055
-        }
-}
-
-/// The RGB of view `view` of sample 0.
-fn rgb(out: &Path, view: u32) -> Vec<[u8; 3]> {
-    let (_, _, channels, bytes) = read_png(&view_path(out, 0, view, None, "rgb.png"));
-    assert_eq!(channels, 3);
-    bytes.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
-}
-
-/// Pixels whose 3 × 3 neighbourhood has mask value `value` throughout (no anti-aliased edge).
-fn inside(mask: &[u8], width: usize, value: u8) -> Vec<usize> {
-    let height = mask.len() / width;
-    (0..mask.len())
-        .filter(|&i| {
-            let (r, c) = (i / width, i % width);
-            r > 0
-                && c > 0
-                && r + 1 < height
-                && c + 1 < width
-                && (r - 1..=r + 1)
-                    .all(|rr| (c - 1..=c + 1).all(|cc| mask[rr * width + cc] == value))
-        })
-        .collect()
 }
 
 const MAP_WIDTH: usize = 64;
@@ -209,18 +176,28 @@ fn a_white_box_is_lit_by_the_maps_irradiance() {
             recipe,
             |dir| {
                 write_map(&dir.join("sky.hdr"), MAP_WIDTH, MAP_HEIGHT, |r, _| {
-                    [if upper_only && r >= MAP_HEIGHT / 2 { 0.0 } else { L }; 3]
+                    [if upper_only && r >= MAP_HEIGHT / 2 {
+                        0.0
+                    } else {
+                        L
+                    }; 3]
                 })
             },
             &[],
         );
-        let views: Vec<_> = (0..6).map(|view| (load(&out, view, None), rgb(&out, view))).collect();
+        let views: Vec<_> = (0..6)
+            .map(|view| (load(&out, view, None), rgb(&out, view)))
+            .collect();
         // The box's top and bottom heights, from every point seen.
         let heights = views.iter().flat_map(|(v, _)| {
             (0..v.depth.len()).filter_map(|i| v.point(i / v.width, i % v.width).map(|p| p[2]))
         });
-        let (bottom, top) = heights.fold((f64::MAX, f64::MIN), |(lo, hi), z| (lo.min(z), hi.max(z)));
-        assert!((top - bottom - 0.6).abs() < 0.01, "the box is 0.6 m tall: {bottom}..{top}");
+        let (bottom, top) =
+            heights.fold((f64::MAX, f64::MIN), |(lo, hi), z| (lo.min(z), hi.max(z)));
+        assert!(
+            (top - bottom - 0.6).abs() < 0.01,
+            "the box is 0.6 m tall: {bottom}..{top}"
+        );
         let mut seen = [0usize; 3]; // top, side, bottom pixels checked
         for (view, (v, pixels)) in views.iter().enumerate() {
             // 0 top (n_z = 1), 1 side (0), 2 bottom (−1), per pixel that sees the box.
@@ -240,7 +217,10 @@ fn a_white_box_is_lit_by_the_maps_irradiance() {
                 // Away from creases, where anti-aliasing mixes two faces.
                 let w = v.width;
                 let Some(f) = face[i] else { continue };
-                if [i - 1, i + 1, i - w, i + w].iter().any(|&j| face[j] != Some(f)) {
+                if [i - 1, i + 1, i - w, i + w]
+                    .iter()
+                    .any(|&j| face[j] != Some(f))
+                {
                     continue;
                 }
                 let n_z = 1.0 - f as f64;
@@ -269,22 +249,28 @@ fn a_white_box_is_lit_by_the_maps_irradiance() {
 fn a_missing_or_misshapen_map_is_an_error_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let recipe = write(dir.path(), "recipe.rhai", BACKGROUND_RECIPE);
-    let missing = run(&recipe, &dir.path().join("a"), &[]);
-    assert!(!missing.status.success());
-    let message = stderr(&missing);
-    assert!(message.contains("sky.hdr") && message.contains("not found"), "{message}");
+    let failure = |out: &str| {
+        let output = run(&recipe, &dir.path().join(out), &[]);
+        assert!(!output.status.success());
+        stderr(&output)
+    };
+    let message = failure("a");
+    assert!(
+        message.contains("sky.hdr") && message.contains("not found"),
+        "{message}"
+    );
     assert!(message.contains("recipe.rhai:1:"), "{message}");
 
     write_map(&dir.path().join("sky.hdr"), 40, 30, telltale);
-    let square = run(&recipe, &dir.path().join("b"), &[]);
-    assert!(!square.status.success());
-    let message = stderr(&square);
-    assert!(message.contains("sky.hdr") && message.contains("2:1"), "{message}");
+    let message = failure("b");
+    assert!(
+        message.contains("sky.hdr") && message.contains("2:1"),
+        "{message}"
+    );
 
     std::fs::write(dir.path().join("sky.hdr"), b"not an image").unwrap();
-    let corrupt = run(&recipe, &dir.path().join("c"), &[]);
-    assert!(!corrupt.status.success());
-    assert!(stderr(&corrupt).contains("sky.hdr"), "{}", stderr(&corrupt));
+    let message = failure("c");
+    assert!(message.contains("sky.hdr"), "{message}");
 }
 
 /// Light and background from one map, with occlusion on and the map turned: the same bytes on
@@ -314,5 +300,8 @@ fn environment_light_is_the_same_on_one_thread_or_two() {
     let json = read_json(&view_path(&one, 0, 1, None, "json"));
     let text = json.to_string();
     let hash = blake3_hex(&std::fs::read(dir.path().join("sky.hdr")).unwrap());
-    assert!(text.contains(&hash), "the view records the map's hash: {text}");
+    assert!(
+        text.contains(&hash),
+        "the view records the map's hash: {text}"
+    );
 }

@@ -2,8 +2,7 @@
 //! with a record of every value drawn.
 
 use crate::materials::{
-    Backdrop, EnvironmentLight, Film, GroundBounce, Lighting, Sky, Sun, ToneCurve,
-    srgb_to_linear,
+    Backdrop, EnvironmentLight, Film, GroundBounce, Lighting, Sky, Sun, ToneCurve, srgb_to_linear,
 };
 use crate::scene::{Background, EnvironmentSpec, LightSpec, SkyGradient, Tone};
 use crate::seeds::Stream;
@@ -143,7 +142,10 @@ pub fn draw_light(spec: &LightSpec, stream: &mut Stream) -> (Lighting, LightDraw
         ambient,
         sun: sun.as_ref().map(|s| s.1.clone()),
         sky: sky.as_ref().map(|s| s.1.clone()),
-        environment: spec.environment.as_ref().map(|e| EnvironmentDraw::of(&e.map)),
+        environment: spec
+            .environment
+            .as_ref()
+            .map(|e| EnvironmentDraw::of(&e.map)),
         shadows: spec.shadows,
     };
     let lighting = Lighting {

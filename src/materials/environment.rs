@@ -252,31 +252,24 @@ fn is_exr(name: &Path) -> bool {
         .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case("exr"))
 }
 
-/// The R, G and B channels of an OpenEXR file's first layer, row-major from the top.
+/// The R, G and B channels of an OpenEXR file's first layer with them, row-major from the top.
 fn exr_texels(bytes: &[u8], name: &Path) -> Result<Vec<[f32; 3]>, String> {
-    use exr::prelude::{ReadChannels, ReadLayers, Text, read};
+    use exr::prelude::{ReadChannels, ReadLayers, read};
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
-        .all_channels()
+        .rgb_channels(
+            |size, _| (size.width(), vec![[0.0f32; 3]; size.area()]),
+            |(width, texels), at, (r, g, b): (f32, f32, f32)| {
+                texels[at.y() * *width + at.x()] = [r, g, b];
+            },
+        )
         .first_valid_layer()
         .all_attributes()
         .non_parallel()
         .from_buffered(std::io::Cursor::new(bytes))
         .map_err(|e| cannot_read(name, &e))?;
-    let list = &image.layer_data.channel_data.list;
-    let channel = |wanted: &str| -> Result<Vec<f32>, String> {
-        list.iter()
-            .find(|c| c.name == Text::from(wanted))
-            .map(|c| c.sample_data.values_as_f32().collect())
-            .ok_or_else(|| cannot_read(name, &format!("no channel {wanted:?}")))
-    };
-    let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
-    Ok(r.iter()
-        .zip(&g)
-        .zip(&b)
-        .map(|((r, g), b)| [*r, *g, *b])
-        .collect())
+    Ok(image.layer_data.channel_data.pixels.1)
 }
 
 fn cannot_read(name: &Path, e: &dyn std::fmt::Display) -> String {
@@ -314,7 +307,12 @@ mod tests {
     #[test]
     fn a_constant_map_lights_every_face_to_its_radiance() {
         let map = map_of(16, |_| 0.75);
-        for n in [DVec3::Z, -DVec3::Z, DVec3::X, DVec3::new(0.3, -0.5, 0.2).normalize()] {
+        for n in [
+            DVec3::Z,
+            -DVec3::Z,
+            DVec3::X,
+            DVec3::new(0.3, -0.5, 0.2).normalize(),
+        ] {
             for c in map.diffuse(n) {
                 assert!((c - 0.75).abs() < 1e-12, "{n}: {c}");
             }
@@ -355,7 +353,11 @@ mod tests {
                 let polar = PI * (r as f64 + 0.5) / h as f64;
                 for c in 0..w {
                     let lon = TAU * (c as f64 + 0.5) / w as f64;
-                    let d = DVec3::new(polar.sin() * lon.cos(), polar.sin() * lon.sin(), polar.cos());
+                    let d = DVec3::new(
+                        polar.sin() * lon.cos(),
+                        polar.sin() * lon.sin(),
+                        polar.cos(),
+                    );
                     let l = map.radiance(d)[0];
                     e += l * n.dot(d).max(0.0) * polar.sin() * (PI / h as f64) * (TAU / w as f64);
                 }
@@ -364,7 +366,13 @@ mod tests {
         };
         let peak = exact(sun);
         assert!(peak > 0.0);
-        for n in [sun, DVec3::Z, DVec3::X, -DVec3::Z, sun.cross(DVec3::Z).normalize()] {
+        for n in [
+            sun,
+            DVec3::Z,
+            DVec3::X,
+            -DVec3::Z,
+            sun.cross(DVec3::Z).normalize(),
+        ] {
             let (got, want) = (map.diffuse(n)[0], exact(n));
             assert!(
                 (got - want).abs() <= 0.094 * peak + 0.01 * peak,
@@ -387,7 +395,10 @@ mod tests {
         }
         exr::prelude::write_rgb_file(&path, 6, 4, value).unwrap();
         let error = EnvironmentMap::decode(&std::fs::read(&path).unwrap(), &path).unwrap_err();
-        assert!(error.contains("sky.exr") && error.contains("2:1"), "{error}");
+        assert!(
+            error.contains("sky.exr") && error.contains("2:1"),
+            "{error}"
+        );
     }
 
     /// Lookups at texel centres give the texel, and longitude wraps across the seam.
@@ -397,7 +408,11 @@ mod tests {
         let texels = (0..width * height).map(|i| [i as f32; 3]).collect();
         let map = EnvironmentMap::from_texels(width, height, texels);
         let dir = |polar: f64, lon: f64| {
-            DVec3::new(polar.sin() * lon.cos(), polar.sin() * lon.sin(), polar.cos())
+            DVec3::new(
+                polar.sin() * lon.cos(),
+                polar.sin() * lon.sin(),
+                polar.cos(),
+            )
         };
         // Row 1, column 2 centre.
         let centre = map.radiance(dir(PI * 1.5 / 4.0, TAU * 2.5 / 8.0))[0];

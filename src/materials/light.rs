@@ -231,7 +231,10 @@ mod tests {
         };
         let along_y = light.diffuse(DVec3::Y)[0];
         let along_x = light.diffuse(DVec3::X)[0];
-        assert!(along_y > 0.05 && along_x < 0.25 * along_y, "+y {along_y}, +x {along_x}");
+        assert!(
+            along_y > 0.05 && along_x < 0.25 * along_y,
+            "+y {along_y}, +x {along_x}"
+        );
         let turned = turn_about_z(DVec3::X, std::f64::consts::FRAC_PI_2);
         assert!((turned - DVec3::Y).length() < 1e-15, "{turned}");
     }

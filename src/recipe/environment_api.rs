@@ -14,10 +14,7 @@ pub const DEFAULT_OCCLUSION_RAYS: u32 = 16;
 
 /// The map of `dataset.<context>.environment`, from a file name or a map of options; the
 /// options it does not know are left in the returned `Options` for the caller.
-fn map_options(
-    value: Dynamic,
-    context: &str,
-) -> OptResult<(String, Option<Options>)> {
+fn map_options(value: Dynamic, context: &str) -> OptResult<(String, Option<Options>)> {
     let what = format!("dataset.{context}.environment");
     if value.is_string() {
         return Ok((value.to_string(), None));
@@ -38,17 +35,23 @@ fn placed(
     what: &str,
 ) -> OptResult<EnvironmentSpec> {
     if file.is_empty() {
-        return Err(format!("{what} needs a `file`, a Radiance .hdr image next to the recipe"));
+        return Err(format!(
+            "{what} needs a `file`, a Radiance .hdr image next to the recipe"
+        ));
     }
     let (intensity, rotation) = match o {
         Some(o) => (o.number("intensity", 1.0)?, o.number("rotation", 0.0)?),
         None => (1.0, 0.0),
     };
     if !(0.0..=1e6).contains(&intensity) {
-        return Err(format!("{what}.intensity = {intensity} must lie within [0, 1e6]"));
+        return Err(format!(
+            "{what}.intensity = {intensity} must lie within [0, 1e6]"
+        ));
     }
     if !rotation.is_finite() {
-        return Err(format!("{what}.rotation = {rotation} must be a finite angle in radians"));
+        return Err(format!(
+            "{what}.rotation = {rotation} must be a finite angle in radians"
+        ));
     }
     let (hash, map) = files.environment(&file, what)?;
     Ok(EnvironmentSpec {

@@ -388,9 +388,11 @@ mod tests {
         });
         let hemisphere = DiskPattern::new(64);
         let p = DVec3::new(0.0, 0.0, 0.5);
-        let ((_, below), _) = hemisphere_visibility(&mesh, ground, p, DVec3::X, &hemisphere, (1.0, 0.0));
+        let ((_, below), _) =
+            hemisphere_visibility(&mesh, ground, p, DVec3::X, &hemisphere, (1.0, 0.0));
         assert_eq!(below, 1.0);
-        let ((_, blocked), _) = hemisphere_visibility(&mesh, None, p, DVec3::X, &hemisphere, (1.0, 0.0));
+        let ((_, blocked), _) =
+            hemisphere_visibility(&mesh, None, p, DVec3::X, &hemisphere, (1.0, 0.0));
         // Only rays grazing past the 50 m floor's edge escape.
         assert!(
             blocked < 0.05,
