@@ -5,8 +5,7 @@
 mod common;
 
 use common::{
-    encoded, hashes, inside, load, read_exr, read_json, read_png, render, rgb, run, stderr,
-    view_path, write,
+    encoded, hashes, inside, load, read_exr, read_json, render, rgb, run, stderr, view_path, write,
 };
 use std::path::Path;
 

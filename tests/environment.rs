@@ -229,8 +229,7 @@ fn a_white_box_is_lit_by_the_maps_irradiance() {
                 } else {
                     f64::from(L)
                 };
-                for ch in 0..3 {
-                    let got = f64::from(pixels[i][ch]);
+                for got in pixels[i].map(f64::from) {
                     assert!(
                         (got - encoded(want)).abs() <= 1.1,
                         "upper_only {upper_only}, view {view}, face {f}: {got} vs {:.1}",

@@ -334,17 +334,24 @@ impl<S: Surfaces> Shading<'_, S> {
             };
             add(sun.direction, sun.colour, seen);
         }
-        if let Some(environment) = &l.environment {
+        let surrounding = if let Some(environment) = &l.environment {
             // The map's light replaces the sky's: SH irradiance, scaled by the open share.
-            let (seen, open) =
-                environment_light(self.mesh, l, environment, point, n, &self.hemisphere, turn);
-            for k in 0..3 {
-                light.diffuse[k] += seen[k];
-                light.unshadowed[k] += open[k];
-            }
+            Some(environment_light(
+                self.mesh,
+                l,
+                environment,
+                point,
+                n,
+                &self.hemisphere,
+                turn,
+            ))
         } else if l.sky.is_some() || l.ground.is_some() {
             // Irradiance of a sky dome and a ground below, for a surface tilted by n.z.
-            let (seen, open) = sky_light(self.mesh, l, point, n, &self.hemisphere, turn);
+            Some(sky_light(self.mesh, l, point, n, &self.hemisphere, turn))
+        } else {
+            None
+        };
+        if let Some((seen, open)) = surrounding {
             for k in 0..3 {
                 light.diffuse[k] += seen[k];
                 light.unshadowed[k] += open[k];
