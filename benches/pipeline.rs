@@ -14,13 +14,15 @@
 
 use shmgen::build::BuiltSample;
 use shmgen::cameras::Camera;
-use shmgen::materials::Backdrop;
+use shmgen::materials::environment::EnvironmentMap;
+use shmgen::materials::{Backdrop, EnvironmentLight};
 use shmgen::output::{depth_exr, mask_png, rgb_png};
 use shmgen::pipeline::{self, RunOptions, Shard, prepare, view_camera};
 use shmgen::recipe::Recipe;
 use shmgen::render::{GBuffer, NO_HIT, SampleSurfaces, TraceMesh, shade};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Environment variable under which the benchmark runs one streaming count in a child.
@@ -334,6 +336,7 @@ fn daylight_costs(views: u32) {
             ground: [0.05, 0.04, 0.03],
             occlusion_rays: 0,
         }),
+        environment: None,
         shadows: true,
         ground: None,
         film: Default::default(),
@@ -343,19 +346,52 @@ fn daylight_costs(views: u32) {
         change(&mut l);
         l
     };
-    let lightings: Vec<(&str, Lighting)> = vec![
-        ("studio (A1's default)", sample.lighting.clone()),
-        ("sun with a hard shadow, sky", outdoor.clone()),
+    // A 512 × 256 map: a sky brighter towards the zenith over darker ground.
+    let map = Arc::new(EnvironmentMap::from_texels(
+        512,
+        256,
+        (0..256 * 512)
+            .map(|i| {
+                let up = 1.0 - (i / 512) as f32 / 128.0;
+                if up > 0.0 {
+                    [0.1 + 0.1 * up, 0.15 + 0.1 * up, 0.3]
+                } else {
+                    [0.05; 3]
+                }
+            })
+            .collect(),
+    ));
+    let environment_backdrop = Backdrop::Environment {
+        map: map.clone(),
+        intensity: 1.0,
+        rotation: 0.3,
+    };
+    let environment = |occlusion_rays: u32| {
+        with(&|l| {
+            l.sky = None;
+            l.environment = Some(EnvironmentLight {
+                map: map.clone(),
+                intensity: 1.0,
+                rotation: 0.3,
+                occlusion_rays,
+            });
+        })
+    };
+    let lightings: Vec<(&str, Lighting, &Backdrop)> = vec![
+        ("studio (A1's default)", sample.lighting.clone(), &black),
+        ("sun with a hard shadow, sky", outdoor.clone(), &black),
         (
             "+ soft sun, 0.53°, 8 shadow rays",
             with(&|l| {
                 let sun = l.sun.as_mut().unwrap();
                 (sun.angular_diameter, sun.shadow_rays) = (0.53f64.to_radians(), 8);
             }),
+            &black,
         ),
         (
             "+ sky occlusion, 16 rays",
             with(&|l| l.sky.as_mut().unwrap().occlusion_rays = 16),
+            &black,
         ),
         (
             "+ ground bounce",
@@ -365,6 +401,7 @@ fn daylight_costs(views: u32) {
                     albedo: [0.2; 3],
                 })
             }),
+            &black,
         ),
         (
             "+ filmic tone, +1 EV",
@@ -372,6 +409,18 @@ fn daylight_costs(views: u32) {
                 l.film.tone = ToneCurve::Filmic;
                 l.film.exposure = 2.0;
             }),
+            &black,
+        ),
+        (
+            "environment map light (SH) instead of the sky",
+            environment(0),
+            &black,
+        ),
+        ("+ environment occlusion, 16 rays", environment(16), &black),
+        (
+            "+ environment map background",
+            environment(16),
+            &environment_backdrop,
         ),
     ];
     let mut shade_ms = vec![Vec::new(); lightings.len()];
@@ -388,9 +437,9 @@ fn daylight_costs(views: u32) {
             let camera = view_camera(&recipe.dataset, &sample, view).unwrap().camera;
             let g = mesh.trace(&camera);
             let mut rgb = Vec::new();
-            for (k, (_, lighting)) in lightings.iter().enumerate() {
+            for (k, (_, lighting, backdrop)) in lightings.iter().enumerate() {
                 let start = Instant::now();
-                rgb = shade(&g, &mesh, &camera, lighting, &surfaces, &black, true);
+                rgb = shade(&g, &mesh, &camera, lighting, &surfaces, backdrop, true);
                 shade_ms[k].push(1e3 * start.elapsed().as_secs_f64());
             }
             let (w, h) = (g.width as usize, g.height as usize);
@@ -436,7 +485,7 @@ fn daylight_costs(views: u32) {
     );
     println!("| shading | ms | against the row it adds to |");
     let medians: Vec<f64> = shade_ms.into_iter().map(median).collect();
-    for (k, (name, _)) in lightings.iter().enumerate() {
+    for (k, (name, _, _)) in lightings.iter().enumerate() {
         // The outdoor rows each add one effect to the hard-shadowed sun and sky.
         let base = if k >= 2 { medians[1] } else { medians[0] };
         println!("| {name} | {:.1} | {:+.1} |", medians[k], medians[k] - base);

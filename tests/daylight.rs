@@ -4,7 +4,9 @@
 
 mod common;
 
-use common::{hashes, load, read_exr, read_json, read_png, render, run, stderr, view_path, write};
+use common::{
+    encoded, hashes, inside, load, read_exr, read_json, render, rgb, run, stderr, view_path, write,
+};
 use std::path::Path;
 
 /// sRGB 0–1 → linear.
@@ -14,50 +16,6 @@ fn linear(c: f64) -> f64 {
     } else {
         ((c + 0.055) / 1.055).powf(2.4)
     }
-}
-
-/// Linear → sRGB 0–255.
-fn encoded(l: f64) -> f64 {
-    let l = l.clamp(0.0, 1.0);
-    255.0
-        * if l <= 0.003_130_8 {
-            12.92 * l
-        } else {
-            1.055 * l.powf(1.0 / 2.4) - 0.055
-        }
-}
-
-/// The RGB of view `view` of sample 0.
-fn rgb(out: &Path, view: u32) -> Vec<[u8; 3]> {
-    let (_, _, channels, bytes) = read_png(&view_path(out, 0, view, None, "rgb.png"));
-    assert_eq!(channels, 3);
-    bytes.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
-}
-
-/// Structure pixels whose 3 × 3 neighbourhood is all structure (no anti-aliased edge).
-fn interior(mask: &[u8], width: usize) -> Vec<usize> {
-    let height = mask.len() / width;
-    (0..mask.len())
-        .filter(|&i| {
-            let (r, c) = (i / width, i % width);
-            r > 0
-                && c > 0
-                && r + 1 < height
-                && c + 1 < width
-                && [
-                    i - width - 1,
-                    i - width,
-                    i - width + 1,
-                    i - 1,
-                    i,
-                    i + 1,
-                    i + width - 1,
-                ]
-                .iter()
-                .chain(&[i + width, i + width + 1])
-                .all(|&j| mask[j] == 255)
-        })
-        .collect()
 }
 
 const SKY: [f64; 3] = [0.75, 0.83, 0.95];
@@ -96,7 +54,7 @@ fn a_lone_box_under_a_sun_is_nowhere_darker_than_the_sky_floor() {
     for view in 0..6 {
         let v = load(&out, view, None);
         let pixels = rgb(&out, view);
-        let inside = interior(&v.mask, v.width);
+        let inside = inside(&v.mask, v.width, 255);
         assert!(inside.len() > 200, "view {view} sees the box");
         for i in inside {
             for k in 0..3 {
@@ -185,7 +143,7 @@ fn the_filmic_curve_keeps_highlights_that_clipping_loses() {
         for view in 0..6 {
             let pixels = rgb(&out, view);
             let v = load(&out, view, None);
-            let inside = interior(&v.mask, v.width);
+            let inside = inside(&v.mask, v.width, 255);
             white += inside
                 .iter()
                 .filter(|&&i| pixels[i].iter().all(|&c| c == 255))

@@ -2,9 +2,9 @@
 //! with a record of every value drawn.
 
 use crate::materials::{
-    Backdrop, Film, GroundBounce, Lighting, Sky, Sun, ToneCurve, srgb_to_linear,
+    Backdrop, EnvironmentLight, Film, GroundBounce, Lighting, Sky, Sun, ToneCurve, srgb_to_linear,
 };
-use crate::scene::{Background, LightSpec, SkyGradient, Tone};
+use crate::scene::{Background, EnvironmentSpec, LightSpec, SkyGradient, Tone};
 use crate::seeds::Stream;
 use glam::DVec3;
 use serde::Serialize;
@@ -20,8 +20,35 @@ pub struct LightDraw {
     pub sun: Option<SunDraw>,
     /// The sky drawn, if the dataset has one.
     pub sky: Option<SkyDraw>,
+    /// The environment map lighting the sample, if the dataset has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub environment: Option<EnvironmentDraw>,
     /// Whether the sun casts shadows.
     pub shadows: bool,
+}
+
+/// An environment map as recorded: which file, and how it was placed.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct EnvironmentDraw {
+    /// Path of the map relative to the recipe's folder.
+    pub environment: String,
+    /// blake3 hash (hex) of the file's bytes.
+    pub hash: String,
+    /// Factor on the map's linear radiance.
+    pub intensity: f64,
+    /// Turn of the map about +z, radians.
+    pub rotation: f64,
+}
+
+impl EnvironmentDraw {
+    fn of(spec: &EnvironmentSpec) -> Self {
+        EnvironmentDraw {
+            environment: spec.file.clone(),
+            hash: spec.hash.clone(),
+            intensity: spec.intensity,
+            rotation: spec.rotation,
+        }
+    }
 }
 
 /// The sun drawn for a sample.
@@ -71,6 +98,8 @@ pub enum BackdropDraw {
         /// Width and height of the window, as fractions of the image's width and height.
         window_size: [f64; 2],
     },
+    /// An environment map fixed in the world.
+    Environment(EnvironmentDraw),
 }
 
 /// The light of one sample, drawn from `stream`; a fixed value (`[x, x]`) draws nothing.
@@ -113,6 +142,10 @@ pub fn draw_light(spec: &LightSpec, stream: &mut Stream) -> (Lighting, LightDraw
         ambient,
         sun: sun.as_ref().map(|s| s.1.clone()),
         sky: sky.as_ref().map(|s| s.1.clone()),
+        environment: spec
+            .environment
+            .as_ref()
+            .map(|e| EnvironmentDraw::of(&e.map)),
         shadows: spec.shadows,
     };
     let lighting = Lighting {
@@ -120,6 +153,12 @@ pub fn draw_light(spec: &LightSpec, stream: &mut Stream) -> (Lighting, LightDraw
         studio: Lighting::default().studio.filter(|_| spec.studio),
         sun: sun.map(|s| s.0),
         sky: sky.map(|s| s.0),
+        environment: spec.environment.as_ref().map(|e| EnvironmentLight {
+            map: e.map.map.clone(),
+            intensity: e.map.intensity,
+            rotation: e.map.rotation,
+            occlusion_rays: e.occlusion_rays,
+        }),
         shadows: spec.shadows,
         ground: spec.ground.as_ref().map(|g| GroundBounce {
             height: g.height,
@@ -154,6 +193,14 @@ pub fn draw_backdrop(
                 ground: sky.ground.map(srgb_to_linear),
             },
             BackdropDraw::Sky { sky: sky.clone() },
+        ),
+        Background::Environment { environment } => (
+            Backdrop::Environment {
+                map: environment.map.clone(),
+                intensity: environment.intensity,
+                rotation: environment.rotation,
+            },
+            BackdropDraw::Environment(EnvironmentDraw::of(environment)),
         ),
         Background::Images { decoded, .. } => {
             let chosen = &decoded[stream.integer(0, decoded.len() as i64 - 1) as usize];

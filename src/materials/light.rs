@@ -3,6 +3,7 @@
 //! linear light into display values. Plain values, drawn by the build stage from what a
 //! recipe declared and consumed by the renderer.
 
+use super::environment::EnvironmentMap;
 use super::image::TextureImage;
 use glam::DVec3;
 use std::sync::Arc;
@@ -19,6 +20,8 @@ pub struct Lighting {
     pub sun: Option<Sun>,
     /// Hemispherical light: `sky` from above, `ground` bounce from below.
     pub sky: Option<Sky>,
+    /// Light from an environment map, if any (replaces `sky`).
+    pub environment: Option<EnvironmentLight>,
     /// Whether the sun casts shadows.
     pub shadows: bool,
     /// Light bounced up once by a ground plane lit by the sun and sky, if the scene has one;
@@ -117,6 +120,39 @@ pub struct Sky {
     pub occlusion_rays: u32,
 }
 
+/// Diffuse light from an environment map, fixed in the world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvironmentLight {
+    /// The map, with its SH coefficients computed once when it was read.
+    pub map: Arc<EnvironmentMap>,
+    /// Factor on the map's radiance.
+    pub intensity: f64,
+    /// Turn of the map about +z, radians: what the map shows at longitude φ lies at world
+    /// longitude φ + rotation.
+    pub rotation: f64,
+    /// Occlusion rays per shaded point over its hemisphere (0 = the map reaches every face
+    /// unobstructed).
+    pub occlusion_rays: u32,
+}
+
+impl EnvironmentLight {
+    /// Radiance a white Lambertian face with world normal `n` reflects under the map
+    /// (irradiance / π), unoccluded.
+    pub fn diffuse(&self, n: DVec3) -> [f64; 3] {
+        let lit = self.map.diffuse(turn_about_z(n, -self.rotation));
+        lit.map(|c| c * self.intensity)
+    }
+}
+
+/// `d` turned by `angle` radians about +z (counter-clockwise seen from above).
+pub fn turn_about_z(d: DVec3, angle: f64) -> DVec3 {
+    if angle == 0.0 {
+        return d;
+    }
+    let (s, c) = (libm::sin(angle), libm::cos(angle));
+    DVec3::new(c * d.x - s * d.y, s * d.x + c * d.y, d.z)
+}
+
 impl Default for Lighting {
     fn default() -> Self {
         Lighting {
@@ -128,6 +164,7 @@ impl Default for Lighting {
             ]),
             sun: None,
             sky: None,
+            environment: None,
             shadows: false,
             ground: None,
             film: Film::default(),
@@ -159,11 +196,48 @@ pub enum Backdrop {
         /// Width and height of the window, in image units.
         size: (f64, f64),
     },
+    /// An environment map fixed in the world, seen along each pixel's ray.
+    Environment {
+        /// The map.
+        map: Arc<EnvironmentMap>,
+        /// Factor on the map's radiance.
+        intensity: f64,
+        /// Turn of the map about +z, radians (see `EnvironmentLight::rotation`).
+        rotation: f64,
+    },
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `rotation` moves what the map shows at longitude φ to φ + rotation: a map bright only
+    /// around +x, turned a quarter turn, lights a face looking along +y, not one along +x.
+    #[test]
+    fn a_turned_map_lights_the_turned_direction() {
+        let (width, height) = (64, 32);
+        let texels = (0..width * height)
+            .map(|i| {
+                let (r, c) = (i / width, i % width);
+                let near_x = (c < 4 || c >= width - 4) && (12..20).contains(&r);
+                [if near_x { 1.0 } else { 0.0 }; 3]
+            })
+            .collect();
+        let light = EnvironmentLight {
+            map: Arc::new(EnvironmentMap::from_texels(width, height, texels)),
+            intensity: 2.0,
+            rotation: std::f64::consts::FRAC_PI_2,
+            occlusion_rays: 0,
+        };
+        let along_y = light.diffuse(DVec3::Y)[0];
+        let along_x = light.diffuse(DVec3::X)[0];
+        assert!(
+            along_y > 0.05 && along_x < 0.25 * along_y,
+            "+y {along_y}, +x {along_x}"
+        );
+        let turned = turn_about_z(DVec3::X, std::f64::consts::FRAC_PI_2);
+        assert!((turned - DVec3::Y).length() < 1e-15, "{turned}");
+    }
 
     #[test]
     fn the_default_film_is_clipping_and_keeps_every_bit() {

@@ -8,12 +8,13 @@
 //! patterns are continuous across every edge (moss, which prefers upward faces, and image
 //! textures, projected along the axis nearest each face, change at creases as real ones do);
 //! `image` samples textures made elsewhere; `light` holds the light and backdrops a surface is
-//! seen under.
+//! seen under, `environment` the maps of light from every direction.
 //!
 //! Owns: how things look — the material vocabulary, the generators, texture images, and the
 //! light and backdrop values shading uses. Must not touch: geometry, cameras, recipes or
 //! writing files.
 
+pub mod environment;
 pub mod ground;
 pub mod image;
 pub mod light;
@@ -21,7 +22,7 @@ pub mod noise;
 pub mod procedural;
 pub mod prompt;
 
-pub use light::{Backdrop, Film, GroundBounce, Lighting, Sky, Sun, ToneCurve};
+pub use light::{Backdrop, EnvironmentLight, Film, GroundBounce, Lighting, Sky, Sun, ToneCurve};
 pub use procedural::{Grain, MaterialDraw, Shader, Surface, SurfacePoint};
 
 use serde::Serialize;

@@ -158,7 +158,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
     let views = o.integer("views", 1, 1, 100_000)? as u32;
     let background = background(o.take("background"), files)?;
     let light = match o.sub("light")? {
-        Some(l) => light(l)?,
+        Some(l) => light(l, files)?,
         None => LightSpec::default(),
     };
     let antialias = o.flag("antialias", true)?;
@@ -445,8 +445,8 @@ fn poses(o: &mut Options) -> OptResult<Poses> {
     }
 }
 
-/// `background: [r, g, b]`, `"black"`, `"sky"`, `#{ sky: #{ zenith, horizon, ground } }` or
-/// `#{ images: "folder" }`.
+/// `background: [r, g, b]`, `"black"`, `"sky"`, `#{ sky: #{ zenith, horizon, ground } }`,
+/// `#{ images: "folder" }` or `#{ environment: "sky.hdr" }`.
 fn background(value: Option<Dynamic>, files: &RecipeFiles) -> OptResult<Background> {
     let Some(value) = value else {
         return Ok(Background::Colour([0.0; 3]));
@@ -481,10 +481,14 @@ fn background(value: Option<Dynamic>, files: &RecipeFiles) -> OptResult<Backgrou
         };
         sky.finish()?;
         Background::Sky { sky: gradient }
+    } else if let Some(map) = o.take("environment") {
+        Background::Environment {
+            environment: super::environment_api::background_environment(map, files)?,
+        }
     } else {
         let folder = o.string("images", "")?;
         if folder.is_empty() {
-            return Err("dataset.background needs `sky` or `images`".into());
+            return Err("dataset.background needs `sky`, `images` or `environment`".into());
         }
         let decoded = files.images_in(&folder, "dataset.background.images")?;
         Background::Images {
@@ -503,9 +507,9 @@ fn background(value: Option<Dynamic>, files: &RecipeFiles) -> OptResult<Backgrou
     Ok(result)
 }
 
-/// `light: #{ sun: #{ ... }, sky: #{ ... }, ambient, shadows, studio, ground: #{ height,
-/// albedo }, exposure, tone }`.
-fn light(mut o: Options) -> OptResult<LightSpec> {
+/// `light: #{ sun: #{ ... }, sky: #{ ... }, environment, ambient, shadows, studio, ground:
+/// #{ height, albedo }, exposure, tone }`.
+fn light(mut o: Options, files: &RecipeFiles) -> OptResult<LightSpec> {
     let sun = match o.sub("sun")? {
         None => None,
         Some(mut s) => {
@@ -537,7 +541,8 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
             Some(spec)
         }
     };
-    let outdoor = sun.is_some() || sky.is_some();
+    let environment = super::environment_api::light_environment(o.take("environment"), files)?;
+    let outdoor = sun.is_some() || sky.is_some() || environment.is_some();
     let default_ambient = if outdoor {
         [OUTDOOR_AMBIENT; 2]
     } else {
@@ -567,6 +572,7 @@ fn light(mut o: Options) -> OptResult<LightSpec> {
         studio,
         sun,
         sky,
+        environment,
         ambient,
         shadows,
         ground,

@@ -8,6 +8,7 @@ use super::engine::Sources;
 use super::memory;
 use crate::geometry::Mesh;
 use crate::geometry::import::{ImportOptions, import_mesh};
+use crate::materials::environment::EnvironmentMap;
 use crate::materials::image::{ImageFile, TextureImage};
 use std::collections::BTreeMap;
 use std::path::{Component, Path, PathBuf};
@@ -28,6 +29,8 @@ pub struct RecipeFiles {
     sources: Arc<Sources>,
     meshes: Mutex<BTreeMap<(String, bool), Arc<Mesh>>>,
     images: Mutex<BTreeMap<String, ImageFile>>,
+    /// Environment maps by file, with their hashes: read and projected once per recipe.
+    environments: Mutex<BTreeMap<String, (String, Arc<EnvironmentMap>)>>,
     pixels: Mutex<u64>,
 }
 
@@ -39,6 +42,7 @@ impl RecipeFiles {
             sources,
             meshes: Mutex::default(),
             images: Mutex::default(),
+            environments: Mutex::default(),
             pixels: Mutex::default(),
         }
     }
@@ -159,6 +163,38 @@ impl RecipeFiles {
             .unwrap()
             .insert(file.to_string(), image.clone());
         Ok(image)
+    }
+
+    /// An environment map (Radiance .hdr) named by the recipe, with the blake3 hash of its
+    /// bytes; decoded and projected onto SH once however often it is named. `what` names the
+    /// option for errors.
+    pub fn environment(
+        &self,
+        file: &str,
+        what: &str,
+    ) -> Result<(String, Arc<EnvironmentMap>), String> {
+        if let Some(found) = self.environments.lock().unwrap().get(file) {
+            return Ok(found.clone());
+        }
+        let path = self.inside(file, what)?;
+        let found = memory::exempt(|| -> Result<_, String> {
+            let bytes = self.read(&path, Kind::Image, what)?.ok_or_else(|| {
+                format!(
+                    "{what}: environment map \"{file}\" not found (looked for {})",
+                    path.display()
+                )
+            })?;
+            let (width, height) =
+                EnvironmentMap::size(&bytes, &path).map_err(|e| format!("{what}: {e}"))?;
+            self.count_pixels(u64::from(width) * u64::from(height), &path)?;
+            let map = EnvironmentMap::decode(&bytes, &path).map_err(|e| format!("{what}: {e}"))?;
+            Ok((blake3::hash(&bytes).to_hex().to_string(), Arc::new(map)))
+        })?;
+        self.environments
+            .lock()
+            .unwrap()
+            .insert(file.to_string(), found.clone());
+        Ok(found)
     }
 
     /// Adds an image about to be decoded to the recipe's total, failing past

@@ -15,6 +15,7 @@ mod augment_api;
 mod beam_api;
 mod diagnostics;
 mod engine;
+mod environment_api;
 mod files;
 mod ground_api;
 mod material_api;

@@ -10,7 +10,7 @@
 //! whatever the thread count. See docs/daylight.md for the models and their sources.
 
 use super::trace::TraceMesh;
-use crate::materials::{GroundBounce, Lighting, Sky, Sun};
+use crate::materials::{EnvironmentLight, GroundBounce, Lighting, Sky, Sun};
 use glam::DVec3;
 
 /// Points spread evenly over the unit disk: Vogel's (1979) spiral, r = √((i + ½)/n) at the
@@ -136,14 +136,36 @@ pub(super) fn sky_light(
     if hemisphere.0.is_empty() {
         return (open, open);
     }
-    let (above, below) = hemisphere_visibility(mesh, lighting.ground, p, n, hemisphere, turn());
+    let ((above, below), _) =
+        hemisphere_visibility(mesh, lighting.ground, p, n, hemisphere, turn());
     let seen = std::array::from_fn(|k| sky[k] * up * above + ground[k] * (1.0 - up) * below);
     (seen, open)
 }
 
+/// Light from an environment map on a face with normal `n` at `p`: its order-2 SH irradiance,
+/// scaled by the share of all the cosine-weighted directions of `hemisphere` that escape the
+/// mesh (a ray down stops short of the ground plane, which the map already shows). Returns
+/// (occluded, unoccluded).
+pub(super) fn environment_light(
+    mesh: &TraceMesh,
+    lighting: &Lighting,
+    environment: &EnvironmentLight,
+    p: DVec3,
+    n: DVec3,
+    hemisphere: &DiskPattern,
+    turn: impl FnOnce() -> (f64, f64),
+) -> ([f64; 3], [f64; 3]) {
+    let open = environment.diffuse(n);
+    if hemisphere.0.is_empty() {
+        return (open, open);
+    }
+    let (_, all) = hemisphere_visibility(mesh, lighting.ground, p, n, hemisphere, turn());
+    (open.map(|c| c * all), open)
+}
+
 /// Shares of the upward and of the downward rays of a cosine-weighted hemisphere about `n`
-/// (Malley's method: the disk pattern lifted onto the hemisphere) that leave `p` unblocked; 1
-/// for a half without rays.
+/// (Malley's method: the disk pattern lifted onto the hemisphere) that leave `p` unblocked (1
+/// for a half without rays), and the share of all of them.
 fn hemisphere_visibility(
     mesh: &TraceMesh,
     ground: Option<GroundBounce>,
@@ -151,7 +173,7 @@ fn hemisphere_visibility(
     n: DVec3,
     hemisphere: &DiskPattern,
     turn: (f64, f64),
-) -> (f64, f64) {
+) -> ((f64, f64), f64) {
     let (t, b) = frame(n);
     let (mut up, mut up_seen, mut down, mut down_seen) = (0u32, 0u32, 0u32, 0u32);
     for (x, y) in hemisphere.turned(turn) {
@@ -175,7 +197,10 @@ fn hemisphere_visibility(
             f64::from(seen) / f64::from(all)
         }
     };
-    (share(up_seen, up), share(down_seen, down))
+    (
+        (share(up_seen, up), share(down_seen, down)),
+        share(up_seen + down_seen, up + down),
+    )
 }
 
 #[cfg(test)]
@@ -294,7 +319,7 @@ mod tests {
         let hemisphere = DiskPattern::new(1024);
         for d in [0.25, 1.0, 3.0, 9.0] {
             let p = DVec3::new(1.0 - d, 0.0, 0.0);
-            let (above, below) =
+            let ((above, below), _) =
                 hemisphere_visibility(&mesh, None, p, DVec3::Z, &hemisphere, pixel_turn(d, 0.0));
             let beta = (h / d).atan();
             let expected = 1.0 - 0.5 * (1.0 - beta.cos());
@@ -323,6 +348,7 @@ mod tests {
                 shadow_rays: 1,
             }),
             sky: None,
+            environment: None,
             shadows: true,
             ground: Some(GroundBounce {
                 height: 0.0,
@@ -362,9 +388,11 @@ mod tests {
         });
         let hemisphere = DiskPattern::new(64);
         let p = DVec3::new(0.0, 0.0, 0.5);
-        let (_, below) = hemisphere_visibility(&mesh, ground, p, DVec3::X, &hemisphere, (1.0, 0.0));
+        let ((_, below), _) =
+            hemisphere_visibility(&mesh, ground, p, DVec3::X, &hemisphere, (1.0, 0.0));
         assert_eq!(below, 1.0);
-        let (_, blocked) = hemisphere_visibility(&mesh, None, p, DVec3::X, &hemisphere, (1.0, 0.0));
+        let ((_, blocked), _) =
+            hemisphere_visibility(&mesh, None, p, DVec3::X, &hemisphere, (1.0, 0.0));
         // Only rays grazing past the 50 m floor's edge escape.
         assert!(
             blocked < 0.05,

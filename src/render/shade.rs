@@ -1,7 +1,8 @@
 //! Shading into RGB: diffuse and glossy reflection of the sun, the sky, an ambient term and
 //! (by default) a studio key and fill light fixed to the camera, with optional sun shadows
 //! (soft over the sun's disk), sky occlusion and a ground's bounce (`daylight`); the
-//! background is a colour, a sky gradient or an image. Linear light becomes a pixel through
+//! background is a colour, a sky gradient, an image or an environment map (whose SH
+//! irradiance may also replace the sky's light). Linear light becomes a pixel through
 //! the film's exposure and tone curve, then sRGB.
 //!
 //! Anti-aliasing: a first pass shades one centre ray per pixel, as for the geometric labels.
@@ -10,9 +11,10 @@
 //! boundaries), it is re-shaded from four fixed sub-pixel rays averaged in linear light.
 //! Texture detail is filtered by the materials themselves, so it never triggers extra rays.
 
-use super::daylight::{DiskPattern, pixel_turn, sky_light, sun_visibility};
+use super::daylight::{DiskPattern, environment_light, pixel_turn, sky_light, sun_visibility};
 use super::trace::{GBuffer, NO_HIT, TraceMesh};
 use crate::cameras::Camera;
+use crate::materials::light::turn_about_z;
 use crate::materials::{Backdrop, Film, Lighting, Surface, srgb_to_linear};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -110,7 +112,10 @@ pub fn shade(
             .studio
             .map(|lights| lights.map(|(d, i)| (camera.rotation * d, i))),
         sun_disk: DiskPattern::new(lighting.sun.map_or(0, |s| s.shadow_rays)),
-        hemisphere: DiskPattern::new(lighting.sky.map_or(0, |s| s.occlusion_rays)),
+        hemisphere: DiskPattern::new(match &lighting.environment {
+            Some(e) => e.occlusion_rays,
+            None => lighting.sky.map_or(0, |s| s.occlusion_rays),
+        }),
     };
     let width = g.width as usize;
     let plain_background = matches!(backdrop, Backdrop::Colour(_)).then(|| encode(s.background));
@@ -329,9 +334,24 @@ impl<S: Surfaces> Shading<'_, S> {
             };
             add(sun.direction, sun.colour, seen);
         }
-        if l.sky.is_some() || l.ground.is_some() {
+        let surrounding = if let Some(environment) = &l.environment {
+            // The map's light replaces the sky's: SH irradiance, scaled by the open share.
+            Some(environment_light(
+                self.mesh,
+                l,
+                environment,
+                point,
+                n,
+                &self.hemisphere,
+                turn,
+            ))
+        } else if l.sky.is_some() || l.ground.is_some() {
             // Irradiance of a sky dome and a ground below, for a surface tilted by n.z.
-            let (seen, open) = sky_light(self.mesh, l, point, n, &self.hemisphere, turn);
+            Some(sky_light(self.mesh, l, point, n, &self.hemisphere, turn))
+        } else {
+            None
+        };
+        if let Some((seen, open)) = surrounding {
             for k in 0..3 {
                 light.diffuse[k] += seen[k];
                 light.unshadowed[k] += open[k];
@@ -356,6 +376,15 @@ impl<S: Surfaces> Shading<'_, S> {
                     let t = up.sqrt();
                     std::array::from_fn(|k| film.display(horizon[k] + (zenith[k] - horizon[k]) * t))
                 }
+            }
+            Backdrop::Environment {
+                map,
+                intensity,
+                rotation,
+            } => {
+                let world = turn_about_z(self.camera.rotation * view, -rotation);
+                let film = &self.lighting.film;
+                map.radiance(world).map(|c| film.display(c * intensity))
             }
             Backdrop::Image {
                 image,

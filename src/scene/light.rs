@@ -2,8 +2,10 @@
 //! The build stage draws them for each sample or view.
 
 use crate::materials::Lighting;
+use crate::materials::environment::EnvironmentMap;
 use crate::materials::image::ImageFile;
 use serde::Serialize;
+use std::sync::Arc;
 
 /// The light of a dataset. Without sun and sky, the studio lights fixed to the camera light
 /// every view alike (the paper's renders); with them, the light is fixed in the world and
@@ -17,6 +19,9 @@ pub struct LightSpec {
     pub sun: Option<SunSpec>,
     /// Hemispherical light from the sky above and the ground below, if any.
     pub sky: Option<SkySpec>,
+    /// Diffuse light from an equirectangular environment map, if any (instead of `sky`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub environment: Option<EnvironmentLightSpec>,
     /// Uniform light from every direction, linear, as a range [min, max] to draw from (default
     /// 0.12, or 0.02 with a sun or sky).
     pub ambient: [f64; 2],
@@ -84,6 +89,35 @@ pub struct SkySpec {
     pub occlusion_rays: u32,
 }
 
+/// An equirectangular environment map as declared: a Radiance .hdr file next to the recipe,
+/// +z up, longitude from +x towards +y.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct EnvironmentSpec {
+    /// Path of the map relative to the recipe's folder.
+    pub file: String,
+    /// blake3 hash (hex) of the file's bytes.
+    pub hash: String,
+    /// Factor on the map's linear radiance (default 1).
+    pub intensity: f64,
+    /// Turn of the map about +z, radians (default 0): what the map shows at longitude φ lies
+    /// at world longitude φ + rotation.
+    pub rotation: f64,
+    /// The map, decoded, with its SH coefficients (not recorded).
+    #[serde(skip)]
+    pub map: Arc<EnvironmentMap>,
+}
+
+/// Light from an environment map as declared.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct EnvironmentLightSpec {
+    /// The map and how it is placed.
+    #[serde(flatten)]
+    pub map: EnvironmentSpec,
+    /// Occlusion rays per shaded point (default 16; 0 = no ambient occlusion): the map's light
+    /// reaches a face only along directions the structure leaves open.
+    pub occlusion_rays: u32,
+}
+
 /// Uniform light outdoors, where the sky already lights every face from some side.
 pub const OUTDOOR_AMBIENT: f64 = 0.02;
 
@@ -97,6 +131,7 @@ impl Default for LightSpec {
             studio: true,
             sun: None,
             sky: None,
+            environment: None,
             ambient: [Lighting::default().ambient; 2],
             shadows: false,
             ground: None,
@@ -127,6 +162,12 @@ impl LightSpec {
                 sun.diameter
             ));
         }
+        if self.environment.is_some() && self.sky.is_some() {
+            return Err(
+                "dataset.light: give `sky` or `environment`, not both (the map's light replaces the sky's)"
+                    .to_string(),
+            );
+        }
         if !(-20.0..=20.0).contains(&self.exposure) {
             return Err(format!(
                 "dataset.light.exposure = {} stops must lie within [-20, 20]",
@@ -145,6 +186,11 @@ impl LightSpec {
             .into_iter()
             .chain(self.sun.iter().map(|s| ("sun.intensity", s.intensity)))
             .chain(self.sky.iter().map(|s| ("sky.intensity", s.intensity)))
+            .chain(
+                self.environment
+                    .iter()
+                    .map(|e| ("environment.intensity", [e.map.intensity; 2])),
+            )
         {
             if lo < 0.0 {
                 return Err(format!(
@@ -203,6 +249,11 @@ pub enum Background {
         /// The images, decoded (not recorded).
         #[serde(skip)]
         decoded: Vec<ImageFile>,
+    },
+    /// An equirectangular environment map fixed in the world, looked up along each pixel's ray.
+    Environment {
+        /// The map and how it is placed.
+        environment: EnvironmentSpec,
     },
 }
 

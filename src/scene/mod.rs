@@ -21,8 +21,8 @@ pub use augment::{
 pub use beam::{BeamSpec, Tessellation};
 pub use ground::{GROUND_PART, GroundSpec, ground_radius};
 pub use light::{
-    Background, GroundBounceSpec, ImageRecord, LightSpec, OUTDOOR_AMBIENT, SUN_DIAMETER,
-    SkyGradient, SkySpec, SunSpec, Tone,
+    Background, EnvironmentLightSpec, EnvironmentSpec, GroundBounceSpec, ImageRecord, LightSpec,
+    OUTDOOR_AMBIENT, SUN_DIAMETER, SkyGradient, SkySpec, SunSpec, Tone,
 };
 
 use crate::cameras::CameraRig;

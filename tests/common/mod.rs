@@ -18,6 +18,40 @@ pub fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
     path
 }
 
+/// Linear → sRGB 0–255 (unrounded).
+pub fn encoded(l: f64) -> f64 {
+    let l = l.clamp(0.0, 1.0);
+    255.0
+        * if l <= 0.003_130_8 {
+            12.92 * l
+        } else {
+            1.055 * l.powf(1.0 / 2.4) - 0.055
+        }
+}
+
+/// The RGB of view `view` of sample 0 in dataset `out`.
+pub fn rgb(out: &Path, view: u32) -> Vec<[u8; 3]> {
+    let (_, _, channels, bytes) = read_png(&view_path(out, 0, view, None, "rgb.png"));
+    assert_eq!(channels, 3);
+    bytes.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+/// Pixels whose 3 × 3 neighbourhood has mask value `value` throughout (no anti-aliased edge).
+pub fn inside(mask: &[u8], width: usize, value: u8) -> Vec<usize> {
+    let height = mask.len() / width;
+    (0..mask.len())
+        .filter(|&i| {
+            let (r, c) = (i / width, i % width);
+            r > 0
+                && c > 0
+                && r + 1 < height
+                && c + 1 < width
+                && (r - 1..=r + 1)
+                    .all(|rr| (c - 1..=c + 1).all(|cc| mask[rr * width + cc] == value))
+        })
+        .collect()
+}
+
 /// `shmgen run RECIPE --out OUT --quiet EXTRA...`.
 pub fn run(recipe: &Path, out: &Path, extra: &[&str]) -> Output {
     Command::new(BIN)
