@@ -1,12 +1,13 @@
 //! Ground materials: the prompt of a ground ("grass", "gravel", "asphalt", "concrete slab",
-//! "soil", "water") compiled into a material of the existing bases and generators, with the
-//! colour of the real surface seen from a few metres up.
+//! "soil", "water") compiled into a material of the existing bases, with the colour of the
+//! real surface seen from a few metres up.
 //!
 //! Owns: the ground vocabulary and each ground's look. Must not touch: the structure prompt
 //! vocabulary (a ground word is not a structure material) or the generators, which it reuses:
-//! concrete's mottle and pores for grass, asphalt, slab and soil (at twice their size on grass
-//! and soil, half on asphalt), rubble stone at 0.15 of its size for gravel. No conditions are
-//! layered on: the ground covers most of an outdoor image, and every layer costs per pixel.
+//! `Base::Ground`'s mottle for grass, asphalt, slab and soil (at twice its size on grass and
+//! soil, half on asphalt; a structure's concrete would add formwork joints and tie holes),
+//! rubble stone at 0.15 of its size for gravel. No conditions are layered on: the ground
+//! covers most of an outdoor image, and every layer costs per pixel.
 //!
 //! Colours are sRGB chosen so that the linear albedo falls within the broadband albedos
 //! measured for each surface (Oke, *Boundary Layer Climates*, 2nd ed. 1987, table 1.1): grass

@@ -28,7 +28,8 @@ pub struct LightSpec {
     /// Whether the sun casts shadows (default: on with a sun or sky).
     pub shadows: bool,
     /// A ground plane that bounces the sun's and sky's light once onto faces turned down to
-    /// it, if any (replaces the sky's `ground` colour).
+    /// it, if declared (replaces the sky's `ground` colour); without it, a dataset's `ground`
+    /// bounces light from its own height and colour.
     pub ground: Option<GroundBounceSpec>,
     /// Exposure in stops (EV): linear light × 2^exposure (default 0).
     pub exposure: f64,

@@ -117,18 +117,8 @@ fn jitter(id: u64) -> DVec3 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::spread_points;
     use super::*;
-
-    fn points(n: usize) -> impl Iterator<Item = DVec3> {
-        (0..n).map(|i| {
-            let t = i as f64;
-            DVec3::new(
-                (t * 0.618_034).fract() * 3.0 - 1.0,
-                (t * 0.414_214).fract() * 3.0 - 1.5,
-                (t * 0.732_051).fract() * 3.0,
-            )
-        })
-    }
 
     /// The point of the cell at integer lattice coordinates `c` (absolute lattice units).
     fn cell_point(n: &Noise, c: [i64; 3]) -> (DVec3, u64) {
@@ -160,7 +150,7 @@ mod tests {
         // Recompute the two nearest cell points over a wide neighbourhood and compare.
         let n = Noise::new(11);
         let size = 0.25;
-        for p in points(2000) {
+        for p in spread_points(2000, DVec3::new(-1.0, -1.5, 0.0)) {
             let c = n.cells(p, size);
             let q = p / size;
             let base = q.floor().as_i64vec3();

@@ -323,18 +323,8 @@ fn rung_scale(index: u32) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::spread_points;
     use super::*;
-
-    fn points(n: usize) -> impl Iterator<Item = DVec3> {
-        (0..n).map(|i| {
-            let t = i as f64;
-            DVec3::new(
-                (t * 0.618_034).fract() * 3.0,
-                (t * 0.414_214).fract() * 3.0,
-                (t * 0.732_051).fract() * 3.0,
-            )
-        })
-    }
 
     #[test]
     fn same_seed_same_values_other_seed_other_values() {
@@ -350,7 +340,7 @@ mod tests {
     #[test]
     fn fractal_noise_is_continuous_bounded_and_filtered() {
         let n = Noise::new(3);
-        for p in points(2000) {
+        for p in spread_points(2000, DVec3::ZERO) {
             let v = n.fractal(p, 0.3, 6, 1e-4);
             assert!(v.is_finite() && v.abs() <= 1.5, "{v}");
             let nearby = n.fractal(p + DVec3::splat(1e-7), 0.3, 6, 1e-4);
@@ -363,7 +353,7 @@ mod tests {
     #[test]
     fn ladder_fields_are_fractal_sums_of_their_rungs() {
         let n = Noise::new(9);
-        for p in points(200) {
+        for p in spread_points(200, DVec3::ZERO) {
             let ladder = Ladder::new(&n, p, 1e-3);
             // Lane 0 of group 0 on rungs 2… is `fractal` with the octaves counted from rung 2.
             let field = Field::new(0, 0.32, 5);

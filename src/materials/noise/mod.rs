@@ -102,6 +102,22 @@ pub fn smoothstep(lo: f64, hi: f64, x: f64) -> f64 {
     t * t * (3.0 - 2.0 * t)
 }
 
+/// `n` points spread evenly through the 3 m cube whose lowest corner is `corner` (additive
+/// recurrences with irrational steps), for the noise modules' tests.
+#[cfg(test)]
+fn spread_points(n: usize, corner: glam::DVec3) -> impl Iterator<Item = glam::DVec3> {
+    (0..n).map(move |i| {
+        let t = i as f64;
+        corner
+            + 3.0
+                * glam::DVec3::new(
+                    (t * 0.618_034).fract(),
+                    (t * 0.414_214).fract(),
+                    (t * 0.732_051).fract(),
+                )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
