@@ -10,7 +10,8 @@
 //! imported mesh of a million triangles (written by the benchmark), a streaming run of tiny
 //! views at growing sample counts (throughput and peak resident memory, each count in its own
 //! process), and the time per pair at 3840×3840 against 960×960. Then the cost per view of
-//! each daylight and camera effect, on and off (`SHMGEN_BENCH_ONLY=daylight`: only that).
+//! each daylight and camera effect, on and off (`SHMGEN_BENCH_ONLY=daylight`: only that;
+//! `SHMGEN_BENCH_ONLY=breakdown`: only the per-stage breakdown).
 
 use shmgen::build::BuiltSample;
 use shmgen::cameras::Camera;
@@ -272,6 +273,13 @@ fn view_stages(
 }
 
 /// Per-stage medians over every view of the recipe's first `samples` samples, on one thread.
+fn stage_breakdowns(rows: &[(&str, Recipe)]) {
+    println!("per-stage medians per view, 1 thread, ms (960×960; rows' first samples):");
+    for (name, recipe) in rows {
+        breakdown(name, recipe, 3);
+    }
+}
+
 fn breakdown(name: &str, recipe: &Recipe, samples: u64) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -500,7 +508,8 @@ fn main() {
     if let Ok(samples) = std::env::var(CHILD) {
         return stream_child(&samples);
     }
-    if std::env::var("SHMGEN_BENCH_ONLY").as_deref() == Ok("daylight") {
+    let only = std::env::var("SHMGEN_BENCH_ONLY").unwrap_or_default();
+    if only == "daylight" {
         return daylight_costs(setting("SHMGEN_BENCH_VIEWS", 10) as u32);
     }
     let runs = setting("SHMGEN_BENCH_RUNS", 3);
@@ -535,6 +544,9 @@ fn main() {
             million_recipe(million_dir.path()),
         ),
     ];
+    if only == "breakdown" {
+        return stage_breakdowns(&rows);
+    }
     println!("| row | 1 thread | {cores} threads |");
     for (name, recipe) in &rows {
         let one = rate(recipe, 1, runs);
@@ -543,9 +555,6 @@ fn main() {
     }
     resolution_ratio(cores, runs);
     streaming(setting("SHMGEN_BENCH_STREAM", 100_000));
-    println!("per-stage medians per view, 1 thread, ms (960×960; rows' first samples):");
-    for (name, recipe) in &rows {
-        breakdown(name, recipe, 3);
-    }
+    stage_breakdowns(&rows);
     daylight_costs(setting("SHMGEN_BENCH_VIEWS", 10) as u32);
 }

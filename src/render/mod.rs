@@ -14,6 +14,8 @@
 
 mod daylight;
 mod fields;
+mod power;
+mod raster;
 mod shade;
 mod surfaces;
 mod tiles;

@@ -1,5 +1,6 @@
 //! BVH construction and primary-ray tracing into a geometric buffer.
 
+use super::raster::rasterise;
 use super::tiles::{PixelRect, TILE, visible_tiles};
 use super::watertight::ShearedRay;
 use crate::cameras::Camera;
@@ -161,14 +162,34 @@ impl TraceMesh {
         self.normals[original_triangle as usize]
     }
 
-    /// Traces one centre ray per pixel, in the tiles where the BVH's boxes may be seen only.
+    /// The first surface along the centre ray of every pixel: rasterised where that is exact
+    /// (see `raster`), else traced.
     pub fn trace(&self, camera: &Camera) -> GBuffer {
+        let rays = PrimaryRays::new(camera);
+        let triangles = self
+            .original
+            .iter()
+            .zip(&self.triangles)
+            .map(|(&original, corners)| (original, corners.map(|c| c.as_dvec3() + self.anchor)));
+        // Closer than this to the camera's plane, a corner's projection loses its precision.
+        let near = 1e-3 * self.reach;
+        let along = |tri, dir| self.plane_hit(tri, camera.position, dir);
+        rasterise(camera, &rays, triangles, near, along)
+            .unwrap_or_else(|| self.trace_rays_along(camera, &rays))
+    }
+
+    /// Traces one centre ray per pixel (never rasterised), in the tiles where the BVH's boxes
+    /// may be seen only.
+    pub fn trace_rays(&self, camera: &Camera) -> GBuffer {
+        self.trace_rays_along(camera, &PrimaryRays::new(camera))
+    }
+
+    fn trace_rays_along(&self, camera: &Camera, rays: &PrimaryRays) -> GBuffer {
         let k = camera.intrinsics;
         let (w, h) = (k.width as usize, k.height as usize);
         let mut depth = vec![0.0f32; w * h];
         let mut triangle = vec![NO_HIT; w * h];
         let tiles = visible_tiles(&self.bvh, camera, |lo, hi| self.box_bounds(camera, lo, hi));
-        let rays = PrimaryRays::new(camera);
         let origin = camera.position - self.anchor;
         depth
             .par_chunks_mut(w * TILE)
@@ -343,14 +364,14 @@ fn box_outline(lo: DVec3, hi: DVec3, steps: u32) -> impl Iterator<Item = DVec3> 
 /// The centre-ray directions of a camera's pixels (world axes, unit camera z). For a pinhole
 /// the camera-axes direction is (x(col), y(row), 1), so the rotation's products with x and y
 /// are taken once per column and row, and summed as `DMat3 * DVec3` sums them: the same bits.
-struct PrimaryRays<'a> {
+pub(super) struct PrimaryRays<'a> {
     camera: &'a Camera,
     /// Per column, rotation column x times x; per row, rotation column y times y (pinhole).
     pinhole: Option<(Vec<DVec3>, Vec<DVec3>)>,
 }
 
 impl<'a> PrimaryRays<'a> {
-    fn new(camera: &'a Camera) -> Self {
+    pub(super) fn new(camera: &'a Camera) -> Self {
         let k = camera.intrinsics;
         let r = camera.rotation;
         let pinhole = k.distortion.is_none().then(|| {
@@ -362,7 +383,7 @@ impl<'a> PrimaryRays<'a> {
     }
 
     /// The direction through the centre of pixel (`row`, `col`).
-    fn through(&self, row: usize, col: usize) -> DVec3 {
+    pub(super) fn through(&self, row: usize, col: usize) -> DVec3 {
         match &self.pinhole {
             Some((x, y)) => x[col] + y[row] + self.camera.rotation.z_axis,
             None => {
