@@ -184,6 +184,9 @@ fn row_span(corners: &[DVec2; 3], v: f64, width: usize) -> Option<std::ops::Rang
             (lo, hi) = (lo.min(u), hi.max(u));
         }
     }
+    if lo > hi {
+        return None; // the line passes above or below the triangle
+    }
     centre_range([lo - 1.0, hi + 1.0, hi + 1.0], width)
 }
 

@@ -166,6 +166,13 @@ impl TraceMesh {
     /// (see `raster`), else traced.
     pub fn trace(&self, camera: &Camera) -> GBuffer {
         let rays = PrimaryRays::new(camera);
+        let k = camera.intrinsics;
+        // Most triangles of a mesh this fine cover no pixel centre: projecting them all costs
+        // more than walking the BVH once per pixel (measured on a 10⁶-triangle torus at
+        // 960×960: 197 against 170 ms).
+        if self.triangles.len() > (k.width as usize * k.height as usize) / 2 {
+            return self.trace_rays_along(camera, &rays);
+        }
         let triangles = self
             .original
             .iter()
