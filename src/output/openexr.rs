@@ -40,11 +40,20 @@ pub fn float_exr(
     debug_assert!(channels.windows(2).all(|p| p[0].0 < p[1].0), "sorted names");
     debug_assert!(channels.iter().all(|(_, v)| v.len() == w * h));
     let header = header((width, height), channels, note);
+    // Blocks of background alone (all zeros) are common and compress to the same bytes:
+    // compressed once.
+    let empty = std::sync::OnceLock::new();
     let blocks: Vec<Vec<u8>> = (0..h.div_ceil(LINES_PER_BLOCK))
         .into_par_iter()
         .map(|block| {
             let rows = block * LINES_PER_BLOCK..((block + 1) * LINES_PER_BLOCK).min(h);
-            zip_block(&raw_block(rows, w, channels))
+            let full = rows.len() == LINES_PER_BLOCK;
+            let raw = raw_block(rows, w, channels);
+            if full && raw.iter().all(|&b| b == 0) {
+                empty.get_or_init(|| zip_block(&raw)).clone()
+            } else {
+                zip_block(&raw)
+            }
         })
         .collect();
     let table = 8 * blocks.len();

@@ -14,7 +14,6 @@
 
 mod daylight;
 mod fields;
-mod power;
 mod raster;
 mod shade;
 mod surfaces;

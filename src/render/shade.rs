@@ -12,7 +12,6 @@
 //! Texture detail is filtered by the materials themselves, so it never triggers extra rays.
 
 use super::daylight::{DiskPattern, environment_light, pixel_turn, sky_light, sun_visibility};
-use super::power::power;
 use super::trace::{GBuffer, NO_HIT, TraceMesh};
 use crate::cameras::Camera;
 use crate::materials::light::turn_about_z;
@@ -447,6 +446,17 @@ fn blinn_phong(n: DVec3, l: DVec3, to_eye: DVec3, s: &Surface) -> f64 {
     let exponent = (2.0 / (alpha * alpha) - 2.0).max(0.0);
     let fresnel = s.specular + (1.0 - s.specular) * (1.0 - to_eye.dot(h).max(0.0)).powi(5);
     fresnel * (exponent + 8.0) / (8.0 * PI) * power(n.dot(h).max(0.0), exponent)
+}
+
+/// x^e for x in [0, 1], through libm's exp2 and log2 (relative error below 1e-13, far below
+/// an 8-bit step). Not the platform's pow: glibc picks an FMA or a plain version by CPU,
+/// which may round differently, and the image must be the same on every x86-64 machine;
+/// libm's own pow is three times slower, a tenth of a textured view's time.
+fn power(x: f64, e: f64) -> f64 {
+    if x == 0.0 {
+        return if e == 0.0 { 1.0 } else { 0.0 };
+    }
+    libm::exp2(e * libm::log2(x))
 }
 
 /// Linear colour → sRGB 8-bit.

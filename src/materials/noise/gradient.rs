@@ -165,9 +165,20 @@ fn lerp(a: F4, b: F4, t: F4) -> F4 {
 /// What a sum of `octaves` octaves is multiplied by: the inverse of their amplitudes' sum
 /// 2 (1 − 2^−octaves), times the gain. Octaves filtered out take their variance with them.
 fn normaliser(octaves: u32) -> f64 {
-    let tail = 1.0 / (1u64 << octaves.min(63)) as f64;
-    FRACTAL_GAIN / (2.0 * (1.0 - tail))
+    NORMALISERS[octaves.min(63) as usize]
 }
+
+/// `normaliser` for 0–63 octaves, divided out when compiling rather than at every point.
+const NORMALISERS: [f64; 64] = {
+    let mut table = [0.0; 64];
+    let mut octaves = 0;
+    while octaves < 64 {
+        let tail = 1.0 / (1u64 << octaves) as f64;
+        table[octaves] = FRACTAL_GAIN / (2.0 * (1.0 - tail));
+        octaves += 1;
+    }
+    table
+};
 
 /// One octave of a fractal sum.
 struct Octave {
@@ -184,17 +195,25 @@ struct Octave {
 struct Octaves {
     next: Octave,
     end: u32,
-    /// Pixel footprint, metres.
-    footprint: f64,
+    /// Half the next octave's wavelength over the pixel footprint, 0.5 / (scale · footprint):
+    /// halved from octave to octave, which gives the same bits as dividing anew (a power of
+    /// two scales a correctly rounded quotient exactly), without a division per octave.
+    resolved: f64,
 }
 
 impl Octaves {
     fn new(wavelength: f64, octaves: u32, footprint: f64) -> Self {
-        Self::from_index(0, 1.0 / wavelength, octaves, footprint)
+        Self::from_index(
+            0,
+            1.0 / wavelength,
+            octaves,
+            resolution(1.0 / wavelength, footprint),
+        )
     }
 
-    /// Octaves numbered from `index`, the first with `scale` lattice cells per metre.
-    fn from_index(index: u32, scale: f64, octaves: u32, footprint: f64) -> Self {
+    /// Octaves numbered from `index`, the first with `scale` lattice cells per metre and
+    /// `resolved` = [`resolution`]`(scale, footprint)`.
+    fn from_index(index: u32, scale: f64, octaves: u32, resolved: f64) -> Self {
         Octaves {
             next: Octave {
                 index,
@@ -202,9 +221,14 @@ impl Octaves {
                 weight: 1.0,
             },
             end: index + octaves,
-            footprint,
+            resolved,
         }
     }
+}
+
+/// Half the wavelength of a lattice with `scale` cells per metre, in pixel footprints.
+fn resolution(scale: f64, footprint: f64) -> f64 {
+    0.5 / (scale * footprint)
 }
 
 impl Iterator for Octaves {
@@ -213,7 +237,7 @@ impl Iterator for Octaves {
     fn next(&mut self) -> Option<Octave> {
         let o = &mut self.next;
         // Wavelength over twice the footprint, less one: 1 at four footprints, 0 at two.
-        let fade = (0.5 / (o.scale * self.footprint) - 1.0).clamp(0.0, 1.0);
+        let fade = (self.resolved - 1.0).clamp(0.0, 1.0);
         if o.index >= self.end || fade == 0.0 {
             return None;
         }
@@ -225,6 +249,7 @@ impl Iterator for Octaves {
         o.index += 1;
         o.scale *= 2.0;
         o.weight *= 0.5;
+        self.resolved *= 0.5;
         Some(out)
     }
 }
@@ -272,7 +297,8 @@ impl Field {
 pub struct Ladder<'a> {
     noise: &'a Noise,
     p: DVec3,
-    footprint: f64,
+    /// [`resolution`] of the top rung at the point's footprint (lower rungs: halved).
+    resolved_top: f64,
     /// Per lane group, a bit for every rung evaluated.
     done: [Cell<u32>; GROUPS],
     rungs: [[Cell<[f32; LANES]>; RUNGS]; GROUPS],
@@ -284,7 +310,7 @@ impl<'a> Ladder<'a> {
         Ladder {
             noise,
             p,
-            footprint,
+            resolved_top: resolution(rung_scale(0), footprint),
             done: [const { Cell::new(0) }; GROUPS],
             rungs: [const { [const { Cell::new([0.0; LANES]) }; RUNGS] }; GROUPS],
         }
@@ -296,8 +322,10 @@ impl<'a> Ladder<'a> {
         let first = u32::from(field.first);
         let octaves = u32::from(field.octaves);
         let scale = rung_scale(first);
+        // 2^−first: the top rung's resolution halved `first` times, exactly.
+        let resolved = self.resolved_top * f64::from_bits((1023 - u64::from(first)) << 52);
         let mut sum = 0f32;
-        for octave in Octaves::from_index(first, scale, octaves, self.footprint) {
+        for octave in Octaves::from_index(first, scale, octaves, resolved) {
             sum += octave.weight * self.rung(group, octave.index, octave.scale)[lane];
         }
         f64::from(sum) * normaliser(octaves)
@@ -358,7 +386,7 @@ mod tests {
             // Lane 0 of group 0 on rungs 2… is `fractal` with the octaves counted from rung 2.
             let field = Field::new(0, 0.32, 5);
             let mut direct = 0f32;
-            for o in Octaves::from_index(2, rung_scale(2), 5, 1e-3) {
+            for o in Octaves::from_index(2, rung_scale(2), 5, resolution(rung_scale(2), 1e-3)) {
                 direct += o.weight * n.octave(p, o.scale, o.index, n.keys[0])[0];
             }
             assert_eq!(ladder.get(field), f64::from(direct) * normaliser(5));
