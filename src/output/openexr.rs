@@ -47,12 +47,16 @@ pub fn float_exr(
         .into_par_iter()
         .map(|block| {
             let rows = block * LINES_PER_BLOCK..((block + 1) * LINES_PER_BLOCK).min(h);
-            let full = rows.len() == LINES_PER_BLOCK;
-            let raw = raw_block(rows, w, channels);
-            if full && raw.iter().all(|&b| b == 0) {
-                empty.get_or_init(|| zip_block(&raw)).clone()
+            let pixels = rows.start * w..rows.end * w;
+            let background = (rows.len() == LINES_PER_BLOCK)
+                && channels
+                    .iter()
+                    .all(|(_, values)| values[pixels.clone()].iter().all(|v| v.to_bits() == 0));
+            if background {
+                let raw = || raw_block(rows.clone(), w, channels);
+                empty.get_or_init(|| zip_block(&raw())).clone()
             } else {
-                zip_block(&raw)
+                zip_block(&raw_block(rows, w, channels))
             }
         })
         .collect();

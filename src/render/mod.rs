@@ -2,7 +2,8 @@
 //! per-pixel buffers.
 //!
 //! Owns: the BVH over a scene mesh (built once, reused for all its views), the watertight
-//! ray–triangle test, screen-space culling, the per-pixel geometric buffers (planar depth, hit
+//! ray–triangle test, screen-space culling, rasterising the centre rays of a pinhole view
+//! (the same first hits, far cheaper; see docs/rendering.md), the per-pixel geometric buffers (planar depth, hit
 //! triangle) and the fields that follow the same centre ray (normals, distance along the ray,
 //! displacement from the unloaded structure, optical flow from its image), texture lookup on
 //! the undeformed surface (through `materials`), shading into RGB with sun, sky, studio lights

@@ -1,4 +1,5 @@
-//! BVH construction and primary-ray tracing into a geometric buffer.
+//! BVH construction and primary-ray tracing into a geometric buffer (handing pinhole views
+//! of a mesh in front of the camera to `raster`, which finds the same first hits).
 
 use super::raster::rasterise;
 use super::tiles::{PixelRect, TILE, visible_tiles};
