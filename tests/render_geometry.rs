@@ -606,6 +606,83 @@ fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() 
     );
 }
 
+/// The axis (0–2) of the box face the ray through image point (u, v) meets first, if any.
+fn analytic_box_face(cam: &Camera, u: f64, v: f64) -> Option<usize> {
+    let t = analytic_box_depth_at(cam, u, v, DVec3::ZERO)?;
+    let p = cam.position + cam.rotation * cam.intrinsics.ray_through(u, v) * t;
+    (0..3).max_by(|&a, &b| (p[a] / HALF[a]).abs().total_cmp(&(p[b] / HALF[b]).abs()))
+}
+
+#[test]
+fn crease_pixels_mix_the_faces_their_sub_rays_meet() {
+    use shmgen::materials::srgb_to_linear;
+    use shmgen::materials::{Backdrop, Lighting};
+    use shmgen::render::shade;
+    // Seen obliquely, three faces of the box meet at creases; each face has its own flat
+    // albedo, so a crease pixel's linear value must be the mean over its 2 × 2 sub-rays of the
+    // face each meets (analytically), however the shading is shared among them.
+    let k = Intrinsics::from_fov_y(200, 150, 0.9);
+    let cam = Camera::look_at(k, DVec3::new(3.0, -6.0, 3.5), DVec3::ZERO, DVec3::Z);
+    let box_ = box_mesh(DVec3::ZERO);
+    let mesh = TraceMesh::build(&box_);
+    let g = mesh.trace(&cam);
+    let albedo = |tri: u32| {
+        let n = mesh.normal(tri).abs();
+        [[0.8; 3], [0.35; 3], [0.08; 3]][(0..3).max_by(|&a, &b| n[a].total_cmp(&n[b])).unwrap()]
+    };
+    let rgb = shade(
+        &g,
+        &mesh,
+        &cam,
+        &Lighting::default(),
+        &albedo,
+        &Backdrop::Colour([0, 0, 0]),
+        true,
+    );
+    let sub_faces = |row: u32, col: u32| {
+        [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)]
+            .map(|(du, dv)| analytic_box_face(&cam, f64::from(col) + du, f64::from(row) + dv))
+    };
+    // Each face's shade, from pixels wholly inside it.
+    let mut face_linear = [None; 3];
+    for row in 0..k.height {
+        for col in 0..k.width {
+            if let [Some(f), Some(a), Some(b), Some(c)] = sub_faces(row, col) {
+                if [a, b, c] == [f; 3] {
+                    let got = rgb[3 * (row * k.width + col) as usize];
+                    face_linear[f] = Some(srgb_to_linear(f64::from(got) / 255.0));
+                }
+            }
+        }
+    }
+    let face_linear = face_linear.map(|f| f.expect("every face seen"));
+    let mut creases = 0;
+    for row in 0..k.height {
+        for col in 0..k.width {
+            let faces = sub_faces(row, col);
+            let distinct = faces
+                .iter()
+                .flatten()
+                .collect::<std::collections::BTreeSet<_>>();
+            if distinct.len() < 2 {
+                continue;
+            }
+            creases += 1;
+            let want: f64 = faces
+                .iter()
+                .map(|f| f.map_or(0.0, |f| face_linear[f]))
+                .sum::<f64>()
+                / 4.0;
+            let got = srgb_to_linear(f64::from(rgb[3 * (row * k.width + col) as usize]) / 255.0);
+            assert!(
+                (got - want).abs() < 0.01,
+                "({row},{col}): {got} vs {want}, faces {faces:?}"
+            );
+        }
+    }
+    assert!(creases > 40, "{creases} crease pixels");
+}
+
 /// Depth bits and triangle of every pixel when each centre ray is traced on its own, with no
 /// culling: what tiled, culled tracing must reproduce exactly.
 fn one_ray_per_pixel(trace: &TraceMesh, cam: &Camera) -> (Vec<u32>, Vec<u32>) {

@@ -8,7 +8,8 @@
 //! Anti-aliasing: a first pass shades one centre ray per pixel, as for the geometric labels.
 //! Where a pixel differs from a neighbour in what it sees (surface or background, or an
 //! untextured shade more than one 8-bit level apart: silhouettes, creases, material
-//! boundaries), it is re-shaded from four fixed sub-pixel rays averaged in linear light.
+//! boundaries), it is re-shaded from four fixed sub-pixel rays averaged in linear light,
+//! each untextured surface among them shaded once (at the first sub-ray that meets it).
 //! Texture detail is filtered by the materials themselves, so it never triggers extra rays.
 
 use super::daylight::{DiskPattern, environment_light, pixel_turn, sky_light, sun_visibility};
@@ -237,10 +238,26 @@ impl<S: Surfaces> Shading<'_, S> {
                     if !neighbours.into_iter().flatten().any(|j| differs(i, j)) {
                         continue;
                     }
+                    // A sub-ray meeting an untextured triangle an earlier sub-ray of the pixel
+                    // met takes its radiance: within a pixel a flat triangle's shade barely
+                    // changes, so such an edge pixel costs one shading per surface it shows.
+                    // Textured triangles are shaded per sub-ray: thin features (cracks, pits)
+                    // change within a pixel, and their edges stay anti-aliased.
+                    let mut seen: Vec<(u32, [f64; 3])> = Vec::with_capacity(EDGE_SAMPLES.len());
                     let mean = EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
                         let (u, v) = (col as f64 + du, row as f64 + dv);
                         let hit = self.mesh.first_hit(self.camera, k.ray_through(u, v));
-                        let c = self.radiance_with_irradiance(hit, u, v).0;
+                        let flat = hit.filter(|&(_, tri)| !self.surfaces.textured(tri));
+                        let earlier = flat.and_then(|(_, tri)| seen.iter().find(|s| s.0 == tri));
+                        let c = match (earlier, flat) {
+                            (Some(&(_, c)), _) => c,
+                            (None, Some((_, tri))) => {
+                                let c = self.radiance_with_irradiance(hit, u, v).0;
+                                seen.push((tri, c));
+                                c
+                            }
+                            (None, None) => self.radiance_with_irradiance(hit, u, v).0,
+                        };
                         std::array::from_fn(|k| acc[k] + c[k] / 4.0)
                     });
                     out[3 * col..3 * col + 3].copy_from_slice(&encode(mean));
