@@ -272,7 +272,7 @@ fn view_stages(
     g
 }
 
-/// Per-stage medians over every view of the recipe's first `samples` samples, on one thread.
+/// The per-stage breakdown of every row.
 fn stage_breakdowns(rows: &[(&str, Recipe)]) {
     println!("per-stage medians per view, 1 thread, ms (960×960; rows' first samples):");
     for (name, recipe) in rows {
@@ -280,6 +280,7 @@ fn stage_breakdowns(rows: &[(&str, Recipe)]) {
     }
 }
 
+/// Per-stage medians over every view of the recipe's first `samples` samples, on one thread.
 fn breakdown(name: &str, recipe: &Recipe, samples: u64) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)

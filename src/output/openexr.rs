@@ -53,8 +53,9 @@ pub fn float_exr(
                     .iter()
                     .all(|(_, values)| values[pixels.clone()].iter().all(|v| v.to_bits() == 0));
             if background {
-                let raw = || raw_block(rows.clone(), w, channels);
-                empty.get_or_init(|| zip_block(&raw())).clone()
+                empty
+                    .get_or_init(|| zip_block(&raw_block(rows.clone(), w, channels)))
+                    .clone()
             } else {
                 zip_block(&raw_block(rows, w, channels))
             }

@@ -3,8 +3,8 @@
 //!
 //! Owns: the BVH over a scene mesh (built once, reused for all its views), the watertight
 //! ray–triangle test, screen-space culling, rasterising the centre rays of a pinhole view
-//! (the same first hits, far cheaper; see docs/rendering.md), the per-pixel geometric buffers (planar depth, hit
-//! triangle) and the fields that follow the same centre ray (normals, distance along the ray,
+//! (the same first hits, far cheaper; see docs/rendering.md), the per-pixel geometric buffers
+//! (planar depth, hit triangle) and the fields that follow the same centre ray (normals, distance along the ray,
 //! displacement from the unloaded structure, optical flow from its image), texture lookup on
 //! the undeformed surface (through `materials`), shading into RGB with sun, sky, studio lights
 //! and shadows (soft over the sun's disk), sky occlusion and a ground's bounce (`daylight`),

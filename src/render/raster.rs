@@ -67,10 +67,10 @@ pub(super) fn rasterise(
             let (u, v) = k.project(p);
             *out = DVec2::new(u, v);
         }
-        let Some(rows) = centre_range(projected.map(|c| c.y), height) else {
+        let Some(rows) = centre_range(span(projected.map(|c| c.y)), height) else {
             continue;
         };
-        if centre_range(projected.map(|c| c.x), width).is_none() {
+        if centre_range(span(projected.map(|c| c.x)), width).is_none() {
             continue;
         }
         let triangle = Projected {
@@ -120,14 +120,15 @@ pub(super) fn rasterise(
     })
 }
 
-/// Pixels whose centre (index + 0.5) lies within the span of `coordinates` along one image
-/// axis of `size` pixels, or None when there is none.
-fn centre_range(coordinates: [f64; 3], size: usize) -> Option<std::ops::Range<usize>> {
-    let lo = coordinates.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = coordinates
-        .iter()
-        .copied()
-        .fold(f64::NEG_INFINITY, f64::max);
+/// The least and greatest of three coordinates.
+fn span(coordinates: [f64; 3]) -> (f64, f64) {
+    let [a, b, c] = coordinates;
+    (a.min(b).min(c), a.max(b).max(c))
+}
+
+/// Pixels whose centre (index + 0.5) lies within `lo..=hi` along one image axis of `size`
+/// pixels, or None when there is none.
+fn centre_range((lo, hi): (f64, f64), size: usize) -> Option<std::ops::Range<usize>> {
     let first = (lo - 0.5).ceil().max(0.0);
     let last = (hi - 0.5).floor().min(size as f64 - 1.0);
     (first <= last).then(|| first as usize..last as usize + 1)
@@ -187,7 +188,7 @@ fn row_span(corners: &[DVec2; 3], v: f64, width: usize) -> Option<std::ops::Rang
     if lo > hi {
         return None; // the line passes above or below the triangle
     }
-    centre_range([lo - 1.0, hi + 1.0, hi + 1.0], width)
+    centre_range((lo - 1.0, hi + 1.0), width)
 }
 
 /// An edge as a line through two image points, always taken from the lesser endpoint (by
@@ -373,16 +374,29 @@ mod tests {
         for order in [[2u32, 7], [7, 2]] {
             let twice = square.iter().flat_map(|&(i, t)| order.map(|o| (o + i, t)));
             let g = rasterise(&camera, &rays, twice, 1e-3, plane_at(5.0, 0.0)).unwrap();
+            assert_ne!(g.triangle[centre], NO_HIT);
             assert!(g.triangle.iter().all(|&t| t == NO_HIT || t == 2 || t == 3));
         }
-        // A nearer plane hides a farther one whatever their order.
-        let near = |tri: u32, dir: DVec3| if tri < 2 { 4.0 / dir.z } else { 5.0 / dir.z };
-        let both = square
-            .iter()
-            .copied()
-            .chain(square.iter().map(|&(i, t)| (i + 2, t)));
-        let g = rasterise(&camera, &rays, both, 1e-3, near).unwrap();
-        assert!(g.triangle.iter().all(|&t| t == NO_HIT || t < 2));
+        // A nearer plane (the copies numbered 2 and 3) hides a farther one whatever the order.
+        let (near_plane, far_plane) = (plane_at(5.0, 1.0), plane_at(5.0, 0.0));
+        let near = |tri: u32, dir: DVec3| {
+            if tri >= 2 {
+                near_plane(tri, dir)
+            } else {
+                far_plane(tri, dir)
+            }
+        };
+        let copies = || square.iter().map(|&(i, t)| (i + 2, t));
+        for nearer_first in [false, true] {
+            let both: Vec<_> = if nearer_first {
+                copies().chain(square.iter().copied()).collect()
+            } else {
+                square.iter().copied().chain(copies()).collect()
+            };
+            let g = rasterise(&camera, &rays, both.into_iter(), 1e-3, near).unwrap();
+            assert!((g.depth[centre] - 4.0).abs() < 1e-6);
+            assert!(g.triangle.iter().all(|&t| t == NO_HIT || t >= 2));
+        }
     }
 
     #[test]

@@ -243,17 +243,20 @@ impl<S: Surfaces> Shading<'_, S> {
                     // changes, so such an edge pixel costs one shading per surface it shows.
                     // Textured triangles are shaded per sub-ray: thin features (cracks, pits)
                     // change within a pixel, and their edges stay anti-aliased.
-                    let mut seen: Vec<(u32, [f64; 3])> = Vec::with_capacity(EDGE_SAMPLES.len());
+                    let mut seen = [(NO_HIT, [0.0; 3]); EDGE_SAMPLES.len()];
+                    let mut shaded = 0;
                     let mean = EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
                         let (u, v) = (col as f64 + du, row as f64 + dv);
                         let hit = self.mesh.first_hit(self.camera, k.ray_through(u, v));
                         let flat = hit.filter(|&(_, tri)| !self.surfaces.textured(tri));
-                        let earlier = flat.and_then(|(_, tri)| seen.iter().find(|s| s.0 == tri));
+                        let earlier =
+                            flat.and_then(|(_, tri)| seen[..shaded].iter().find(|s| s.0 == tri));
                         let c = match (earlier, flat) {
                             (Some(&(_, c)), _) => c,
                             (None, Some((_, tri))) => {
                                 let c = self.radiance_with_irradiance(hit, u, v).0;
-                                seen.push((tri, c));
+                                seen[shaded] = (tri, c);
+                                shaded += 1;
                                 c
                             }
                             (None, None) => self.radiance_with_irradiance(hit, u, v).0,
