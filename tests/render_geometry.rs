@@ -805,3 +805,141 @@ fn rasterised_views_match_one_ray_per_pixel() {
         }
     }
 }
+
+/// Stripes across x on every face of the box, alternately light and dark every half
+/// `STRIPE_PERIOD`: about a pixel wide in `edge_pixels_show_the_texture_their_centre_sees`, so
+/// sub-rays of a pixel often land on other stripes than its centre.
+const STRIPE_PERIOD: f64 = 0.09;
+
+fn stripe(p: DVec3) -> f64 {
+    if (p.x / STRIPE_PERIOD).rem_euclid(1.0) < 0.5 {
+        0.8
+    } else {
+        0.1
+    }
+}
+
+/// The box's faces, each textured with `stripe`; the material continues within a face only.
+struct Striped<'a>(&'a TraceMesh);
+
+impl Striped<'_> {
+    fn face(&self, tri: u32) -> usize {
+        let n = self.0.normal(tri).abs();
+        (0..3).max_by(|&a, &b| n[a].total_cmp(&n[b])).unwrap()
+    }
+}
+
+impl shmgen::render::Surfaces for Striped<'_> {
+    fn at(&self, _: u32, p: DVec3, _: f64) -> shmgen::materials::Surface {
+        shmgen::materials::Surface {
+            albedo: [stripe(p); 3],
+            roughness: 1.0,
+            specular: 0.0,
+            crack: false,
+        }
+    }
+
+    fn flat(&self, _: u32) -> [f64; 3] {
+        [0.45; 3]
+    }
+
+    fn textured(&self, _: u32) -> bool {
+        true
+    }
+
+    fn continues(&self, a: u32, b: u32) -> bool {
+        self.face(a) == self.face(b)
+    }
+}
+
+#[test]
+fn edge_pixels_show_the_texture_their_centre_sees() {
+    use shmgen::materials::srgb_to_linear;
+    use shmgen::materials::{Backdrop, Lighting};
+    use shmgen::render::shade;
+    // A textured face is filtered by its material over the whole pixel, so a crease pixel
+    // must show on each face it meets the texture where the pixel's centre ray meets that
+    // face's plane (what the pixel would show were the face all it saw), lit at each sub-ray:
+    // its linear value is the mean over the 2 × 2 sub-rays of the face's irradiance times the
+    // stripe at that centre point, all found analytically.
+    let k = Intrinsics::from_fov_y(200, 150, 0.9);
+    let cam = Camera::look_at(k, DVec3::new(3.0, -6.0, 3.5), DVec3::ZERO, DVec3::Z);
+    let mesh = TraceMesh::build(&box_mesh(DVec3::ZERO));
+    let g = mesh.trace(&cam);
+    let rgb = shade(
+        &g,
+        &mesh,
+        &cam,
+        &Lighting::default(),
+        &Striped(&mesh),
+        &Backdrop::Colour([0, 0, 0]),
+        true,
+    );
+    let linear = |row: u32, col: u32| {
+        srgb_to_linear(f64::from(rgb[3 * (row * k.width + col) as usize]) / 255.0)
+    };
+    let ray = |u: f64, v: f64| cam.rotation * k.ray_through(u, v);
+    // Where the ray through (u, v) meets the plane of the face across `axis` the camera sees.
+    let on_face_plane = |axis: usize, u: f64, v: f64| {
+        let d = ray(u, v);
+        let side = HALF[axis] * cam.position[axis].signum();
+        cam.position + d * ((side - cam.position[axis]) / d[axis])
+    };
+    let sub_faces = |row: u32, col: u32| {
+        [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)]
+            .map(|(du, dv)| analytic_box_face(&cam, f64::from(col) + du, f64::from(row) + dv))
+    };
+    // Each face's irradiance, from pixels wholly inside it on a light stripe.
+    let mut irradiance = [None; 3];
+    for row in 0..k.height {
+        for col in 0..k.width {
+            let (u, v) = (f64::from(col) + 0.5, f64::from(row) + 0.5);
+            if let [Some(f), Some(a), Some(b), Some(c)] = sub_faces(row, col) {
+                if [a, b, c] == [f; 3] && stripe(on_face_plane(f, u, v)) == 0.8 {
+                    irradiance[f] = Some(linear(row, col) / 0.8);
+                }
+            }
+        }
+    }
+    let irradiance = irradiance.map(|e| e.expect("every face seen"));
+    let (mut edges, mut textured_differently) = (0, 0);
+    for row in 0..k.height {
+        for col in 0..k.width {
+            let faces = sub_faces(row, col);
+            let distinct = faces
+                .iter()
+                .flatten()
+                .collect::<std::collections::BTreeSet<_>>();
+            if distinct.len() < 2 {
+                continue;
+            }
+            edges += 1;
+            let (u, v) = (f64::from(col) + 0.5, f64::from(row) + 0.5);
+            let want: f64 = faces
+                .iter()
+                .map(|f| f.map_or(0.0, |f| irradiance[f] * stripe(on_face_plane(f, u, v))))
+                .sum::<f64>()
+                / 4.0;
+            let got = linear(row, col);
+            assert!(
+                (got - want).abs() < 0.01,
+                "({row},{col}): {got} vs {want}, faces {faces:?}"
+            );
+            // Sub-rays that would have shown another stripe, had each been textured alone.
+            let sub_points = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)];
+            if faces.iter().zip(sub_points).any(|(f, (du, dv))| {
+                f.is_some_and(|f| {
+                    let own = on_face_plane(f, f64::from(col) + du, f64::from(row) + dv);
+                    stripe(own) != stripe(on_face_plane(f, u, v))
+                })
+            }) {
+                textured_differently += 1;
+            }
+        }
+    }
+    assert!(edges > 40, "{edges} crease pixels");
+    assert!(
+        textured_differently > 20,
+        "{textured_differently} crease pixels whose sub-rays see other stripes than the centre"
+    );
+}

@@ -9,7 +9,8 @@
 //! Where a pixel differs from a neighbour in what it sees (surface or background, or an
 //! untextured shade more than one 8-bit level apart: silhouettes, creases, material
 //! boundaries), it is re-shaded from four fixed sub-pixel rays averaged in linear light,
-//! each untextured surface among them shaded once (at the first sub-ray that meets it).
+//! each untextured surface among them shaded once (at the first sub-ray that meets it) and
+//! each textured face's material evaluated once, at the pixel's centre (see `edge_pixel`).
 //! Texture detail is filtered by the materials themselves, so it never triggers extra rays.
 
 use super::daylight::{DiskPattern, environment_light, pixel_turn, sky_light, sun_visibility};
@@ -31,6 +32,11 @@ pub trait Surfaces: Sync {
     fn flat(&self, tri: u32) -> [f64; 3];
     /// Whether the surface varies over the triangle (else `flat` is all there is to it).
     fn textured(&self, tri: u32) -> bool;
+    /// Whether, within one pixel, triangle `b` may take the surface evaluated on triangle
+    /// `a`: the same material continuing over a shallow crease (facets of one curved face),
+    /// not a corner between faces, where the material may differ (a top weathers unlike a
+    /// side).
+    fn continues(&self, a: u32, b: u32) -> bool;
 }
 
 /// A plain matte colour per triangle.
@@ -50,6 +56,10 @@ impl<F: Fn(u32) -> [f64; 3] + Sync> Surfaces for F {
 
     fn textured(&self, _: u32) -> bool {
         false
+    }
+
+    fn continues(&self, a: u32, b: u32) -> bool {
+        self(a) == self(b)
     }
 }
 
@@ -123,18 +133,27 @@ pub fn shade(
     // Only pixels next to a hit can be an edge, and on a plain background only hits need work.
     let (rows, cols) = hit_bounds(g);
     // Centre rays: the shaded colour, and (for anti-aliasing) the untextured one.
-    let mut rgb = vec![0u8; g.triangle.len() * 3];
+    let mut rgb = match plain_background {
+        Some(bytes) => bytes.repeat(g.triangle.len()),
+        None => vec![0u8; g.triangle.len() * 3],
+    };
+    // On a plain background only the hits' bounding box needs shading.
+    let span = |row: usize| match plain_background {
+        Some(_) if !rows.contains(&row) => 0..0,
+        Some(_) => cols.clone(),
+        None => 0..width,
+    };
     if !antialias {
         rgb.par_chunks_mut(width * 3)
             .enumerate()
-            .for_each(|(row, out)| s.centre_row(g, row, plain_background, out, None));
+            .for_each(|(row, out)| s.centre_row(g, row, span(row), out, None));
         return rgb;
     }
     let mut flat = vec![0u8; rgb.len()];
     rgb.par_chunks_mut(width * 3)
         .zip(flat.par_chunks_mut(width * 3))
         .enumerate()
-        .for_each(|(row, (out, flat))| s.centre_row(g, row, plain_background, out, Some(flat)));
+        .for_each(|(row, (out, flat))| s.centre_row(g, row, span(row), out, Some(flat)));
     s.antialias_edges(g, &flat, (rows, cols), &mut rgb);
     rgb
 }
@@ -160,23 +179,24 @@ fn hit_bounds(g: &GBuffer) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
 }
 
 impl<S: Surfaces> Shading<'_, S> {
-    /// One row of centre rays: the shaded sRGB colour into `out` and, when anti-aliasing,
-    /// into `flat` the colour that decides where edges are (the untextured albedo lit
-    /// without shadows or gloss for a textured surface; the shaded colour otherwise).
+    /// Centre rays of columns `span` of a row: the shaded sRGB colour into `out` and, when
+    /// anti-aliasing, into `flat` the colour that decides where edges are (the untextured
+    /// albedo lit without shadows or gloss for a textured surface; the shaded colour
+    /// otherwise). Pixels of a plain background are left as they are.
     fn centre_row(
         &self,
         g: &GBuffer,
         row: usize,
-        plain_background: Option<[u8; 3]>,
+        span: std::ops::Range<usize>,
         out: &mut [u8],
         mut flat: Option<&mut [u8]>,
     ) {
         let width = g.width as usize;
-        for col in 0..width {
+        let plain_background = matches!(self.backdrop, Backdrop::Colour(_));
+        for col in span {
             let i = row * width + col;
             let hit = (g.triangle[i] != NO_HIT).then(|| (g.depth[i], g.triangle[i]));
-            if let (None, Some(bytes)) = (hit, plain_background) {
-                out[3 * col..3 * col + 3].copy_from_slice(&bytes);
+            if hit.is_none() && plain_background {
                 continue;
             }
             let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
@@ -211,7 +231,6 @@ impl<S: Surfaces> Shading<'_, S> {
         rgb: &mut [u8],
     ) {
         let width = g.width as usize;
-        let k = self.camera.intrinsics;
         let differs = |i: usize, j: usize| {
             let (a, b) = (g.triangle[i], g.triangle[j]);
             if (a == NO_HIT) != (b == NO_HIT) {
@@ -238,34 +257,59 @@ impl<S: Surfaces> Shading<'_, S> {
                     if !neighbours.into_iter().flatten().any(|j| differs(i, j)) {
                         continue;
                     }
-                    // A sub-ray meeting an untextured triangle an earlier sub-ray of the pixel
-                    // met takes its radiance: within a pixel a flat triangle's shade barely
-                    // changes, so such an edge pixel costs one shading per surface it shows.
-                    // Textured triangles are shaded per sub-ray: thin features (cracks, pits)
-                    // change within a pixel, and their edges stay anti-aliased.
-                    let mut seen = [(NO_HIT, [0.0; 3]); EDGE_SAMPLES.len()];
-                    let mut shaded = 0;
-                    let mean = EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
-                        let (u, v) = (col as f64 + du, row as f64 + dv);
-                        let hit = self.mesh.first_hit(self.camera, k.ray_through(u, v));
-                        let flat = hit.filter(|&(_, tri)| !self.surfaces.textured(tri));
-                        let earlier =
-                            flat.and_then(|(_, tri)| seen[..shaded].iter().find(|s| s.0 == tri));
-                        let c = match (earlier, flat) {
-                            (Some(&(_, c)), _) => c,
-                            (None, Some((_, tri))) => {
-                                let c = self.radiance_with_irradiance(hit, u, v).0;
-                                seen[shaded] = (tri, c);
-                                shaded += 1;
-                                c
-                            }
-                            (None, None) => self.radiance_with_irradiance(hit, u, v).0,
-                        };
-                        std::array::from_fn(|k| acc[k] + c[k] / 4.0)
-                    });
+                    let mean = self.edge_pixel(col, row);
                     out[3 * col..3 * col + 3].copy_from_slice(&encode(mean));
                 }
             });
+    }
+
+    /// Mean linear radiance of the four sub-rays of pixel (`col`, `row`).
+    ///
+    /// Each sub-ray is lit at its own point, with its own normal. What it sees there is shared
+    /// within the pixel: a sub-ray meeting an untextured triangle an earlier sub-ray met takes
+    /// that radiance (a flat triangle's shade barely changes within a pixel), and one meeting
+    /// a textured triangle takes the surface an earlier sub-ray found where the material
+    /// `continues`. Materials filter their texture over the whole pixel's footprint, so one
+    /// evaluation per pixel and face is the filter every other pixel gets; evaluating at each
+    /// sub-ray would blur an edge pixel's texture more than its neighbours'.
+    fn edge_pixel(&self, col: usize, row: usize) -> [f64; 3] {
+        let k = self.camera.intrinsics;
+        let mut flat_seen = [(NO_HIT, [0.0; 3]); EDGE_SAMPLES.len()];
+        let mut flats = 0;
+        let mut textures_seen = [(NO_HIT, None); EDGE_SAMPLES.len()];
+        let mut textures = 0;
+        EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
+            let (u, v) = (col as f64 + du, row as f64 + dv);
+            let view = k.ray_through(u, v);
+            let c = match self.mesh.first_hit(self.camera, view) {
+                None => self.backdrop(view, u, v),
+                Some((depth, tri)) if self.surfaces.textured(tri) => {
+                    let earlier = textures_seen[..textures]
+                        .iter()
+                        .find(|(t, _)| self.surfaces.continues(*t, tri));
+                    let surface = match earlier {
+                        Some(&(_, surface)) => surface,
+                        None => {
+                            let surface = Some(self.surface_at_centre(tri, depth, (col, row)));
+                            textures_seen[textures] = (tri, surface);
+                            textures += 1;
+                            surface
+                        }
+                    };
+                    self.hit_radiance(view, depth, tri, (u, v), surface).0
+                }
+                Some((depth, tri)) => match flat_seen[..flats].iter().find(|s| s.0 == tri) {
+                    Some(&(_, c)) => c,
+                    None => {
+                        let c = self.hit_radiance(view, depth, tri, (u, v), None).0;
+                        flat_seen[flats] = (tri, c);
+                        flats += 1;
+                        c
+                    }
+                },
+            };
+            std::array::from_fn(|k| acc[k] + c[k] / 4.0)
+        })
     }
 
     /// Linear radiance along the ray through image point (u, v), given what it hit, and the
@@ -277,22 +321,43 @@ impl<S: Surfaces> Shading<'_, S> {
         v: f64,
     ) -> ([f64; 3], [f64; 3]) {
         let view = self.camera.intrinsics.ray_through(u, v);
-        let Some((depth, tri)) = hit else {
-            return (self.backdrop(view, u, v), [0.0; 3]);
-        };
+        match hit {
+            None => (self.backdrop(view, u, v), [0.0; 3]),
+            Some((depth, tri)) => self.hit_radiance(view, depth, tri, (u, v), None),
+        }
+    }
+
+    /// The surface of triangle `tri`'s material where the centre ray of pixel `(col, row)`
+    /// meets the triangle's plane (at `depth` along it if it runs along the plane), filtered
+    /// over the pixel: what the pixel would show were the face all it saw.
+    fn surface_at_centre(&self, tri: u32, depth: f32, (col, row): (usize, usize)) -> Surface {
+        let centre = self
+            .camera
+            .intrinsics
+            .ray_through(col as f64 + 0.5, row as f64 + 0.5);
+        let (point, _, footprint) =
+            hit_geometry(self.camera, self.mesh, tri, centre, f64::from(depth));
+        self.surfaces.at(tri, point, footprint)
+    }
+
+    /// Linear radiance and unshadowed irradiance where the ray along `view` through image
+    /// point `pixel` meets triangle `tri` at planar `depth`, with the surface there (`given`,
+    /// else the material's at that point).
+    fn hit_radiance(
+        &self,
+        view: DVec3,
+        depth: f32,
+        tri: u32,
+        pixel: (f64, f64),
+        given: Option<Surface>,
+    ) -> ([f64; 3], [f64; 3]) {
         let (point, normal, footprint) =
             hit_geometry(self.camera, self.mesh, tri, view, f64::from(depth));
-        let surface = self.surfaces.at(tri, point, footprint);
-        let light = self.light(view, &surface, point, normal, (u, v));
-        (
-            reflected(
-                &self.lighting.film,
-                surface.albedo,
-                light.diffuse,
-                light.specular,
-            ),
-            light.unshadowed,
-        )
+        let surface = given.unwrap_or_else(|| self.surfaces.at(tri, point, footprint));
+        let light = self.light(view, &surface, point, normal, pixel);
+        let film = &self.lighting.film;
+        let radiance = reflected(film, surface.albedo, light.diffuse, light.specular);
+        (radiance, light.unshadowed)
     }
 
     /// The light a surface at `point` with facing `n` receives along `view`, seen through

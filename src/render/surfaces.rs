@@ -29,12 +29,17 @@ pub struct SampleSurfaces<'a> {
 impl SampleSurfaces<'_> {
     /// The undeformed surface point under world point `p` of triangle `tri`.
     fn rest_point(&self, tri: u32, p: DVec3, footprint: f64) -> SurfacePoint {
-        let [ra, rb, rc] = self.mesh.triangles[tri as usize].map(|i| self.rest[i as usize]);
         SurfacePoint {
             rest: carried(self.mesh, tri, p, self.rest),
-            rest_normal: (rb - ra).cross(rc - ra).normalize_or_zero(),
+            rest_normal: self.rest_normal(tri),
             footprint,
         }
+    }
+
+    /// Unit normal of the triangle's undeformed surface.
+    fn rest_normal(&self, tri: u32) -> DVec3 {
+        let [ra, rb, rc] = self.mesh.triangles[tri as usize].map(|i| self.rest[i as usize]);
+        (rb - ra).cross(rc - ra).normalize_or_zero()
     }
 
     fn shader_of(&self, tri: u32) -> (&Shader, &Grain) {
@@ -88,7 +93,16 @@ impl Surfaces for SampleSurfaces<'_> {
     fn textured(&self, tri: u32) -> bool {
         self.shader_of(tri).0.textured()
     }
+
+    fn continues(&self, a: u32, b: u32) -> bool {
+        self.piece[a as usize] == self.piece[b as usize]
+            && self.rest_normal(a).dot(self.rest_normal(b)) >= SHALLOW_CREASE_COS
+    }
 }
+
+/// Cosine of the sharpest crease within one face of a piece, 20°: facets of a tessellated
+/// curve meet at a few degrees, the faces of a box at 90°.
+const SHALLOW_CREASE_COS: f64 = 0.939_692_620_785_908_4;
 
 /// Barycentric weights of the point of triangle (a, b, c) nearest to `p`'s projection,
 /// clamped onto the triangle (a hit can stray outside it by the f32 rounding of tracing).
