@@ -814,3 +814,28 @@ fn a_folder_holding_another_dataset_is_refused_unless_forced() {
     ok(run(&recipe, &out, &["--set", "samples=3", "--force"]));
     assert_eq!(hashes(&out).len(), 2 + 3 * 3 * 4);
 }
+
+#[test]
+fn a_mesh_shared_between_samples_renders_as_if_each_built_its_own() {
+    // The same imported mesh in every sample (only the cameras change): a run shares one BVH
+    // between its samples, a shard of one sample builds its own; the bytes must not differ.
+    let dir = tempfile::tempdir().unwrap();
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
+    std::fs::copy(corpus.join("tetra.obj"), dir.path().join("tetra.obj")).unwrap();
+    let recipe = write(
+        dir.path(),
+        "static.rhai",
+        r#"dataset(#{ samples: 4, views: 2, camera: #{ width: 64, height: 48 },
+            scene: |rng| assembly("tetra", [shape::mesh("tetra.obj", #{ normalize: true })]) })"#,
+    );
+    ok(run(&recipe, &dir.path().join("t1"), &["--threads", "1"]));
+    ok(run(&recipe, &dir.path().join("t2"), &["--threads", "2"]));
+    let alone = dir.path().join("alone");
+    for shard in 0..4 {
+        ok(run(&recipe, &alone, &["--shard", &format!("{shard}/4")]));
+    }
+    let one = hashes(&dir.path().join("t1"));
+    assert_eq!(one.len(), 2 + 4 * 2 * 4, "run.json, manifest and 4 files per view");
+    assert_eq!(one, hashes(&dir.path().join("t2")));
+    assert_eq!(one, hashes(&alone));
+}

@@ -14,12 +14,14 @@ mod heap;
 mod progress;
 mod record;
 mod sample;
+mod shared_bvh;
 mod view;
 
 pub use geometry::SampleGeometry;
 pub use record::ViewFacts;
 pub use record::{RunRecord, ViewRecord, json_bytes, run_json, run_schema, view_schema};
 pub use sample::{for_each_image, prepare, write_sample};
+pub use shared_bvh::SharedBvhs;
 pub use view::{RenderedView, SampleRenderer, view_camera};
 
 use crate::output::DatasetFolder;
@@ -162,12 +164,13 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
     let todo = mine - done.len();
     let progress = Progress::new("rendering", todo, options.quiet);
     let rendered = AtomicU64::new(0);
+    let bvhs = SharedBvhs::default();
     let bytes = in_order(
         shard.samples(total).filter(|s| !done.contains(*s)),
         |index| {
             let sample = prepare(recipe, index)?;
             let mut stage = folder.stage(index)?;
-            let views = write_sample(recipe, &sample, &mut stage)?;
+            let views = write_sample(recipe, &sample, &bvhs, &mut stage)?;
             let bytes = stage.bytes;
             folder
                 .commit(stage, views)

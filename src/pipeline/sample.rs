@@ -6,6 +6,7 @@ use super::augmented::{Applied, AugmentedView, copy_camera};
 use super::finite::check_finite;
 use super::geometry::SampleGeometry;
 use super::record::{AugmentationRecord, SampleRecord, ViewFacts, json_bytes};
+use super::shared_bvh::SharedBvhs;
 use super::view::{SampleRenderer, view_camera};
 use crate::build::{BuiltSample, build_sample};
 use crate::output::{
@@ -61,15 +62,22 @@ fn check_segmentation(recipe: &Recipe, sample: &BuiltSample) -> Result<()> {
 }
 
 /// Renders every view of the sample, clean and augmented, and stages its files, the sample's
-/// own files first. Returns the number of images written.
+/// own files first; the BVH comes from `bvhs` (shared with samples of the same mesh). Returns
+/// the number of images written.
 ///
 /// Views are rendered and encoded in parallel, as many at a time as there are threads (so a
 /// run's last sample, or a run of fewer samples than threads, still keeps every core busy),
 /// and their files are staged in view order after each group: the staging, and the first
 /// error reported, are the same on any thread count, and memory holds one group's files.
-pub fn write_sample(recipe: &Recipe, sample: &BuiltSample, stage: &mut SampleStage) -> Result<u32> {
+pub fn write_sample(
+    recipe: &Recipe,
+    sample: &BuiltSample,
+    bvhs: &SharedBvhs,
+    stage: &mut SampleStage,
+) -> Result<u32> {
     let dataset = &recipe.dataset;
-    let renderer = SampleRenderer::new(dataset, sample);
+    let bvh = bvhs.get(&sample.mesh, sample.structure_triangles());
+    let renderer = SampleRenderer::with_bvh(dataset, sample, bvh);
     let mut record = SampleRecord::new(sample);
     record.files = write_sample_files(dataset, sample, stage)?;
     let views: Vec<u32> = (0..dataset.cameras_per_sample()).collect();

@@ -17,7 +17,7 @@ use crate::scene::{DatasetSpec, NormalsFrame};
 use crate::seeds::{self, Scope, Stream};
 use anyhow::{Result, anyhow};
 use serde::Serialize;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 /// Which eye of a stereo pair a view is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
@@ -106,7 +106,7 @@ pub fn above_ground(sample: &BuiltSample, camera: &Camera, draw: &ViewDraw) -> R
 pub struct SampleRenderer<'a> {
     dataset: &'a DatasetSpec,
     sample: &'a BuiltSample,
-    trace_mesh: TraceMesh,
+    trace_mesh: Arc<TraceMesh>,
     surfaces: SampleSurfaces<'a>,
     rest: OnceLock<Traced>,
 }
@@ -142,10 +142,21 @@ pub struct RenderedView<'a> {
 impl<'a> SampleRenderer<'a> {
     /// Builds the BVH and surfaces of `sample`, a sample of `dataset`.
     pub fn new(dataset: &'a DatasetSpec, sample: &'a BuiltSample) -> Self {
+        let bvh = TraceMesh::build_with_core(&sample.mesh, sample.structure_triangles());
+        Self::with_bvh(dataset, sample, Arc::new(bvh))
+    }
+
+    /// The renderer of `sample` with `bvh`, the BVH of its mesh (built by
+    /// `TraceMesh::build_with_core` with its structure triangles as the core).
+    pub fn with_bvh(
+        dataset: &'a DatasetSpec,
+        sample: &'a BuiltSample,
+        bvh: Arc<TraceMesh>,
+    ) -> Self {
         SampleRenderer {
             dataset,
             sample,
-            trace_mesh: TraceMesh::build_with_core(&sample.mesh, sample.structure_triangles()),
+            trace_mesh: bvh,
             surfaces: SampleSurfaces {
                 mesh: &sample.mesh,
                 rest: &sample.rest,

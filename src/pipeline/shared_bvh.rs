@@ -1,0 +1,105 @@
+//! BVHs shared between samples whose traced meshes are the same: an imported mesh that no load
+//! moves and no draw changes is built once per run instead of once per sample (on a 10⁶-triangle
+//! mesh the build costs as much as several of its views).
+//!
+//! Owns: recognising a mesh already built (by a BLAKE3 fingerprint of its vertex and index
+//! bytes) and holding the latest BVH. Must not touch: how a BVH is built or traced. A shared
+//! BVH is the one the sample would have built (the build is a pure function of the mesh), so
+//! sharing changes no output byte.
+
+use crate::geometry::Mesh;
+use crate::render::TraceMesh;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// A BVH being built or built, shared by the samples that ask for it.
+type Slot = Arc<OnceLock<Arc<TraceMesh>>>;
+
+/// The BVH of the mesh most recently asked for. Samples under way at once (one per thread)
+/// that ask for the same mesh wait for one build; a different mesh replaces it, so at most
+/// one BVH outlives the samples that used it.
+#[derive(Default)]
+pub struct SharedBvhs {
+    latest: Mutex<Option<(blake3::Hash, Slot)>>,
+}
+
+impl SharedBvhs {
+    /// The BVH of `mesh` whose first `core` triangles are the structures (see
+    /// `TraceMesh::build_with_core`), built unless the latest mesh asked for is the same.
+    pub fn get(&self, mesh: &Mesh, core: usize) -> Arc<TraceMesh> {
+        let key = fingerprint(mesh, core);
+        let slot = {
+            let mut latest = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+            match &*latest {
+                Some((known, slot)) if *known == key => slot.clone(),
+                _ => {
+                    let slot = Slot::default();
+                    *latest = Some((key, slot.clone()));
+                    slot
+                }
+            }
+        };
+        slot.get_or_init(|| Arc::new(TraceMesh::build_with_core(mesh, core)))
+            .clone()
+    }
+}
+
+/// BLAKE3 of the core count, the vertex positions' bits and the triangles' indices.
+fn fingerprint(mesh: &Mesh, core: usize) -> blake3::Hash {
+    let mut hasher = blake3::Hasher::new();
+    hasher.update(&(core as u64).to_le_bytes());
+    hasher.update(&(mesh.positions.len() as u64).to_le_bytes());
+    // Bytes gathered in blocks: one hasher call per value would cost more than the hashing.
+    let mut block = Vec::with_capacity(BLOCK);
+    let mut feed = |bytes: &[u8]| {
+        block.extend_from_slice(bytes);
+        if block.len() >= BLOCK {
+            hasher.update(&block);
+            block.clear();
+        }
+    };
+    for p in &mesh.positions {
+        for c in p.to_array() {
+            feed(&c.to_bits().to_le_bytes());
+        }
+    }
+    for t in &mesh.triangles {
+        for i in t {
+            feed(&i.to_le_bytes());
+        }
+    }
+    hasher.update(&block);
+    hasher.finalize()
+}
+
+/// Bytes handed to the hasher at a time.
+const BLOCK: usize = 1 << 16;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    fn triangle(z: f64) -> Mesh {
+        Mesh {
+            positions: vec![DVec3::ZERO, DVec3::X, DVec3::new(0.0, 1.0, z)],
+            triangles: vec![[0, 1, 2]],
+        }
+    }
+
+    #[test]
+    fn the_same_mesh_shares_its_bvh_and_any_change_builds_anew() {
+        let bvhs = SharedBvhs::default();
+        let first = bvhs.get(&triangle(0.0), 1);
+        assert!(Arc::ptr_eq(&first, &bvhs.get(&triangle(0.0), 1)));
+        // The least change of a coordinate, the core count or the winding is another mesh.
+        let moved = bvhs.get(&triangle(f64::from_bits(1)), 1);
+        assert!(!Arc::ptr_eq(&first, &moved));
+        assert!(!Arc::ptr_eq(
+            &moved,
+            &bvhs.get(&triangle(f64::from_bits(1)), 0)
+        ));
+        let mut turned = triangle(0.0);
+        turned.triangles[0] = [0, 2, 1];
+        assert_ne!(fingerprint(&turned, 1), fingerprint(&triangle(0.0), 1));
+    }
+}
