@@ -835,7 +835,11 @@ fn a_mesh_shared_between_samples_renders_as_if_each_built_its_own() {
         ok(run(&recipe, &alone, &["--shard", &format!("{shard}/4")]));
     }
     let one = hashes(&dir.path().join("t1"));
-    assert_eq!(one.len(), 2 + 4 * 2 * 4, "run.json, manifest and 4 files per view");
+    assert_eq!(
+        one.len(),
+        2 + 4 * 2 * 4,
+        "run.json, manifest and 4 files per view"
+    );
     assert_eq!(one, hashes(&dir.path().join("t2")));
     assert_eq!(one, hashes(&alone));
 }

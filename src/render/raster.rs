@@ -30,6 +30,12 @@ use rayon::prelude::*;
 /// Rows of pixels per band: a band is rasterised by one thread from the triangles binned to it.
 const BAND: usize = 8;
 
+thread_local! {
+    /// Exact (f64) depth of the nearest surface so far at each pixel of the band a thread is
+    /// rasterising: kept between bands and views rather than allocated and filled for each.
+    static NEAREST: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// A triangle projected into the image: pixel coordinates of its corners and its index in
 /// the scene mesh.
 #[derive(Clone, Copy)]
@@ -90,27 +96,33 @@ pub(super) fn rasterise(
         .enumerate()
         .for_each(|(band, ((depth, triangle), binned))| {
             let rows = band * BAND..(band * BAND + BAND).min(height);
-            let mut nearest = vec![f64::INFINITY; depth.len()];
-            for t in binned {
-                cover(t, rows.clone(), width, |row, col| {
-                    let i = (row - rows.start) * width + col;
-                    let d = depth_along(t.original, rays.through(row, col));
-                    let nearer = d < nearest[i] || (d == nearest[i] && t.original < triangle[i]);
-                    if d > 0.0 && d.is_finite() && nearer {
-                        nearest[i] = d;
-                        triangle[i] = t.original;
-                    }
-                });
-            }
-            for ((out, &d), tri) in depth.iter_mut().zip(&nearest).zip(triangle.iter_mut()) {
-                // A depth that leaves f32's range is no surface, as for traced rays.
-                let d = d as f32;
-                if *tri != NO_HIT && d > 0.0 && d.is_finite() {
-                    *out = d;
-                } else {
-                    *tri = NO_HIT;
+            NEAREST.with_borrow_mut(|nearest| {
+                // Read only where a triangle is recorded: what it held before does not matter.
+                nearest.resize(depth.len(), 0.0);
+                for t in binned {
+                    cover(t, rows.clone(), width, |row, col| {
+                        let i = (row - rows.start) * width + col;
+                        let d = depth_along(t.original, rays.through(row, col));
+                        let nearer = triangle[i] == NO_HIT
+                            || d < nearest[i]
+                            || (d == nearest[i] && t.original < triangle[i]);
+                        if d > 0.0 && d.is_finite() && nearer {
+                            nearest[i] = d;
+                            triangle[i] = t.original;
+                        }
+                    });
                 }
-            }
+                for ((out, &d), tri) in depth.iter_mut().zip(&nearest[..]).zip(triangle.iter_mut())
+                {
+                    // A depth that leaves f32's range is no surface, as for traced rays.
+                    let d = d as f32;
+                    if *tri != NO_HIT && d > 0.0 && d.is_finite() {
+                        *out = d;
+                    } else {
+                        *tri = NO_HIT;
+                    }
+                }
+            });
         });
     Some(GBuffer {
         width: k.width,
