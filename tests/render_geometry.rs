@@ -520,11 +520,30 @@ fn a_deformed_beam_one_kilometre_away_renders_like_one_at_the_origin() {
     );
 }
 
+/// The RGB image of `mesh` through `cam` under the default studio light on black.
+fn shaded_on_black(
+    mesh: &TraceMesh,
+    cam: &Camera,
+    surfaces: &impl shmgen::render::Surfaces,
+    antialias: bool,
+) -> Vec<u8> {
+    use shmgen::materials::{Backdrop, Lighting};
+    let g = mesh.trace(cam);
+    let black = Backdrop::Colour([0, 0, 0]);
+    shmgen::render::shade(
+        &g,
+        mesh,
+        cam,
+        &Lighting::default(),
+        surfaces,
+        &black,
+        antialias,
+    )
+}
+
 #[test]
 fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() {
     use shmgen::materials::srgb_to_linear;
-    use shmgen::materials::{Backdrop, Lighting};
-    use shmgen::render::shade;
     // Head-on, the box shows one face of uniform colour on black: a silhouette pixel's linear
     // value must be the face's times the fraction of the 2 × 2 sub-pixel rays that hit it.
     let k = Intrinsics::from_fov_y(240, 180, 0.8);
@@ -536,24 +555,9 @@ fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() 
     );
     let mesh = TraceMesh::build(&box_mesh(DVec3::ZERO));
     let g = mesh.trace(&cam);
-    let rgb = shade(
-        &g,
-        &mesh,
-        &cam,
-        &Lighting::default(),
-        &|_| [0.5, 0.5, 0.5],
-        &Backdrop::Colour([0, 0, 0]),
-        true,
-    );
-    let plain = shade(
-        &g,
-        &mesh,
-        &cam,
-        &Lighting::default(),
-        &|_| [0.5, 0.5, 0.5],
-        &Backdrop::Colour([0, 0, 0]),
-        false,
-    );
+    let grey = |_| [0.5, 0.5, 0.5];
+    let rgb = shaded_on_black(&mesh, &cam, &grey, true);
+    let plain = shaded_on_black(&mesh, &cam, &grey, false);
     assert!(
         plain
             .iter()
@@ -613,74 +617,77 @@ fn analytic_box_face(cam: &Camera, u: f64, v: f64) -> Option<usize> {
     (0..3).max_by(|&a, &b| (p[a] / HALF[a]).abs().total_cmp(&(p[b] / HALF[b]).abs()))
 }
 
+/// The fixed sub-pixel positions of anti-aliasing's rays.
+const SUB_POINTS: [(f64, f64); 4] = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)];
+
+/// The face of the box (by axis) each sub-ray of pixel (row, col) meets, analytically.
+fn sub_ray_faces(cam: &Camera, row: u32, col: u32) -> [Option<usize>; 4] {
+    SUB_POINTS.map(|(du, dv)| analytic_box_face(cam, f64::from(col) + du, f64::from(row) + dv))
+}
+
+/// The face all four sub-rays of pixel (row, col) meet, if they meet one.
+fn whole_face(cam: &Camera, row: u32, col: u32) -> Option<usize> {
+    match sub_ray_faces(cam, row, col) {
+        [Some(f), a, b, c] if [a, b, c] == [Some(f); 3] => Some(f),
+        _ => None,
+    }
+}
+
+/// Every pixel whose sub-rays meet two faces or more, with the face of each sub-ray.
+fn crease_pixels(cam: &Camera) -> Vec<(u32, u32, [Option<usize>; 4])> {
+    let k = cam.intrinsics;
+    (0..k.height)
+        .flat_map(|row| (0..k.width).map(move |col| (row, col)))
+        .map(|(row, col)| (row, col, sub_ray_faces(cam, row, col)))
+        .filter(|(_, _, faces)| {
+            let distinct = faces
+                .iter()
+                .flatten()
+                .collect::<std::collections::BTreeSet<_>>();
+            distinct.len() >= 2
+        })
+        .collect()
+}
+
 #[test]
 fn crease_pixels_mix_the_faces_their_sub_rays_meet() {
     use shmgen::materials::srgb_to_linear;
-    use shmgen::materials::{Backdrop, Lighting};
-    use shmgen::render::shade;
     // Seen obliquely, three faces of the box meet at creases; each face has its own flat
     // albedo, so a crease pixel's linear value must be the mean over its 2 × 2 sub-rays of the
     // face each meets (analytically), however the shading is shared among them.
     let k = Intrinsics::from_fov_y(200, 150, 0.9);
     let cam = Camera::look_at(k, DVec3::new(3.0, -6.0, 3.5), DVec3::ZERO, DVec3::Z);
-    let box_ = box_mesh(DVec3::ZERO);
-    let mesh = TraceMesh::build(&box_);
-    let g = mesh.trace(&cam);
+    let mesh = TraceMesh::build(&box_mesh(DVec3::ZERO));
     let albedo = |tri: u32| {
         let n = mesh.normal(tri).abs();
         [[0.8; 3], [0.35; 3], [0.08; 3]][(0..3).max_by(|&a, &b| n[a].total_cmp(&n[b])).unwrap()]
     };
-    let rgb = shade(
-        &g,
-        &mesh,
-        &cam,
-        &Lighting::default(),
-        &albedo,
-        &Backdrop::Colour([0, 0, 0]),
-        true,
-    );
-    let sub_faces = |row: u32, col: u32| {
-        [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)]
-            .map(|(du, dv)| analytic_box_face(&cam, f64::from(col) + du, f64::from(row) + dv))
-    };
+    let rgb = shaded_on_black(&mesh, &cam, &albedo, true);
     // Each face's shade, from pixels wholly inside it.
     let mut face_linear = [None; 3];
     for row in 0..k.height {
         for col in 0..k.width {
-            if let [Some(f), Some(a), Some(b), Some(c)] = sub_faces(row, col) {
-                if [a, b, c] == [f; 3] {
-                    let got = rgb[3 * (row * k.width + col) as usize];
-                    face_linear[f] = Some(srgb_to_linear(f64::from(got) / 255.0));
-                }
+            if let Some(f) = whole_face(&cam, row, col) {
+                let got = rgb[3 * (row * k.width + col) as usize];
+                face_linear[f] = Some(srgb_to_linear(f64::from(got) / 255.0));
             }
         }
     }
     let face_linear = face_linear.map(|f| f.expect("every face seen"));
-    let mut creases = 0;
-    for row in 0..k.height {
-        for col in 0..k.width {
-            let faces = sub_faces(row, col);
-            let distinct = faces
-                .iter()
-                .flatten()
-                .collect::<std::collections::BTreeSet<_>>();
-            if distinct.len() < 2 {
-                continue;
-            }
-            creases += 1;
-            let want: f64 = faces
-                .iter()
-                .map(|f| f.map_or(0.0, |f| face_linear[f]))
-                .sum::<f64>()
-                / 4.0;
-            let got = srgb_to_linear(f64::from(rgb[3 * (row * k.width + col) as usize]) / 255.0);
-            assert!(
-                (got - want).abs() < 0.01,
-                "({row},{col}): {got} vs {want}, faces {faces:?}"
-            );
-        }
+    let creases = crease_pixels(&cam);
+    for &(row, col, faces) in &creases {
+        let want: f64 = faces
+            .iter()
+            .map(|f| f.map_or(0.0, |f| face_linear[f]))
+            .sum::<f64>()
+            / 4.0;
+        let got = srgb_to_linear(f64::from(rgb[3 * (row * k.width + col) as usize]) / 255.0);
+        assert!(
+            (got - want).abs() < 0.01,
+            "({row},{col}): {got} vs {want}, faces {faces:?}"
+        );
     }
-    assert!(creases > 40, "{creases} crease pixels");
+    assert!(creases.len() > 40, "{} crease pixels", creases.len());
 }
 
 /// Depth bits and triangle of every pixel when each centre ray is traced on its own, with no
@@ -855,8 +862,6 @@ impl shmgen::render::Surfaces for Striped<'_> {
 #[test]
 fn edge_pixels_show_the_texture_their_centre_sees() {
     use shmgen::materials::srgb_to_linear;
-    use shmgen::materials::{Backdrop, Lighting};
-    use shmgen::render::shade;
     // A textured face is filtered by its material over the whole pixel, so a crease pixel
     // must show on each face it meets the texture where the pixel's centre ray meets that
     // face's plane (what the pixel would show were the face all it saw), lit at each sub-ray:
@@ -865,16 +870,7 @@ fn edge_pixels_show_the_texture_their_centre_sees() {
     let k = Intrinsics::from_fov_y(200, 150, 0.9);
     let cam = Camera::look_at(k, DVec3::new(3.0, -6.0, 3.5), DVec3::ZERO, DVec3::Z);
     let mesh = TraceMesh::build(&box_mesh(DVec3::ZERO));
-    let g = mesh.trace(&cam);
-    let rgb = shade(
-        &g,
-        &mesh,
-        &cam,
-        &Lighting::default(),
-        &Striped(&mesh),
-        &Backdrop::Colour([0, 0, 0]),
-        true,
-    );
+    let rgb = shaded_on_black(&mesh, &cam, &Striped(&mesh), true);
     let linear = |row: u32, col: u32| {
         srgb_to_linear(f64::from(rgb[3 * (row * k.width + col) as usize]) / 255.0)
     };
@@ -885,59 +881,44 @@ fn edge_pixels_show_the_texture_their_centre_sees() {
         let side = HALF[axis] * cam.position[axis].signum();
         cam.position + d * ((side - cam.position[axis]) / d[axis])
     };
-    let sub_faces = |row: u32, col: u32| {
-        [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)]
-            .map(|(du, dv)| analytic_box_face(&cam, f64::from(col) + du, f64::from(row) + dv))
-    };
     // Each face's irradiance, from pixels wholly inside it on a light stripe.
     let mut irradiance = [None; 3];
     for row in 0..k.height {
         for col in 0..k.width {
             let (u, v) = (f64::from(col) + 0.5, f64::from(row) + 0.5);
-            if let [Some(f), Some(a), Some(b), Some(c)] = sub_faces(row, col) {
-                if [a, b, c] == [f; 3] && stripe(on_face_plane(f, u, v)) == 0.8 {
+            if let Some(f) = whole_face(&cam, row, col) {
+                if stripe(on_face_plane(f, u, v)) == 0.8 {
                     irradiance[f] = Some(linear(row, col) / 0.8);
                 }
             }
         }
     }
     let irradiance = irradiance.map(|e| e.expect("every face seen"));
-    let (mut edges, mut textured_differently) = (0, 0);
-    for row in 0..k.height {
-        for col in 0..k.width {
-            let faces = sub_faces(row, col);
-            let distinct = faces
-                .iter()
-                .flatten()
-                .collect::<std::collections::BTreeSet<_>>();
-            if distinct.len() < 2 {
-                continue;
-            }
-            edges += 1;
-            let (u, v) = (f64::from(col) + 0.5, f64::from(row) + 0.5);
-            let want: f64 = faces
-                .iter()
-                .map(|f| f.map_or(0.0, |f| irradiance[f] * stripe(on_face_plane(f, u, v))))
-                .sum::<f64>()
-                / 4.0;
-            let got = linear(row, col);
-            assert!(
-                (got - want).abs() < 0.01,
-                "({row},{col}): {got} vs {want}, faces {faces:?}"
-            );
-            // Sub-rays that would have shown another stripe, had each been textured alone.
-            let sub_points = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)];
-            if faces.iter().zip(sub_points).any(|(f, (du, dv))| {
-                f.is_some_and(|f| {
-                    let own = on_face_plane(f, f64::from(col) + du, f64::from(row) + dv);
-                    stripe(own) != stripe(on_face_plane(f, u, v))
-                })
-            }) {
-                textured_differently += 1;
-            }
+    let creases = crease_pixels(&cam);
+    let mut textured_differently = 0;
+    for &(row, col, faces) in &creases {
+        let (u, v) = (f64::from(col) + 0.5, f64::from(row) + 0.5);
+        let want: f64 = faces
+            .iter()
+            .map(|f| f.map_or(0.0, |f| irradiance[f] * stripe(on_face_plane(f, u, v))))
+            .sum::<f64>()
+            / 4.0;
+        let got = linear(row, col);
+        assert!(
+            (got - want).abs() < 0.01,
+            "({row},{col}): {got} vs {want}, faces {faces:?}"
+        );
+        // Sub-rays that would have shown another stripe, had each been textured alone.
+        if faces.iter().zip(SUB_POINTS).any(|(f, (du, dv))| {
+            f.is_some_and(|f| {
+                let own = on_face_plane(f, f64::from(col) + du, f64::from(row) + dv);
+                stripe(own) != stripe(on_face_plane(f, u, v))
+            })
+        }) {
+            textured_differently += 1;
         }
     }
-    assert!(edges > 40, "{edges} crease pixels");
+    assert!(creases.len() > 40, "{} crease pixels", creases.len());
     assert!(
         textured_differently > 20,
         "{textured_differently} crease pixels whose sub-rays see other stripes than the centre"

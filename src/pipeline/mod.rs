@@ -14,18 +14,17 @@ mod heap;
 mod progress;
 mod record;
 mod sample;
-mod shared_bvh;
 mod view;
 
 pub use geometry::SampleGeometry;
 pub use record::ViewFacts;
 pub use record::{RunRecord, ViewRecord, json_bytes, run_json, run_schema, view_schema};
 pub use sample::{for_each_image, prepare, write_sample};
-pub use shared_bvh::SharedBvhs;
 pub use view::{RenderedView, SampleRenderer, view_camera};
 
 use crate::output::DatasetFolder;
 use crate::recipe::Recipe;
+use crate::render::SharedBvhs;
 use anyhow::{Context, Result, bail};
 use progress::Progress;
 use std::path::PathBuf;

@@ -6,13 +6,13 @@ use super::augmented::{Applied, AugmentedView, copy_camera};
 use super::finite::check_finite;
 use super::geometry::SampleGeometry;
 use super::record::{AugmentationRecord, SampleRecord, ViewFacts, json_bytes};
-use super::shared_bvh::SharedBvhs;
 use super::view::{SampleRenderer, view_camera};
 use crate::build::{BuiltSample, build_sample};
 use crate::output::{
     MAX_SEGMENTATION_ID, SAMPLE_WRITERS, SampleStage, ViewLayers, WRITERS, sample_file, view_file,
 };
 use crate::recipe::Recipe;
+use crate::render::SharedBvhs;
 use crate::scene::{DatasetSpec, GeometryMode};
 use anyhow::{Result, bail};
 use rayon::prelude::*;

@@ -1,11 +1,12 @@
 //! Ray tracing of one deformed mesh (and, for the unloaded image, its undeformed twin) into
 //! per-pixel buffers.
 //!
-//! Owns: the BVH over a scene mesh (built once, reused for all its views), the watertight
-//! ray–triangle test, screen-space culling, rasterising the centre rays of a pinhole view
-//! (the same first hits, far cheaper; see docs/rendering.md), the per-pixel geometric buffers
-//! (planar depth, hit triangle) and the fields that follow the same centre ray (normals, distance along the ray,
-//! displacement from the unloaded structure, optical flow from its image), texture lookup on
+//! Owns: the BVH over a scene mesh (built once, reused for all its views, and shared by
+//! samples whose mesh is the same), the watertight ray–triangle test, screen-space culling,
+//! rasterising the centre rays of a pinhole view (the same first hits, far cheaper; see
+//! docs/rendering.md), the per-pixel geometric buffers (planar depth, hit triangle) and the
+//! fields that follow the same centre ray (normals, distance along the ray, displacement
+//! from the unloaded structure, optical flow from its image), texture lookup on
 //! the undeformed surface (through `materials`), shading into RGB with sun, sky, studio lights
 //! and shadows (soft over the sun's disk), sky occlusion and a ground's bounce (`daylight`),
 //! exposure and tone curve, anti-aliased with fixed sub-pixel rays only where the image
@@ -17,6 +18,7 @@ mod daylight;
 mod fields;
 mod raster;
 mod shade;
+mod shared_bvh;
 mod surfaces;
 mod tiles;
 mod trace;
@@ -24,5 +26,6 @@ mod watertight;
 
 pub use fields::{Deformed, displacement, flow, normals, ray_distance};
 pub use shade::{Surfaces, shade};
+pub use shared_bvh::SharedBvhs;
 pub use surfaces::SampleSurfaces;
 pub use trace::{GBuffer, NO_HIT, TraceMesh, Traced};

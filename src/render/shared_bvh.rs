@@ -7,8 +7,8 @@
 //! BVH is the one the sample would have built (the build is a pure function of the mesh), so
 //! sharing changes no output byte.
 
+use super::TraceMesh;
 use crate::geometry::Mesh;
-use crate::render::TraceMesh;
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// A BVH being built or built, shared by the samples that ask for it.
