@@ -7,7 +7,8 @@
 //!     SHMGEN_BENCH_RUNS=1 SHMGEN_BENCH_STREAM=10000 cargo bench --bench pipeline   (quicker)
 //!
 //! Rows: the A1 smoke run with the paper's prompts, the quickstart, the A2 smoke run, an
-//! imported mesh of a million triangles (written by the benchmark), a streaming run of tiny
+//! imported mesh of a million triangles (written by the benchmark; 2 samples × 10 views, and
+//! 10 × 2 where the samples share its BVH), a streaming run of tiny
 //! views at growing sample counts (throughput and peak resident memory, each count in its own
 //! process), and the time per pair at 3840×3840 against 960×960. Then the cost per view of
 //! each daylight and camera effect, on and off (`SHMGEN_BENCH_ONLY=daylight`: only that;
@@ -124,9 +125,11 @@ fn write_torus(path: &Path, around: u32, across: u32) {
 }
 
 /// A recipe rendering the imported mesh `million.ply` next to it, plain grey, the paper's
-/// camera.
-fn million_recipe(dir: &Path) -> Recipe {
-    write_torus(&dir.join("million.ply"), 1000, 500);
+/// camera, with `sets` (samples, views) applied; the mesh is written on first use.
+fn million_recipe(dir: &Path, sets: &[(&str, &str)]) -> Recipe {
+    if !dir.join("million.ply").exists() {
+        write_torus(&dir.join("million.ply"), 1000, 500);
+    }
     let path = dir.join("million.rhai");
     std::fs::write(
         &path,
@@ -136,7 +139,7 @@ fn million_recipe(dir: &Path) -> Recipe {
             scene: |rng| assembly("torus", [shape::mesh("million.ply")]).colour([0.6, 0.6, 0.6]) })"#,
     )
     .unwrap();
-    load(&path, &[])
+    load(&path, sets)
 }
 
 /// A run of `samples` samples of one 16×16 view each: "pairs/s peak_kB" on stdout.
@@ -542,11 +545,17 @@ fn main() {
         ),
         (
             "imported mesh, 1,000,000 triangles (2 × 10 views)",
-            million_recipe(million_dir.path()),
+            million_recipe(million_dir.path(), &[]),
+        ),
+        (
+            "the same mesh, 10 samples × 2 views (one BVH shared)",
+            million_recipe(million_dir.path(), &[("samples", "10"), ("views", "2")]),
         ),
     ];
+    // The shared-mesh row's stages are those of the row above it.
+    let staged = &rows[..rows.len() - 1];
     if only == "breakdown" {
-        return stage_breakdowns(&rows);
+        return stage_breakdowns(staged);
     }
     println!("| row | 1 thread | {cores} threads |");
     for (name, recipe) in &rows {
@@ -556,6 +565,6 @@ fn main() {
     }
     resolution_ratio(cores, runs);
     streaming(setting("SHMGEN_BENCH_STREAM", 100_000));
-    stage_breakdowns(&rows);
+    stage_breakdowns(staged);
     daylight_costs(setting("SHMGEN_BENCH_VIEWS", 10) as u32);
 }
