@@ -854,6 +854,10 @@ impl shmgen::render::Surfaces for Striped<'_> {
         true
     }
 
+    fn matte(&self, _: u32) -> bool {
+        false
+    }
+
     fn continues(&self, a: u32, b: u32) -> bool {
         self.face(a) == self.face(b)
     }

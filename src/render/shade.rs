@@ -32,6 +32,9 @@ pub trait Surfaces: Sync {
     fn flat(&self, tri: u32) -> [f64; 3];
     /// Whether the surface varies over the triangle (else `flat` is all there is to it).
     fn textured(&self, tri: u32) -> bool;
+    /// Whether the triangle's surface is the same everywhere and without gloss: then under
+    /// lights that cast no shadow it shows one radiance over each of its sides.
+    fn matte(&self, tri: u32) -> bool;
     /// Whether, within one pixel, triangle `b` may take the surface evaluated on triangle
     /// `a`: the same material continuing over a shallow crease (facets of one curved face),
     /// not a corner between faces, where the material may differ (a top weathers unlike a
@@ -56,6 +59,10 @@ impl<F: Fn(u32) -> [f64; 3] + Sync> Surfaces for F {
 
     fn textured(&self, _: u32) -> bool {
         false
+    }
+
+    fn matte(&self, _: u32) -> bool {
+        true
     }
 
     fn continues(&self, a: u32, b: u32) -> bool {
@@ -97,7 +104,16 @@ struct Shading<'a, S: Surfaces> {
     sun_disk: DiskPattern,
     /// Occlusion rays over a shaded point's hemisphere.
     hemisphere: DiskPattern,
+    /// Whether the light is the same at every point of a face: lights from fixed directions
+    /// without shadows, no sky, ground or environment (whose occlusion and bounce vary).
+    uniform_light: bool,
 }
+
+/// The side of a matte triangle last shaded under uniform light, with its radiance and
+/// unshadowed irradiance: consecutive pixels mostly see the same triangle, and it shows the
+/// same light wherever it is met (see `Shading::uniform_side`).
+#[derive(Default)]
+struct LastMatte(Option<((u32, bool), ([f64; 3], [f64; 3]))>);
 
 /// RGB8 image (sRGB) of the G-buffer.
 pub fn shade(
@@ -127,6 +143,10 @@ pub fn shade(
             Some(e) => e.occlusion_rays,
             None => lighting.sky.map_or(0, |s| s.occlusion_rays),
         }),
+        uniform_light: lighting.environment.is_none()
+            && lighting.sky.is_none()
+            && lighting.ground.is_none()
+            && (lighting.sun.is_none() || !lighting.shadows),
     };
     let width = g.width as usize;
     let plain_background = matches!(backdrop, Backdrop::Colour(_)).then(|| encode(s.background));
@@ -193,6 +213,7 @@ impl<S: Surfaces> Shading<'_, S> {
     ) {
         let width = g.width as usize;
         let plain_background = matches!(self.backdrop, Backdrop::Colour(_));
+        let mut last = LastMatte::default();
         for col in span {
             let i = row * width + col;
             let hit = (g.triangle[i] != NO_HIT).then(|| (g.depth[i], g.triangle[i]));
@@ -200,7 +221,7 @@ impl<S: Surfaces> Shading<'_, S> {
                 continue;
             }
             let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
-            let (linear, unshadowed) = self.radiance_with_irradiance(hit, u, v);
+            let (linear, unshadowed) = self.radiance_with_irradiance(hit, u, v, &mut last);
             let colour = encode(linear);
             out[3 * col..3 * col + 3].copy_from_slice(&colour);
             if let Some(flat) = flat.as_deref_mut() {
@@ -246,6 +267,7 @@ impl<S: Surfaces> Shading<'_, S> {
             .enumerate()
             .filter(|(row, _)| rows.contains(row))
             .for_each(|(row, out)| {
+                let mut last = LastMatte::default();
                 for col in cols.clone() {
                     let i = row * width + col;
                     let neighbours = [
@@ -257,7 +279,7 @@ impl<S: Surfaces> Shading<'_, S> {
                     if !neighbours.into_iter().flatten().any(|j| differs(i, j)) {
                         continue;
                     }
-                    let mean = self.edge_pixel(col, row);
+                    let mean = self.edge_pixel(col, row, &mut last);
                     out[3 * col..3 * col + 3].copy_from_slice(&encode(mean));
                 }
             });
@@ -272,7 +294,7 @@ impl<S: Surfaces> Shading<'_, S> {
     /// `continues`. Materials filter their texture over the whole pixel's footprint, so one
     /// evaluation per pixel and face is the filter every other pixel gets; evaluating at each
     /// sub-ray would blur an edge pixel's texture more than its neighbours'.
-    fn edge_pixel(&self, col: usize, row: usize) -> [f64; 3] {
+    fn edge_pixel(&self, col: usize, row: usize, last: &mut LastMatte) -> [f64; 3] {
         let k = self.camera.intrinsics;
         let mut flat_seen = [(NO_HIT, [0.0; 3]); EDGE_SAMPLES.len()];
         let mut flats = 0;
@@ -301,7 +323,7 @@ impl<S: Surfaces> Shading<'_, S> {
                 Some((depth, tri)) => match flat_seen[..flats].iter().find(|s| s.0 == tri) {
                     Some(&(_, c)) => c,
                     None => {
-                        let c = self.hit_radiance(view, depth, tri, (u, v), None).0;
+                        let c = self.matte_radiance(view, depth, tri, (u, v), last).0;
                         flat_seen[flats] = (tri, c);
                         flats += 1;
                         c
@@ -319,12 +341,50 @@ impl<S: Surfaces> Shading<'_, S> {
         hit: Option<(f32, u32)>,
         u: f64,
         v: f64,
+        last: &mut LastMatte,
     ) -> ([f64; 3], [f64; 3]) {
         let view = self.camera.intrinsics.ray_through(u, v);
         match hit {
             None => (self.backdrop(view, u, v), [0.0; 3]),
-            Some((depth, tri)) => self.hit_radiance(view, depth, tri, (u, v), None),
+            Some((depth, tri)) => self.matte_radiance(view, depth, tri, (u, v), last),
         }
+    }
+
+    /// `hit_radiance` of an untextured hit, taken from `last` when it saw the same side of
+    /// the same matte triangle under uniform light (the same bits: nothing in the sum then
+    /// depends on where the triangle is met), and kept there.
+    fn matte_radiance(
+        &self,
+        view: DVec3,
+        depth: f32,
+        tri: u32,
+        pixel: (f64, f64),
+        last: &mut LastMatte,
+    ) -> ([f64; 3], [f64; 3]) {
+        let side = self.uniform_side(tri, view);
+        match (side, last.0) {
+            (Some(side), Some((seen, light))) if side == seen => light,
+            _ => {
+                let light = self.hit_radiance(view, depth, tri, pixel, None);
+                if let Some(side) = side {
+                    last.0 = Some((side, light));
+                }
+                light
+            }
+        }
+    }
+
+    /// The triangle and the side of it seen along `view` (whether its normal is turned, as
+    /// `facing_normal` turns it), when it shows one radiance over that side: a matte,
+    /// untextured surface under uniform light.
+    fn uniform_side(&self, tri: u32, view: DVec3) -> Option<(u32, bool)> {
+        let uniform = self.uniform_light && self.surfaces.matte(tri);
+        uniform.then(|| {
+            (
+                tri,
+                self.mesh.normal(tri).dot(self.camera.rotation * view) > 0.0,
+            )
+        })
     }
 
     /// The surface of triangle `tri`'s material where the centre ray of pixel `(col, row)`
