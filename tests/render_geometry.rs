@@ -928,3 +928,48 @@ fn edge_pixels_show_the_texture_their_centre_sees() {
         "{textured_differently} crease pixels whose sub-rays see other stripes than the centre"
     );
 }
+
+#[test]
+fn only_untextured_surfaces_without_gloss_are_matte() {
+    use shmgen::materials::{Base, Grain, Material, Shader};
+    use shmgen::render::{SampleSurfaces, Surfaces};
+    // One triangle per material: a plain matte colour, the same colour with a glint, and a
+    // textured one. A glint moves with the eye and a texture with the point, so only the first
+    // shows one radiance over a side under uniform light.
+    let plain = Material::plain([0.5, 0.4, 0.3]);
+    let glossy = Material {
+        specular: 0.04,
+        roughness: 0.3,
+        ..plain.clone()
+    };
+    let textured = Material {
+        base: Base::Concrete,
+        ..plain.clone()
+    };
+    let mut stream = Stream::new(1, Scope::Sample(0), "material");
+    let shaders: Vec<Shader> = [plain, glossy, textured]
+        .iter()
+        .map(|m| Shader::new(m, &mut stream))
+        .collect();
+    let mesh = Mesh {
+        positions: vec![DVec3::ZERO, DVec3::X, DVec3::Y],
+        triangles: vec![[0, 1, 2]; 3],
+    };
+    let grain = Grain {
+        axis: DVec3::X,
+        centre: DVec3::ZERO,
+        bottom: 0.0,
+        top: 1.0,
+    };
+    let pieces: Vec<(u32, Grain)> = (0..3).map(|s| (s, grain)).collect();
+    let surfaces = SampleSurfaces {
+        mesh: &mesh,
+        rest: &mesh.positions,
+        piece: &[0, 1, 2],
+        pieces: &pieces,
+        shaders: &shaders,
+    };
+    assert!(surfaces.matte(0));
+    assert!(!surfaces.matte(1), "a glint is not the same everywhere");
+    assert!(!surfaces.matte(2), "a texture is not the same everywhere");
+}

@@ -129,51 +129,6 @@ pub(super) fn barycentric(a: DVec3, b: DVec3, c: DVec3, p: DVec3) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::materials::{Base, Material};
-    use crate::seeds::{Scope, Stream};
-
-    #[test]
-    fn only_untextured_surfaces_without_gloss_are_matte() {
-        // One triangle per material: a plain matte colour, the same colour with a glint, and
-        // a textured one. A glint moves with the eye, a texture with the point.
-        let plain = Material::plain([0.5, 0.4, 0.3]);
-        let glossy = Material {
-            specular: 0.04,
-            roughness: 0.3,
-            ..plain.clone()
-        };
-        let textured = Material {
-            base: Base::Concrete,
-            ..plain.clone()
-        };
-        let mut stream = Stream::new(1, Scope::Sample(0), "material");
-        let shaders: Vec<Shader> = [plain, glossy, textured]
-            .iter()
-            .map(|m| Shader::new(m, &mut stream))
-            .collect();
-        let mesh = Mesh {
-            positions: vec![DVec3::ZERO, DVec3::X, DVec3::Y],
-            triangles: vec![[0, 1, 2]; 3],
-        };
-        let grain = Grain {
-            axis: DVec3::X,
-            centre: DVec3::ZERO,
-            bottom: 0.0,
-            top: 1.0,
-        };
-        let pieces: Vec<(u32, Grain)> = (0..3).map(|s| (s, grain)).collect();
-        let surfaces = SampleSurfaces {
-            mesh: &mesh,
-            rest: &mesh.positions,
-            piece: &[0, 1, 2],
-            pieces: &pieces,
-            shaders: &shaders,
-        };
-        assert!(surfaces.matte(0));
-        assert!(!surfaces.matte(1), "a glint is not the same everywhere");
-        assert!(!surfaces.matte(2), "a texture is not the same everywhere");
-    }
-
     #[test]
     fn barycentric_weights_rebuild_the_point_and_clamp_outside() {
         let (a, b, c) = (
