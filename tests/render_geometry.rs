@@ -610,11 +610,17 @@ fn rgb_edges_are_antialiased_by_the_covered_fraction_and_nothing_else_changes() 
     );
 }
 
+/// The axis (0–2) along which `v` is longest.
+fn dominant_axis(v: DVec3) -> usize {
+    let v = v.abs();
+    (0..3).max_by(|&a, &b| v[a].total_cmp(&v[b])).unwrap()
+}
+
 /// The axis (0–2) of the box face the ray through image point (u, v) meets first, if any.
 fn analytic_box_face(cam: &Camera, u: f64, v: f64) -> Option<usize> {
     let t = analytic_box_depth_at(cam, u, v, DVec3::ZERO)?;
     let p = cam.position + cam.rotation * cam.intrinsics.ray_through(u, v) * t;
-    (0..3).max_by(|&a, &b| (p[a] / HALF[a]).abs().total_cmp(&(p[b] / HALF[b]).abs()))
+    Some(dominant_axis(p / HALF))
 }
 
 /// The fixed sub-pixel positions of anti-aliasing's rays.
@@ -658,10 +664,7 @@ fn crease_pixels_mix_the_faces_their_sub_rays_meet() {
     let k = Intrinsics::from_fov_y(200, 150, 0.9);
     let cam = Camera::look_at(k, DVec3::new(3.0, -6.0, 3.5), DVec3::ZERO, DVec3::Z);
     let mesh = TraceMesh::build(&box_mesh(DVec3::ZERO));
-    let albedo = |tri: u32| {
-        let n = mesh.normal(tri).abs();
-        [[0.8; 3], [0.35; 3], [0.08; 3]][(0..3).max_by(|&a, &b| n[a].total_cmp(&n[b])).unwrap()]
-    };
+    let albedo = |tri: u32| [[0.8; 3], [0.35; 3], [0.08; 3]][dominant_axis(mesh.normal(tri))];
     let rgb = shaded_on_black(&mesh, &cam, &albedo, true);
     // Each face's shade, from pixels wholly inside it.
     let mut face_linear = [None; 3];
@@ -829,13 +832,6 @@ fn stripe(p: DVec3) -> f64 {
 /// The box's faces, each textured with `stripe`; the material continues within a face only.
 struct Striped<'a>(&'a TraceMesh);
 
-impl Striped<'_> {
-    fn face(&self, tri: u32) -> usize {
-        let n = self.0.normal(tri).abs();
-        (0..3).max_by(|&a, &b| n[a].total_cmp(&n[b])).unwrap()
-    }
-}
-
 impl shmgen::render::Surfaces for Striped<'_> {
     fn at(&self, _: u32, p: DVec3, _: f64) -> shmgen::materials::Surface {
         shmgen::materials::Surface {
@@ -859,7 +855,7 @@ impl shmgen::render::Surfaces for Striped<'_> {
     }
 
     fn continues(&self, a: u32, b: u32) -> bool {
-        self.face(a) == self.face(b)
+        dominant_axis(self.0.normal(a)) == dominant_axis(self.0.normal(b))
     }
 }
 

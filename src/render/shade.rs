@@ -109,6 +109,36 @@ struct Shading<'a, S: Surfaces> {
     uniform_light: bool,
 }
 
+/// What the sub-rays of one edge pixel found, by the triangle they found it on: one entry per
+/// sub-ray at most.
+struct FoundInPixel<T>([Option<(u32, T)>; EDGE_SAMPLES.len()]);
+
+impl<T> Default for FoundInPixel<T> {
+    fn default() -> Self {
+        FoundInPixel(std::array::from_fn(|_| None))
+    }
+}
+
+impl<T: Copy> FoundInPixel<T> {
+    /// The value found on the first earlier triangle that `same` accepts, else `find()`'s,
+    /// kept for `tri`.
+    fn get_or_insert(
+        &mut self,
+        tri: u32,
+        same: impl Fn(u32) -> bool,
+        find: impl FnOnce() -> T,
+    ) -> T {
+        if let Some(&(_, value)) = self.0.iter().flatten().find(|(earlier, _)| same(*earlier)) {
+            return value;
+        }
+        let value = find();
+        if let Some(free) = self.0.iter_mut().find(|entry| entry.is_none()) {
+            *free = Some((tri, value));
+        }
+        value
+    }
+}
+
 /// The side of a matte triangle last shaded under uniform light, with its radiance and
 /// unshadowed irradiance: consecutive pixels mostly see the same triangle, and it shows the
 /// same light wherever it is met (see `Shading::uniform_side`).
@@ -296,39 +326,26 @@ impl<S: Surfaces> Shading<'_, S> {
     /// sub-ray would blur an edge pixel's texture more than its neighbours'.
     fn edge_pixel(&self, col: usize, row: usize, last: &mut LastMatte) -> [f64; 3] {
         let k = self.camera.intrinsics;
-        let mut flat_seen = [(NO_HIT, [0.0; 3]); EDGE_SAMPLES.len()];
-        let mut flats = 0;
-        let mut textures_seen = [(NO_HIT, None); EDGE_SAMPLES.len()];
-        let mut textures = 0;
+        let mut radiances = FoundInPixel::<[f64; 3]>::default();
+        let mut surfaces = FoundInPixel::<Surface>::default();
         EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
             let (u, v) = (col as f64 + du, row as f64 + dv);
             let view = k.ray_through(u, v);
             let c = match self.mesh.first_hit(self.camera, view) {
                 None => self.backdrop(view, u, v),
                 Some((depth, tri)) if self.surfaces.textured(tri) => {
-                    let earlier = textures_seen[..textures]
-                        .iter()
-                        .find(|(t, _)| self.surfaces.continues(*t, tri));
-                    let surface = match earlier {
-                        Some(&(_, surface)) => surface,
-                        None => {
-                            let surface = Some(self.surface_at_centre(tri, depth, (col, row)));
-                            textures_seen[textures] = (tri, surface);
-                            textures += 1;
-                            surface
-                        }
-                    };
-                    self.hit_radiance(view, depth, tri, (u, v), surface).0
+                    let surface = surfaces.get_or_insert(
+                        tri,
+                        |earlier| self.surfaces.continues(earlier, tri),
+                        || self.surface_at_centre(tri, depth, (col, row)),
+                    );
+                    self.hit_radiance(view, depth, tri, (u, v), Some(surface)).0
                 }
-                Some((depth, tri)) => match flat_seen[..flats].iter().find(|s| s.0 == tri) {
-                    Some(&(_, c)) => c,
-                    None => {
-                        let c = self.matte_radiance(view, depth, tri, (u, v), last).0;
-                        flat_seen[flats] = (tri, c);
-                        flats += 1;
-                        c
-                    }
-                },
+                Some((depth, tri)) => radiances.get_or_insert(
+                    tri,
+                    |earlier| earlier == tri,
+                    || self.matte_radiance(view, depth, tri, (u, v), last).0,
+                ),
             };
             std::array::from_fn(|k| acc[k] + c[k] / 4.0)
         })
@@ -374,17 +391,11 @@ impl<S: Surfaces> Shading<'_, S> {
         }
     }
 
-    /// The triangle and the side of it seen along `view` (whether its normal is turned, as
-    /// `facing_normal` turns it), when it shows one radiance over that side: a matte,
-    /// untextured surface under uniform light.
+    /// The triangle and the side of it seen along `view`, when it shows one radiance over
+    /// that side: a matte, untextured surface under uniform light.
     fn uniform_side(&self, tri: u32, view: DVec3) -> Option<(u32, bool)> {
         let uniform = self.uniform_light && self.surfaces.matte(tri);
-        uniform.then(|| {
-            (
-                tri,
-                self.mesh.normal(tri).dot(self.camera.rotation * view) > 0.0,
-            )
-        })
+        uniform.then(|| (tri, sees_back(self.camera, self.mesh, tri, view)))
     }
 
     /// The surface of triangle `tri`'s material where the centre ray of pixel `(col, row)`
@@ -551,11 +562,16 @@ impl<S: Surfaces> Shading<'_, S> {
 /// World normal of the triangle, turned towards the camera (surfaces are two-sided).
 pub(super) fn facing_normal(camera: &Camera, mesh: &TraceMesh, tri: u32, view: DVec3) -> DVec3 {
     let n = mesh.normal(tri);
-    if n.dot(camera.rotation * view) > 0.0 {
+    if sees_back(camera, mesh, tri, view) {
         -n
     } else {
         n
     }
+}
+
+/// Whether the ray along `view` (camera axes) meets triangle `tri` from behind its winding.
+fn sees_back(camera: &Camera, mesh: &TraceMesh, tri: u32, view: DVec3) -> bool {
+    mesh.normal(tri).dot(camera.rotation * view) > 0.0
 }
 
 /// Where the ray along `view` (camera axes, unit z) meets triangle `tri` at planar `depth`:

@@ -129,6 +129,7 @@ pub(super) fn barycentric(a: DVec3, b: DVec3, c: DVec3, p: DVec3) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
     #[test]
     fn barycentric_weights_rebuild_the_point_and_clamp_outside() {
         let (a, b, c) = (
