@@ -12,7 +12,8 @@
 //! views at growing sample counts (throughput and peak resident memory, each count in its own
 //! process), and the time per pair at 3840×3840 against 960×960. Then the cost per view of
 //! each daylight and camera effect, on and off (`SHMGEN_BENCH_ONLY=daylight`: only that;
-//! `SHMGEN_BENCH_ONLY=breakdown`: only the per-stage breakdown).
+//! `SHMGEN_BENCH_ONLY=breakdown`: only the per-stage breakdown; any other text: only the
+//! table's rows whose name holds it, e.g. `SHMGEN_BENCH_ONLY=quickstart`).
 
 use shmgen::build::BuiltSample;
 use shmgen::cameras::Camera;
@@ -558,10 +559,13 @@ fn main() {
         return stage_breakdowns(staged);
     }
     println!("| row | 1 thread | {cores} threads |");
-    for (name, recipe) in &rows {
+    for (name, recipe) in rows.iter().filter(|(name, _)| name.contains(&only)) {
         let one = rate(recipe, 1, runs);
         let all = rate(recipe, cores, runs);
         println!("| {name} | {one:.1} pairs/s | {all:.1} pairs/s |");
+    }
+    if !only.is_empty() {
+        return;
     }
     resolution_ratio(cores, runs);
     streaming(setting("SHMGEN_BENCH_STREAM", 100_000));

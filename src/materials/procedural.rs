@@ -76,6 +76,8 @@ pub struct Shader {
     brightness: f64,
     /// The material's linear base colour times `brightness`.
     albedo: [f64; 3],
+    /// Whether the surface varies from point to point (asked at every pixel).
+    textured: bool,
 }
 
 /// Share of a pixel a crack must cover for the pixel to be labelled a crack.
@@ -199,6 +201,9 @@ impl Shader {
             pith,
             brightness,
             albedo: material.albedo().map(|c| c * brightness),
+            textured: material.base != Base::Plain
+                || !material.conditions.is_empty()
+                || material.texture != Texture::Procedural,
         }
     }
 
@@ -219,8 +224,7 @@ impl Shader {
 
     /// Whether the surface varies from point to point.
     pub fn textured(&self) -> bool {
-        let m = &self.material;
-        m.base != Base::Plain || !m.conditions.is_empty() || m.texture != Texture::Procedural
+        self.textured
     }
 
     /// Mean linear albedo, without texture.

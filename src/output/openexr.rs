@@ -51,7 +51,7 @@ pub fn float_exr(
             let background = (rows.len() == LINES_PER_BLOCK)
                 && channels
                     .iter()
-                    .all(|(_, values)| values[pixels.clone()].iter().all(|v| v.to_bits() == 0));
+                    .all(|(_, values)| all_zero(&values[pixels.clone()]));
             if background {
                 empty
                     .get_or_init(|| zip_block(&raw_block(rows.clone(), w, channels)))
@@ -77,6 +77,13 @@ pub fn float_exr(
         out.extend_from_slice(block);
     }
     out
+}
+
+/// Whether every value is +0.0 (a background pixel), in runs the compiler can vectorise.
+fn all_zero(values: &[f32]) -> bool {
+    values
+        .chunks(64)
+        .all(|run| run.iter().fold(0, |any, v| any | v.to_bits()) == 0)
 }
 
 /// Magic number, version 2 (single-part scanline, short names) and the header's attributes,
@@ -132,11 +139,15 @@ fn c_string(name: &str) -> Vec<u8> {
 /// The uncompressed bytes of scanlines `rows`: each line holds every channel's samples in
 /// turn, little-endian.
 fn raw_block(rows: std::ops::Range<usize>, width: usize, channels: &[(&str, &[f32])]) -> Vec<u8> {
-    let mut raw = Vec::with_capacity(rows.len() * width * 4 * channels.len());
+    let line = 4 * width;
+    let mut raw = vec![0u8; rows.len() * channels.len() * line];
+    let mut lines = raw.chunks_exact_mut(line);
     for row in rows {
         for (_, values) in channels {
-            for v in &values[row * width..(row + 1) * width] {
-                raw.extend_from_slice(&v.to_le_bytes());
+            let out = lines.next().expect("one line per row and channel");
+            let samples = &values[row * width..(row + 1) * width];
+            for (bytes, v) in out.chunks_exact_mut(4).zip(samples) {
+                bytes.copy_from_slice(&v.to_le_bytes());
             }
         }
     }
@@ -158,19 +169,23 @@ fn zip_block(raw: &[u8]) -> Vec<u8> {
 /// follow each other), then each byte replaced by its difference from the previous one + 128.
 fn predicted(raw: &[u8]) -> Vec<u8> {
     let half = raw.len().div_ceil(2);
-    let mut out = vec![0u8; raw.len()];
-    let (evens, odds) = out.split_at_mut(half);
-    for (i, pair) in raw.chunks(2).enumerate() {
-        evens[i] = pair[0];
-        if let Some(&odd) = pair.get(1) {
-            odds[i] = odd;
-        }
+    let mut split = vec![0u8; raw.len()];
+    let (evens, odds) = split.split_at_mut(half);
+    let pairs = raw.chunks_exact(2);
+    if let [last] = pairs.remainder() {
+        evens[half - 1] = *last;
     }
-    let mut previous = out.first().copied().unwrap_or(0);
-    for byte in out.iter_mut().skip(1) {
-        let current = *byte;
-        *byte = current.wrapping_sub(previous).wrapping_add(128);
-        previous = current;
+    for ((pair, even), odd) in pairs.zip(evens.iter_mut()).zip(odds.iter_mut()) {
+        *even = pair[0];
+        *odd = pair[1];
+    }
+    // Each difference is of two split bytes, not of an earlier difference: the loop carries
+    // nothing from one byte to the next.
+    let mut out = split.clone();
+    if let Some(rest) = out.get_mut(1..) {
+        for ((out, &current), &previous) in rest.iter_mut().zip(&split[1..]).zip(&split) {
+            *out = current.wrapping_sub(previous).wrapping_add(128);
+        }
     }
     out
 }

@@ -181,16 +181,14 @@ pub fn shade(
     let width = g.width as usize;
     let plain_background = matches!(backdrop, Backdrop::Colour(_)).then(|| encode(s.background));
     // Only pixels next to a hit can be an edge, and on a plain background only hits need work.
-    let (rows, cols) = hit_bounds(g);
+    let spans = hit_spans(g);
     // Centre rays: the shaded colour, and (for anti-aliasing) the untextured one.
     let mut rgb = match plain_background {
         Some(bytes) => bytes.repeat(g.triangle.len()),
         None => vec![0u8; g.triangle.len() * 3],
     };
-    // On a plain background only the hits' bounding box needs shading.
     let span = |row: usize| match plain_background {
-        Some(_) if !rows.contains(&row) => 0..0,
-        Some(_) => cols.clone(),
+        Some(_) => spans[row].clone(),
         None => 0..width,
     };
     if !antialias {
@@ -204,28 +202,35 @@ pub fn shade(
         .zip(flat.par_chunks_mut(width * 3))
         .enumerate()
         .for_each(|(row, (out, flat))| s.centre_row(g, row, span(row), out, Some(flat)));
-    s.antialias_edges(g, &flat, (rows, cols), &mut rgb);
+    s.antialias_edges(g, &flat, &spans, &mut rgb);
     rgb
 }
 
-/// Rows and columns holding a hit, widened by one pixel (their neighbours).
-fn hit_bounds(g: &GBuffer) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
-    let (width, height) = (g.width as usize, g.height as usize);
-    let (mut r0, mut r1, mut c0, mut c1) = (usize::MAX, 0, usize::MAX, 0);
-    for (row, line) in g.triangle.chunks(width).enumerate() {
-        let Some(first) = line.iter().position(|&t| t != NO_HIT) else {
-            continue;
-        };
-        let last = line.iter().rposition(|&t| t != NO_HIT).unwrap_or(first);
-        (r0, r1, c0, c1) = (r0.min(row), row, c0.min(first), c1.max(last));
+/// The columns of each row from its first hit to its last (empty for a row without one).
+fn hit_spans(g: &GBuffer) -> Vec<std::ops::Range<usize>> {
+    g.triangle
+        .chunks(g.width as usize)
+        .map(|line| match line.iter().position(|&t| t != NO_HIT) {
+            None => 0..0,
+            Some(first) => first..line.iter().rposition(|&t| t != NO_HIT).unwrap_or(first) + 1,
+        })
+        .collect()
+}
+
+/// The columns of `row` that hold a hit or touch one (given every row's `hit_spans`): the only
+/// pixels that can be an edge.
+fn near_hits(spans: &[std::ops::Range<usize>], row: usize, width: usize) -> std::ops::Range<usize> {
+    let around = &spans[row.saturating_sub(1)..(row + 2).min(spans.len())];
+    let (first, end) = around
+        .iter()
+        .filter(|span| !span.is_empty())
+        .fold((usize::MAX, 0), |(first, end), span| {
+            (first.min(span.start), end.max(span.end))
+        });
+    if first == usize::MAX {
+        return 0..0;
     }
-    if r0 == usize::MAX {
-        return (0..0, 0..0);
-    }
-    (
-        r0.saturating_sub(1)..(r1 + 2).min(height),
-        c0.saturating_sub(1)..(c1 + 2).min(width),
-    )
+    first.saturating_sub(1)..(end + 1).min(width)
 }
 
 impl<S: Surfaces> Shading<'_, S> {
@@ -272,13 +277,14 @@ impl<S: Surfaces> Shading<'_, S> {
         }
     }
 
-    /// Re-shades from four fixed sub-pixel rays every pixel (within `rows` × `cols`) whose
-    /// `flat` colour, or whether it sees a surface, differs from a neighbour's.
+    /// Re-shades from four fixed sub-pixel rays every pixel (near the hits of `spans`, see
+    /// `hit_spans`) whose `flat` colour, or whether it sees a surface, differs from a
+    /// neighbour's.
     fn antialias_edges(
         &self,
         g: &GBuffer,
         flat: &[u8],
-        (rows, cols): (std::ops::Range<usize>, std::ops::Range<usize>),
+        spans: &[std::ops::Range<usize>],
         rgb: &mut [u8],
     ) {
         let width = g.width as usize;
@@ -295,10 +301,9 @@ impl<S: Surfaces> Shading<'_, S> {
         };
         rgb.par_chunks_mut(width * 3)
             .enumerate()
-            .filter(|(row, _)| rows.contains(row))
             .for_each(|(row, out)| {
                 let mut last = LastMatte::default();
-                for col in cols.clone() {
+                for col in near_hits(spans, row, width) {
                     let i = row * width + col;
                     let neighbours = [
                         (col > 0).then(|| i - 1),
