@@ -99,9 +99,12 @@ pub(super) fn rasterise(
             NEAREST.with_borrow_mut(|nearest| {
                 // Read only where a triangle is recorded: what it held before does not matter.
                 nearest.resize(depth.len(), 0.0);
+                // The band's pixels from the first covered to the last: the others stay empty.
+                let mut covered = usize::MAX..0;
                 for t in binned {
                     cover(t, rows.clone(), width, |row, col| {
                         let i = (row - rows.start) * width + col;
+                        covered = covered.start.min(i)..covered.end.max(i + 1);
                         let d = depth_along(t.original, rays.through(row, col));
                         let nearer = triangle[i] == NO_HIT
                             || d < nearest[i]
@@ -112,8 +115,10 @@ pub(super) fn rasterise(
                         }
                     });
                 }
-                for ((out, &d), tri) in depth.iter_mut().zip(&nearest[..]).zip(triangle.iter_mut())
-                {
+                let covered = covered.start.min(covered.end)..covered.end;
+                let depth = &mut depth[covered.clone()];
+                let nearest = &nearest[covered.clone()];
+                for ((out, &d), tri) in depth.iter_mut().zip(nearest).zip(&mut triangle[covered]) {
                     // A depth that leaves f32's range is no surface, as for traced rays.
                     let d = d as f32;
                     if *tri != NO_HIT && d > 0.0 && d.is_finite() {

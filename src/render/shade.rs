@@ -107,6 +107,9 @@ struct Shading<'a, S: Surfaces> {
     /// Whether the light is the same at every point of a face: lights from fixed directions
     /// without shadows, no sky, ground or environment (whose occlusion and bounce vary).
     uniform_light: bool,
+    /// The camera-axes x of each column's centre ray, when the lens does not distort: x then
+    /// depends on the column alone (the same bits as `ray_through`, divided once per column).
+    pinhole_columns: Option<Vec<f64>>,
 }
 
 /// What the sub-rays of one edge pixel found, by the triangle they found it on: one entry per
@@ -145,6 +148,26 @@ impl<T: Copy> FoundInPixel<T> {
 #[derive(Default)]
 struct LastMatte(Option<((u32, bool), ([f64; 3], [f64; 3]))>);
 
+/// The linear colour last encoded and its sRGB bytes: neighbouring pixels often show the
+/// same colour (a matte face under uniform light), and then need no second encoding.
+struct LastEncoded([f64; 3], [u8; 3]);
+
+impl Default for LastEncoded {
+    fn default() -> Self {
+        // NaN equals nothing: the first colour is always encoded.
+        LastEncoded([f64::NAN; 3], [0; 3])
+    }
+}
+
+impl LastEncoded {
+    fn encode(&mut self, linear: [f64; 3]) -> [u8; 3] {
+        if linear != self.0 {
+            *self = LastEncoded(linear, encode(linear));
+        }
+        self.1
+    }
+}
+
 /// RGB8 image (sRGB) of the G-buffer.
 pub fn shade(
     g: &GBuffer,
@@ -177,6 +200,11 @@ pub fn shade(
             && lighting.sky.is_none()
             && lighting.ground.is_none()
             && (lighting.sun.is_none() || !lighting.shadows),
+        pinhole_columns: camera.intrinsics.distortion.is_none().then(|| {
+            (0..camera.intrinsics.width)
+                .map(|col| camera.intrinsics.ray_through_pixel(0, col).x)
+                .collect()
+        }),
     };
     let width = g.width as usize;
     let plain_background = matches!(backdrop, Backdrop::Colour(_)).then(|| encode(s.background));
@@ -204,6 +232,11 @@ pub fn shade(
         .for_each(|(row, (out, flat))| s.centre_row(g, row, span(row), out, Some(flat)));
     s.antialias_edges(g, &flat, &spans, &mut rgb);
     rgb
+}
+
+/// Whether two sRGB colours differ by more than one level in a channel.
+fn visibly_different(a: [u8; 3], b: [u8; 3]) -> bool {
+    a != b && a.iter().zip(&b).any(|(x, y)| x.abs_diff(*y) > 1)
 }
 
 /// The columns of each row from its first hit to its last (empty for a row without one).
@@ -248,7 +281,10 @@ impl<S: Surfaces> Shading<'_, S> {
     ) {
         let width = g.width as usize;
         let plain_background = matches!(self.backdrop, Backdrop::Colour(_));
+        let k = self.camera.intrinsics;
+        let row_y = k.ray_through_pixel(row as u32, 0).y;
         let mut last = LastMatte::default();
+        let (mut shaded, mut untextured) = (LastEncoded::default(), LastEncoded::default());
         for col in span {
             let i = row * width + col;
             let hit = (g.triangle[i] != NO_HIT).then(|| (g.depth[i], g.triangle[i]));
@@ -256,14 +292,18 @@ impl<S: Surfaces> Shading<'_, S> {
                 continue;
             }
             let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
-            let (linear, unshadowed) = self.radiance_with_irradiance(hit, u, v, &mut last);
-            let colour = encode(linear);
+            let view = match &self.pinhole_columns {
+                Some(x) => DVec3::new(x[col], row_y, 1.0),
+                None => k.ray_through(u, v),
+            };
+            let (linear, unshadowed) = self.radiance_with_irradiance(hit, view, (u, v), &mut last);
+            let colour = shaded.encode(linear);
             out[3 * col..3 * col + 3].copy_from_slice(&colour);
             if let Some(flat) = flat.as_deref_mut() {
                 let flat_colour = match hit {
                     Some((_, tri)) if self.surfaces.textured(tri) => {
                         let film = &self.lighting.film;
-                        encode(reflected(
+                        untextured.encode(reflected(
                             film,
                             self.surfaces.flat(tri),
                             unshadowed,
@@ -288,16 +328,10 @@ impl<S: Surfaces> Shading<'_, S> {
         rgb: &mut [u8],
     ) {
         let width = g.width as usize;
+        let hit = |i: usize| g.triangle[i] != NO_HIT;
+        let colour = |i: usize| [flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]];
         let differs = |i: usize, j: usize| {
-            let (a, b) = (g.triangle[i], g.triangle[j]);
-            if (a == NO_HIT) != (b == NO_HIT) {
-                return true;
-            }
-            a != NO_HIT
-                && flat[3 * i..3 * i + 3]
-                    .iter()
-                    .zip(&flat[3 * j..3 * j + 3])
-                    .any(|(x, y)| x.abs_diff(*y) > 1)
+            hit(i) != hit(j) || (hit(i) && visibly_different(colour(i), colour(j)))
         };
         rgb.par_chunks_mut(width * 3)
             .enumerate()
@@ -305,13 +339,11 @@ impl<S: Surfaces> Shading<'_, S> {
                 let mut last = LastMatte::default();
                 for col in near_hits(spans, row, width) {
                     let i = row * width + col;
-                    let neighbours = [
-                        (col > 0).then(|| i - 1),
-                        (col + 1 < width).then(|| i + 1),
-                        (row > 0).then(|| i - width),
-                        (i + width < g.triangle.len()).then(|| i + width),
-                    ];
-                    if !neighbours.into_iter().flatten().any(|j| differs(i, j)) {
+                    let edge = (col > 0 && differs(i, i - 1))
+                        || (col + 1 < width && differs(i, i + 1))
+                        || (row > 0 && differs(i, i - width))
+                        || (i + width < g.triangle.len() && differs(i, i + width));
+                    if !edge {
                         continue;
                     }
                     let mean = self.edge_pixel(col, row, &mut last);
@@ -356,16 +388,15 @@ impl<S: Surfaces> Shading<'_, S> {
         })
     }
 
-    /// Linear radiance along the ray through image point (u, v), given what it hit, and the
-    /// diffuse irradiance there as if no shadow fell (zero for the backdrop).
+    /// Linear radiance along the ray `view` through image point (u, v), given what it hit,
+    /// and the diffuse irradiance there as if no shadow fell (zero for the backdrop).
     fn radiance_with_irradiance(
         &self,
         hit: Option<(f32, u32)>,
-        u: f64,
-        v: f64,
+        view: DVec3,
+        (u, v): (f64, f64),
         last: &mut LastMatte,
     ) -> ([f64; 3], [f64; 3]) {
-        let view = self.camera.intrinsics.ray_through(u, v);
         match hit {
             None => (self.backdrop(view, u, v), [0.0; 3]),
             Some((depth, tri)) => self.matte_radiance(view, depth, tri, (u, v), last),
@@ -628,7 +659,9 @@ fn power(x: f64, e: f64) -> f64 {
 /// Linear colour → sRGB 8-bit.
 fn encode(linear: [f64; 3]) -> [u8; 3] {
     let lut = srgb_lut();
-    linear.map(|c| lut[round_half_up(c.clamp(0.0, 1.0) * (LUT_SIZE - 1) as f64)])
+    let byte = |c: f64| lut[round_half_up(c.clamp(0.0, 1.0) * (LUT_SIZE - 1) as f64)];
+    // Spelled out: `array::map` is not always inlined here, and this runs for every pixel.
+    [byte(linear[0]), byte(linear[1]), byte(linear[2])]
 }
 
 /// `y.round()` for y ≥ 0 (NaN gives 0, as `round` does): ⌊2y⌋ is exact (doubling is), and
