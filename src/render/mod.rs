@@ -16,6 +16,7 @@
 
 mod daylight;
 mod fields;
+mod gloss;
 mod raster;
 mod shade;
 mod shared_bvh;

@@ -14,13 +14,13 @@
 //! Texture detail is filtered by the materials themselves, so it never triggers extra rays.
 
 use super::daylight::{DiskPattern, environment_light, pixel_turn, sky_light, sun_visibility};
+use super::gloss::Lobe;
 use super::trace::{GBuffer, NO_HIT, TraceMesh};
 use crate::cameras::Camera;
 use crate::materials::light::turn_about_z;
 use crate::materials::{Backdrop, Film, Lighting, Surface, srgb_to_linear};
 use glam::DVec3;
 use rayon::prelude::*;
-use std::f64::consts::PI;
 use std::sync::OnceLock;
 
 /// The surfaces of a mesh, by triangle.
@@ -479,8 +479,10 @@ impl<S: Surfaces> Shading<'_, S> {
         pixel: (f64, f64),
     ) -> Light {
         let l = self.lighting;
-        let gloss = (surface.specular > 0.0).then_some(surface);
-        let to_eye = gloss.map(|_| -(self.camera.rotation * view).normalize());
+        let gloss = Lobe::of(surface);
+        let to_eye = gloss
+            .as_ref()
+            .map(|_| -(self.camera.rotation * view).normalize());
         let mut light = Light {
             diffuse: [l.ambient; 3],
             unshadowed: [l.ambient; 3],
@@ -504,8 +506,8 @@ impl<S: Surfaces> Shading<'_, S> {
             for k in 0..3 {
                 light.diffuse[k] += colour[k] * cos;
             }
-            if let (Some(s), Some(to_eye)) = (gloss, to_eye) {
-                let glint = blinn_phong(n, direction, to_eye, s) * cos;
+            if let (Some(lobe), Some(to_eye)) = (&gloss, to_eye) {
+                let glint = lobe.glint(n, direction, to_eye) * cos;
                 for k in 0..3 {
                     light.specular[k] += colour[k] * glint;
                 }
@@ -634,26 +636,6 @@ pub(super) fn hit_geometry(
     // A pixel stretches over a surface seen at a slant (up to ten times, at grazing rays).
     let slant = normal.dot(-(camera.rotation * view).normalize()).max(0.1);
     (point, normal, depth / k.fx.min(k.fy) / slant)
-}
-
-/// Normalised Blinn–Phong lobe with Schlick's Fresnel, for a light along `l`.
-fn blinn_phong(n: DVec3, l: DVec3, to_eye: DVec3, s: &Surface) -> f64 {
-    let h = (l + to_eye).normalize_or_zero();
-    let alpha = (s.roughness * s.roughness).max(1e-3);
-    let exponent = (2.0 / (alpha * alpha) - 2.0).max(0.0);
-    let fresnel = s.specular + (1.0 - s.specular) * (1.0 - to_eye.dot(h).max(0.0)).powi(5);
-    fresnel * (exponent + 8.0) / (8.0 * PI) * power(n.dot(h).max(0.0), exponent)
-}
-
-/// x^e for x in [0, 1], through libm's exp2 and log2 (relative error below 1e-13, far below
-/// an 8-bit step). Not the platform's pow: glibc picks an FMA or a plain version by CPU,
-/// which may round differently, and the image must be the same on every x86-64 machine;
-/// libm's own pow is three times slower, a tenth of a textured view's time.
-fn power(x: f64, e: f64) -> f64 {
-    if x == 0.0 {
-        return if e == 0.0 { 1.0 } else { 0.0 };
-    }
-    libm::exp2(e * libm::log2(x))
 }
 
 /// Linear colour → sRGB 8-bit.
