@@ -697,4 +697,43 @@ mod tests {
             assert_eq!(round_half_up(y), y.round() as usize, "{y}");
         }
     }
+
+    #[test]
+    fn edges_are_looked_for_wherever_a_hit_is_or_touches() {
+        let (width, height) = (23usize, 17usize);
+        // Scattered hits (a fixed arithmetic pattern), a row without any, hits on the borders.
+        let hits = |row: usize, col: usize| {
+            row != 8 && ((row * 7 + col * 13) % 29 == 0 || (row == 0 && col == 22))
+        };
+        let triangle = (0..height)
+            .flat_map(|row| (0..width).map(move |col| if hits(row, col) { 1 } else { NO_HIT }))
+            .collect();
+        let g = GBuffer {
+            width: width as u32,
+            height: height as u32,
+            depth: vec![1.0; width * height],
+            triangle,
+        };
+        let spans = hit_spans(&g);
+        for row in 0..height {
+            let searched = near_hits(&spans, row, width);
+            for col in 0..width {
+                let touched = [(0, 0), (0, -1), (0, 1), (-1, 0), (1, 0)]
+                    .iter()
+                    .any(|(dr, dc)| {
+                        let (r, c) = (row as isize + dr, col as isize + dc);
+                        (0..height as isize).contains(&r)
+                            && (0..width as isize).contains(&c)
+                            && hits(r as usize, c as usize)
+                    });
+                assert!(!touched || searched.contains(&col), "({row}, {col})");
+            }
+        }
+        // Nothing to look for far from every hit.
+        let empty = GBuffer {
+            triangle: vec![NO_HIT; width * height],
+            ..g
+        };
+        assert!((0..height).all(|row| near_hits(&hit_spans(&empty), row, width).is_empty()));
+    }
 }
