@@ -1,6 +1,6 @@
-//! Shading into RGB: diffuse and glossy reflection of the sun, the sky, an ambient term and
-//! (by default) a studio key and fill light fixed to the camera, with optional sun shadows
-//! (soft over the sun's disk), sky occlusion and a ground's bounce (`daylight`); the
+//! Shading into RGB: diffuse and glossy (`gloss`) reflection of the sun, the sky, an ambient
+//! term and (by default) a studio key and fill light fixed to the camera, with optional sun
+//! shadows (soft over the sun's disk), sky occlusion and a ground's bounce (`daylight`); the
 //! background is a colour, a sky gradient, an image or an environment map (whose SH
 //! irradiance may also replace the sky's light). Linear light becomes a pixel through
 //! the film's exposure and tone curve, then sRGB.
