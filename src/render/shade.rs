@@ -98,6 +98,8 @@ struct Shading<'a, S: Surfaces> {
     surfaces: &'a S,
     backdrop: &'a Backdrop,
     background: [f64; 3],
+    /// Whether the backdrop is one colour (then pixels without a hit are filled, not shaded).
+    plain_background: bool,
     /// The studio lights in world axes, for this view.
     studio: Option<[(DVec3, f64); 2]>,
     /// Shadow rays over the sun's disk.
@@ -184,6 +186,7 @@ pub fn shade(
         lighting,
         surfaces,
         backdrop,
+        plain_background: matches!(backdrop, Backdrop::Colour(_)),
         background: match backdrop {
             Backdrop::Colour(c) => c.map(|c| srgb_to_linear(f64::from(c) / 255.0)),
             _ => [0.0; 3],
@@ -207,7 +210,7 @@ pub fn shade(
         }),
     };
     let width = g.width as usize;
-    let plain_background = matches!(backdrop, Backdrop::Colour(_)).then(|| encode(s.background));
+    let plain_background = s.plain_background.then(|| encode(s.background));
     // Only pixels next to a hit can be an edge, and on a plain background only hits need work.
     let spans = hit_spans(g);
     // Centre rays: the shaded colour, and (for anti-aliasing) the untextured one.
@@ -280,7 +283,6 @@ impl<S: Surfaces> Shading<'_, S> {
         mut flat: Option<&mut [u8]>,
     ) {
         let width = g.width as usize;
-        let plain_background = matches!(self.backdrop, Backdrop::Colour(_));
         let k = self.camera.intrinsics;
         let row_y = k.ray_through_pixel(row as u32, 0).y;
         let mut last = LastMatte::default();
@@ -288,7 +290,7 @@ impl<S: Surfaces> Shading<'_, S> {
         for col in span {
             let i = row * width + col;
             let hit = (g.triangle[i] != NO_HIT).then(|| (g.depth[i], g.triangle[i]));
-            if hit.is_none() && plain_background {
+            if hit.is_none() && self.plain_background {
                 continue;
             }
             let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);

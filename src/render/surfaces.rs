@@ -96,7 +96,7 @@ impl Surfaces for SampleSurfaces<'_> {
 
     fn matte(&self, tri: u32) -> bool {
         let shader = self.shader_of(tri).0;
-        !shader.textured() && shader.untextured().specular == 0.0
+        !shader.textured() && shader.material().specular == 0.0
     }
 
     fn continues(&self, a: u32, b: u32) -> bool {
