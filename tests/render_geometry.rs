@@ -727,7 +727,7 @@ fn rasterised_matches_traced(mesh: &Mesh, trace: &TraceMesh, cam: &Camera, c: us
     let width = cam.intrinsics.width as usize;
     let pixels = width * cam.intrinsics.height as usize;
     assert!(
-        mesh.triangles.len() <= pixels / 2,
+        mesh.triangles.len() <= 3 * pixels,
         "coarse enough to be rasterised"
     );
     let g = trace.trace(cam);
@@ -758,10 +758,15 @@ fn rasterised_matches_traced(mesh: &Mesh, trace: &TraceMesh, cam: &Camera, c: us
 /// Cameras about a mesh at 203×117: near, at a pole, inside its bounding sphere, so far that
 /// it is a speck, and through a distorting lens (last).
 fn probing_cameras(mesh: &Mesh) -> Vec<Camera> {
-    let mut lens = Intrinsics::from_fov_y(203, 117, 1.1);
+    probing_cameras_of_size(mesh, (203, 117))
+}
+
+/// `probing_cameras` with images of `width` × `height` pixels.
+fn probing_cameras_of_size(mesh: &Mesh, (width, height): (u32, u32)) -> Vec<Camera> {
+    let mut lens = Intrinsics::from_fov_y(width, height, 1.1);
     lens.distortion.k1 = -0.04;
     lens.distortion.p2 = 0.002;
-    let pinhole = Intrinsics::from_fov_y(203, 117, 1.1);
+    let pinhole = Intrinsics::from_fov_y(width, height, 1.1);
     let (centre, radius) = mesh.bounding_sphere().unwrap();
     let orbit = |k, yaw: f64, pitch: f64, distance| {
         let o = Orbit {
@@ -807,10 +812,29 @@ fn tiled_culled_tracing_matches_one_ray_per_pixel() {
 #[test]
 fn rasterised_views_match_one_ray_per_pixel() {
     for beam in deformed_beams() {
-        // Coarse enough to be rasterised at 203×117 (finer meshes are traced).
+        // Coarse enough to be rasterised at 203×117 (meshes of over 3 triangles per pixel are
+        // traced).
         let mesh = mesh_beam(&beam, 2e-2).unwrap().mesh;
         let trace = TraceMesh::build(&mesh);
         for (c, cam) in probing_cameras(&mesh).iter().enumerate() {
+            rasterised_matches_traced(&mesh, &trace, cam, c);
+        }
+    }
+}
+
+/// Meshes with more triangles than the image has pixels (most triangles cover no pixel
+/// centre, many pixels see several triangles' edges) are rasterised up to 3 triangles per
+/// pixel, and must still find what one ray per pixel finds.
+#[test]
+fn meshes_finer_than_the_pixels_are_rasterised_exactly() {
+    let beams = deformed_beams();
+    // 1,196 and 2,024 triangles, seen at 31×18 = 558 and 40×23 = 920 pixels.
+    let fine = [(&beams[1], 2e-3, (31, 18)), (&beams[3], 2e-2, (40, 23))];
+    for (beam, tolerance, size) in fine {
+        let mesh = mesh_beam(beam, tolerance).unwrap().mesh;
+        assert!(mesh.triangles.len() > 2 * (size.0 * size.1) as usize);
+        let trace = TraceMesh::build(&mesh);
+        for (c, cam) in probing_cameras_of_size(&mesh, size).iter().enumerate() {
             rasterised_matches_traced(&mesh, &trace, cam, c);
         }
     }

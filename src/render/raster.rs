@@ -34,59 +34,105 @@ thread_local! {
     /// Exact (f64) depth of the nearest surface so far at each pixel of the band a thread is
     /// rasterising: kept between bands and views rather than allocated and filled for each.
     static NEAREST: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// The triangles binned to each band of the view a thread is rasterising: kept between
+    /// views with their capacity, so a large mesh's bins are not allocated (and their pages
+    /// faulted in) again for every view.
+    static BINS: std::cell::RefCell<Vec<Vec<Projected>>> =
+        const { std::cell::RefCell::new(Vec::new()) };
 }
 
-/// A triangle projected into the image: pixel coordinates of its corners and its index in
-/// the scene mesh.
+/// A scene triangle as the rasteriser takes it.
+pub(super) struct SceneTriangle {
+    /// Its index in the scene mesh.
+    pub original: u32,
+    /// World corners.
+    pub corners: [DVec3; 3],
+    /// Its plane, seen from the camera.
+    pub plane: Plane,
+}
+
+/// A triangle's plane as seen from a camera centre o: unit normal n and n · (a − o) for a
+/// point a of the plane. The ray from o along d meets it at parameter (n · (a − o)) / (n · d)
+/// (infinite when the ray runs along the plane); for d of unit camera z, that is the planar
+/// depth.
+#[derive(Clone, Copy)]
+pub(super) struct Plane {
+    /// Unit normal n.
+    pub normal: DVec3,
+    /// n · (a − o).
+    pub ahead: f64,
+}
+
+impl Plane {
+    /// Ray parameter where the ray from the camera centre along `dir` meets the plane.
+    pub fn hit(&self, dir: DVec3) -> f64 {
+        self.ahead / self.normal.dot(dir)
+    }
+}
+
+/// A triangle projected into the image: pixel coordinates of its corners, its index in the
+/// scene mesh, its plane and the rows and columns of pixel centres within its bounds. The
+/// plane travels with it so that depth tests read nothing from the mesh: in a band, triangles
+/// come from all over a large mesh, and a look-up by index would miss the cache each time.
 #[derive(Clone, Copy)]
 struct Projected {
     corners: [DVec2; 3],
+    plane: Plane,
     original: u32,
+    rows: [u32; 2],
+    cols: [u32; 2],
 }
 
-/// The geometric buffer of `camera`'s view of `triangles` (world corners with their scene
-/// indices), or None when rasterising would not be exact (a distorting lens, or a corner
-/// closer to the camera's plane than `near` metres, or behind it). `depth_along(tri, dir)`
-/// is the planar depth at which the ray along world `dir` (unit camera z) meets the plane of
-/// scene triangle `tri`.
+impl Projected {
+    /// The triangle with corners at image points `corners`, or None when its bounds hold no
+    /// pixel centre of a `width` × `height` image (then it covers none).
+    fn new(
+        corners: [DVec2; 3],
+        plane: Plane,
+        original: u32,
+        (width, height): (usize, usize),
+    ) -> Option<Self> {
+        let rows = centre_range(span(corners.map(|c| c.y)), height)?;
+        let cols = centre_range(span(corners.map(|c| c.x)), width)?;
+        let ends = |r: std::ops::Range<usize>| [r.start as u32, r.end as u32];
+        Some(Projected {
+            corners,
+            plane,
+            original,
+            rows: ends(rows),
+            cols: ends(cols),
+        })
+    }
+
+    /// The rows of pixel centres within the triangle's bounds.
+    fn rows(&self) -> std::ops::Range<usize> {
+        self.rows[0] as usize..self.rows[1] as usize
+    }
+
+    /// The columns of pixel centres within the triangle's bounds.
+    fn cols(&self) -> std::ops::Range<usize> {
+        self.cols[0] as usize..self.cols[1] as usize
+    }
+}
+
+/// The geometric buffer of `camera`'s view of `triangles`, or None when rasterising would not
+/// be exact (a distorting lens, or a corner closer to the camera's plane than `near` metres,
+/// or behind it).
 pub(super) fn rasterise(
     camera: &Camera,
     rays: &PrimaryRays,
-    triangles: impl Iterator<Item = (u32, [DVec3; 3])>,
+    triangles: impl Iterator<Item = SceneTriangle>,
     near: f64,
-    depth_along: impl Fn(u32, DVec3) -> f64 + Sync,
 ) -> Option<GBuffer> {
     let k = camera.intrinsics;
     if !k.distortion.is_none() {
         return None;
     }
     let (width, height) = (k.width as usize, k.height as usize);
-    let bands = height.div_ceil(BAND);
-    let mut binned: Vec<Vec<Projected>> = vec![Vec::new(); bands];
-    for (original, corners) in triangles {
-        let mut projected = [DVec2::ZERO; 3];
-        for (out, corner) in projected.iter_mut().zip(corners) {
-            let p = camera.world_to_camera(corner);
-            if !(p.z >= near) {
-                return None;
-            }
-            let (u, v) = k.project(p);
-            *out = DVec2::new(u, v);
-        }
-        let Some(rows) = centre_range(span(projected.map(|c| c.y)), height) else {
-            continue;
-        };
-        if centre_range(span(projected.map(|c| c.x)), width).is_none() {
-            continue;
-        }
-        let triangle = Projected {
-            corners: projected,
-            original,
-        };
-        for bin in &mut binned[rows.start / BAND..rows.end.div_ceil(BAND)] {
-            bin.push(triangle);
-        }
-    }
+    let mut binned = BINS.with_borrow_mut(std::mem::take);
+    binned.iter_mut().for_each(Vec::clear);
+    binned.resize_with(height.div_ceil(BAND), Vec::new);
+    bin(camera, triangles, near, &mut binned)?;
     let mut depth = vec![0.0f32; width * height];
     let mut triangle = vec![NO_HIT; width * height];
     depth
@@ -105,7 +151,7 @@ pub(super) fn rasterise(
                     cover(t, rows.clone(), width, |row, col| {
                         let i = (row - rows.start) * width + col;
                         covered = covered.start.min(i)..covered.end.max(i + 1);
-                        let d = depth_along(t.original, rays.through(row, col));
+                        let d = t.plane.hit(rays.through(row, col));
                         let nearer = triangle[i] == NO_HIT
                             || d < nearest[i]
                             || (d == nearest[i] && t.original < triangle[i]);
@@ -129,12 +175,50 @@ pub(super) fn rasterise(
                 }
             });
         });
+    BINS.with_borrow_mut(|bins| *bins = binned);
     Some(GBuffer {
         width: k.width,
         height: k.height,
         depth,
         triangle,
     })
+}
+
+/// Projects `triangles` through `camera` into `bins` (one per band of rows, empty), each
+/// triangle into every band holding a pixel centre within its bounds; None when a corner is
+/// closer to the camera's plane than `near` (see `rasterise`).
+fn bin(
+    camera: &Camera,
+    triangles: impl Iterator<Item = SceneTriangle>,
+    near: f64,
+    bins: &mut [Vec<Projected>],
+) -> Option<()> {
+    let k = camera.intrinsics;
+    let size = (k.width as usize, k.height as usize);
+    for SceneTriangle {
+        original,
+        corners,
+        plane,
+    } in triangles
+    {
+        let mut projected = [DVec2::ZERO; 3];
+        for (out, corner) in projected.iter_mut().zip(corners) {
+            let p = camera.world_to_camera(corner);
+            if !(p.z >= near) {
+                return None;
+            }
+            let (u, v) = k.project(p);
+            *out = DVec2::new(u, v);
+        }
+        let Some(triangle) = Projected::new(projected, plane, original, size) else {
+            continue;
+        };
+        let rows = triangle.rows();
+        for bin in &mut bins[rows.start / BAND..rows.end.div_ceil(BAND)] {
+            bin.push(triangle);
+        }
+    }
+    Some(())
 }
 
 /// The least and greatest of three coordinates.
@@ -146,12 +230,32 @@ fn span(coordinates: [f64; 3]) -> (f64, f64) {
 /// Pixels whose centre (index + 0.5) lies within `lo..=hi` along one image axis of `size`
 /// pixels, or None when there is none.
 fn centre_range((lo, hi): (f64, f64), size: usize) -> Option<std::ops::Range<usize>> {
-    let first = (lo - 0.5).ceil().max(0.0);
-    let last = (hi - 0.5).floor().min(size as f64 - 1.0);
+    // Clamped to the image give or take a pixel first (NaN: to the far end, as `max` and
+    // `min` take it), where rounding by conversion to an integer is exact.
+    let edge = size as f64;
+    let first = ceil_small((lo - 0.5).max(-1.0).min(edge)).max(0);
+    let last = floor_small((hi - 0.5).min(edge).max(-1.0)).min(size as i64 - 1);
     (first <= last).then(|| first as usize..last as usize + 1)
 }
 
-/// Calls `visit(row, col)` for every pixel of `rows` whose centre the triangle covers.
+/// ⌈x⌉ of an x well inside i64's range: exact, without a call into libm (baseline x86-64
+/// has no rounding instruction).
+fn ceil_small(x: f64) -> i64 {
+    let truncated = x as i64;
+    truncated + i64::from((truncated as f64) < x)
+}
+
+/// ⌊x⌋ of an x well inside i64's range (see `ceil_small`).
+fn floor_small(x: f64) -> i64 {
+    let truncated = x as i64;
+    truncated - i64::from((truncated as f64) > x)
+}
+
+/// Columns of pixel centres up to which a triangle's bounds are tested whole.
+const NARROW: usize = 4;
+
+/// Calls `visit(row, col)` for every pixel of `rows` whose centre the triangle covers (only
+/// the triangle's own rows are looked at).
 fn cover(
     t: &Projected,
     rows: std::ops::Range<usize>,
@@ -170,10 +274,17 @@ fn cover(
     if inside.contains(&0) {
         return;
     }
-    for row in rows {
+    let (own_rows, own_cols) = (t.rows(), t.cols());
+    for row in rows.start.max(own_rows.start)..rows.end.min(own_rows.end) {
         let v = row as f64 + 0.5;
-        let Some(cols) = row_span(&t.corners, v, width) else {
-            continue;
+        // Narrow triangles are tested over their bounds; wide ones only about each row's span.
+        let cols = if own_cols.len() <= NARROW {
+            own_cols.clone()
+        } else {
+            match row_span(&t.corners, v, width) {
+                Some(span) => span.start.max(own_cols.start)..span.end.min(own_cols.end),
+                None => continue,
+            }
         };
         for col in cols {
             let p = DVec2::new(col as f64 + 0.5, v);
@@ -260,11 +371,10 @@ mod tests {
     fn visits(triangles: &[[DVec2; 3]], size: usize) -> Vec<u32> {
         let mut count = vec![0; size * size];
         for (i, corners) in triangles.iter().enumerate() {
-            let t = Projected {
-                corners: *corners,
-                original: i as u32,
-            };
-            cover(&t, 0..size, size, |row, col| count[row * size + col] += 1);
+            let plane = plane_at(1.0, 0.0);
+            if let Some(t) = Projected::new(*corners, plane, i as u32, (size, size)) {
+                cover(&t, 0..size, size, |row, col| count[row * size + col] += 1);
+            }
         }
         count
     }
@@ -354,12 +464,40 @@ mod tests {
     }
 
     #[test]
+    fn centre_ranges_round_as_libm_does() {
+        // The range as written with libm's ceil and floor.
+        let libm = |(lo, hi): (f64, f64), size: usize| {
+            let first = (lo - 0.5).ceil().max(0.0);
+            let last = (hi - 0.5).floor().min(size as f64 - 1.0);
+            (first <= last).then(|| first as usize..last as usize + 1)
+        };
+        let mut ends = vec![f64::NAN, -1e300, -7.0, 1e300, f64::INFINITY, -f64::INFINITY];
+        for i in -40..=120 {
+            let x = f64::from(i) / 8.0;
+            ends.extend([x, x.next_up(), x.next_down(), -0.0]);
+        }
+        for &lo in &ends {
+            for &hi in &ends {
+                for size in [1, 9, 12] {
+                    assert_eq!(
+                        centre_range((lo, hi), size),
+                        libm((lo, hi), size),
+                        "{lo}..{hi} in {size}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn edge_on_and_empty_triangles_cover_nothing() {
         let line = [at(1.0, 1.0), at(5.0, 5.0), at(9.0, 9.0)];
         let point = [at(3.0, 3.0); 3];
         assert!(visits(&[line, point], 12).iter().all(|&n| n == 0));
     }
 
+    /// Two triangles making the square from (−1, −1) to (1, 1) at z = 0, seen from a camera
+    /// at z = `camera_z` looking down the z axis.
     fn square_facing(camera_z: f64) -> (Camera, Vec<(u32, [DVec3; 3])>) {
         let k = Intrinsics::from_fov_y(32, 32, 1.0);
         let camera = Camera::look_at(k, DVec3::new(0.0, 0.0, camera_z), DVec3::ZERO, DVec3::Y);
@@ -368,9 +506,26 @@ mod tests {
         (camera, vec![(0, [a, b, c]), (1, [a, c, d])])
     }
 
-    /// Planar depth of the plane z = `height` along `dir` from a camera at z = `from`.
-    fn plane_at(from: f64, height: f64) -> impl Fn(u32, DVec3) -> f64 + Sync {
-        move |_, dir| (height - from) / dir.z
+    /// The plane z = `height` seen from a camera at z = `from`.
+    fn plane_at(from: f64, height: f64) -> Plane {
+        Plane {
+            normal: DVec3::Z,
+            ahead: height - from,
+        }
+    }
+
+    /// Scene triangles (index, corners) all in `plane`.
+    fn in_plane(
+        triangles: impl IntoIterator<Item = (u32, [DVec3; 3])>,
+        plane: Plane,
+    ) -> impl Iterator<Item = SceneTriangle> {
+        triangles
+            .into_iter()
+            .map(move |(original, corners)| SceneTriangle {
+                original,
+                corners,
+                plane,
+            })
     }
 
     #[test]
@@ -380,9 +535,8 @@ mod tests {
         let g = rasterise(
             &camera,
             &rays,
-            square.clone().into_iter(),
+            in_plane(square.clone(), plane_at(5.0, 0.0)),
             1e-3,
-            plane_at(5.0, 0.0),
         )
         .unwrap();
         let centre = 16 * 32 + 16;
@@ -390,27 +544,23 @@ mod tests {
         // The same square twice, under other indices and in either order: the lower wins.
         for order in [[2u32, 7], [7, 2]] {
             let twice = square.iter().flat_map(|&(i, t)| order.map(|o| (o + i, t)));
-            let g = rasterise(&camera, &rays, twice, 1e-3, plane_at(5.0, 0.0)).unwrap();
+            let g = rasterise(&camera, &rays, in_plane(twice, plane_at(5.0, 0.0)), 1e-3).unwrap();
             assert_ne!(g.triangle[centre], NO_HIT);
             assert!(g.triangle.iter().all(|&t| t == NO_HIT || t == 2 || t == 3));
         }
         // A nearer plane (the copies numbered 2 and 3) hides a farther one whatever the order.
-        let (near_plane, far_plane) = (plane_at(5.0, 1.0), plane_at(5.0, 0.0));
-        let near = |tri: u32, dir: DVec3| {
-            if tri >= 2 {
-                near_plane(tri, dir)
-            } else {
-                far_plane(tri, dir)
-            }
+        let nearer = || {
+            let copies = square.iter().map(|&(i, t)| (i + 2, t));
+            in_plane(copies, plane_at(5.0, 1.0))
         };
-        let copies = || square.iter().map(|&(i, t)| (i + 2, t));
+        let farther = || in_plane(square.clone(), plane_at(5.0, 0.0));
         for nearer_first in [false, true] {
             let both: Vec<_> = if nearer_first {
-                copies().chain(square.iter().copied()).collect()
+                nearer().chain(farther()).collect()
             } else {
-                square.iter().copied().chain(copies()).collect()
+                farther().chain(nearer()).collect()
             };
-            let g = rasterise(&camera, &rays, both.into_iter(), 1e-3, near).unwrap();
+            let g = rasterise(&camera, &rays, both.into_iter(), 1e-3).unwrap();
             assert!((g.depth[centre] - 4.0).abs() < 1e-6);
             assert!(g.triangle.iter().all(|&t| t == NO_HIT || t >= 2));
         }
@@ -420,13 +570,14 @@ mod tests {
     fn lenses_and_corners_behind_the_camera_are_left_to_ray_tracing() {
         let (camera, square) = square_facing(5.0);
         let rays = PrimaryRays::new(&camera);
+        let plane = plane_at(5.0, 0.0);
         let behind = square
             .iter()
             .map(|&(i, [a, b, c])| (i, [a, b, c + 9.0 * DVec3::Z]));
-        assert!(rasterise(&camera, &rays, behind, 1e-3, plane_at(5.0, 0.0)).is_none());
+        assert!(rasterise(&camera, &rays, in_plane(behind, plane), 1e-3).is_none());
         let mut lens = camera;
         lens.intrinsics.distortion.k1 = -0.01;
         let rays = PrimaryRays::new(&lens);
-        assert!(rasterise(&lens, &rays, square.into_iter(), 1e-3, plane_at(5.0, 0.0)).is_none());
+        assert!(rasterise(&lens, &rays, in_plane(square, plane), 1e-3).is_none());
     }
 }

@@ -1,7 +1,7 @@
 //! BVH construction and primary-ray tracing into a geometric buffer (handing pinhole views
 //! of a mesh in front of the camera to `raster`, which finds the same first hits).
 
-use super::raster::rasterise;
+use super::raster::{Plane, SceneTriangle, rasterise};
 use super::tiles::{PixelRect, TILE, visible_tiles};
 use super::watertight::ShearedRay;
 use crate::cameras::Camera;
@@ -27,10 +27,11 @@ pub struct TraceMesh {
     triangles: Vec<[Vec3A; 3]>,
     /// Original triangle index of each BVH-ordered triangle.
     original: Vec<u32>,
-    /// Outward unit normals, indexed by original triangle.
-    normals: Vec<DVec3>,
-    /// n · a for each original triangle (first vertex a, relative to `anchor`): its plane.
-    offsets: Vec<f64>,
+    /// The plane of each original triangle.
+    planes: Vec<PlaneEquation>,
+    /// The same planes in BVH leaf order, as `triangles`: rasterising reads them in step
+    /// with the corners (through `original` they would be read all over memory).
+    leaf_planes: Vec<PlaneEquation>,
     anchor: DVec3,
     /// Radius about `anchor` of a sphere holding every vertex.
     reach: f64,
@@ -42,6 +43,31 @@ pub struct TraceMesh {
     /// one (see `occluded_within`).
     core_bounds: (DVec3, DVec3),
 }
+
+/// A triangle's plane: outward unit normal n (zero for a degenerate triangle) and n · a for
+/// its first corner a, relative to the mesh's anchor.
+#[derive(Clone, Copy)]
+struct PlaneEquation {
+    normal: DVec3,
+    offset: f64,
+}
+
+impl PlaneEquation {
+    /// The plane seen from `origin` (relative to the anchor).
+    fn seen_from(&self, origin: DVec3) -> Plane {
+        Plane {
+            normal: self.normal,
+            ahead: self.offset - self.normal.dot(origin),
+        }
+    }
+}
+
+/// Triangles per pixel above which a view is traced rather than rasterised: most triangles of
+/// a mesh this fine cover no pixel centre, and projecting them all costs more than walking the
+/// BVH once per pixel. Measured on the benchmark's 10⁶-triangle torus, one thread, ms per view
+/// rasterised against traced: 960² (1.1 triangles per pixel) about 60 faster; 640² (2.4) 10
+/// faster; 480² (4.3) 10 slower.
+const RASTER_LIMIT: usize = 3;
 
 /// Triangles above which a BVH is built for speed rather than quality.
 const LARGE_MESH: usize = 200_000;
@@ -137,19 +163,26 @@ impl TraceMesh {
             let t = &tris[i as usize];
             [t.v0, t.v1, t.v2]
         });
-        let (normals, offsets) = (0..mesh.triangles.len())
+        let planes: Vec<PlaneEquation> = (0..mesh.triangles.len())
             .map(|t| {
                 let [a, b, c] = mesh.triangle(t);
-                let n = (b - a).cross(c - a).normalize_or_zero();
-                (n, n.dot(a - anchor))
+                let normal = (b - a).cross(c - a).normalize_or_zero();
+                PlaneEquation {
+                    normal,
+                    offset: normal.dot(a - anchor),
+                }
             })
-            .unzip();
+            .collect();
         TraceMesh {
+            leaf_planes: bvh
+                .primitive_indices
+                .iter()
+                .map(|&i| planes[i as usize])
+                .collect(),
+            planes,
             triangles: triangles.collect(),
             original: bvh.primitive_indices.clone(),
             bvh,
-            normals,
-            offsets,
             anchor,
             reach: 0.5 * (hi - lo).length(),
             core_diagonal: (core_hi - core_lo).length(),
@@ -163,15 +196,18 @@ impl TraceMesh {
     /// Ray parameter where the ray from world point `origin` along `dir` meets the plane of
     /// `original_triangle`, in f64: infinite when the ray runs along the plane.
     pub fn plane_hit(&self, original_triangle: u32, origin: DVec3, dir: DVec3) -> f64 {
-        let t = original_triangle as usize;
-        let n = self.normals[t];
-        (self.offsets[t] - n.dot(origin - self.anchor)) / n.dot(dir)
+        self.plane_from(original_triangle, origin).hit(dir)
+    }
+
+    /// The plane of `original_triangle` seen from world point `origin`.
+    fn plane_from(&self, original_triangle: u32, origin: DVec3) -> Plane {
+        self.planes[original_triangle as usize].seen_from(origin - self.anchor)
     }
 
     /// Unit normal of a triangle of the scene mesh (by its original index), following its
     /// winding; zero for a degenerate triangle.
     pub fn normal(&self, original_triangle: u32) -> DVec3 {
-        self.normals[original_triangle as usize]
+        self.planes[original_triangle as usize].normal
     }
 
     /// The first surface along the centre ray of every pixel: rasterised where that is exact
@@ -179,21 +215,23 @@ impl TraceMesh {
     pub fn trace(&self, camera: &Camera) -> GBuffer {
         let rays = PrimaryRays::new(camera);
         let k = camera.intrinsics;
-        // Most triangles of a mesh this fine cover no pixel centre: projecting them all costs
-        // more than walking the BVH once per pixel (measured on a 10⁶-triangle torus at
-        // 960×960: 197 against 170 ms).
-        if self.triangles.len() > (k.width as usize * k.height as usize) / 2 {
+        let pixels = k.width as usize * k.height as usize;
+        if self.triangles.len() > RASTER_LIMIT * pixels {
             return self.trace_rays_along(camera, &rays);
         }
         let triangles = self
             .original
             .iter()
             .zip(&self.triangles)
-            .map(|(&original, corners)| (original, corners.map(|c| c.as_dvec3() + self.anchor)));
+            .zip(&self.leaf_planes)
+            .map(|((&original, corners), plane)| SceneTriangle {
+                original,
+                corners: corners.map(|c| c.as_dvec3() + self.anchor),
+                plane: plane.seen_from(camera.position - self.anchor),
+            });
         // Closer than this to the camera's plane, a corner's projection loses its precision.
         let near = 1e-3 * self.reach;
-        let along = |tri, dir| self.plane_hit(tri, camera.position, dir);
-        rasterise(camera, &rays, triangles, near, along)
+        rasterise(camera, &rays, triangles, near)
             .unwrap_or_else(|| self.trace_rays_along(camera, &rays))
     }
 
