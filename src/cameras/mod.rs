@@ -117,6 +117,16 @@ impl Intrinsics {
         (self.fx * x + self.cx, self.fy * y + self.cy)
     }
 
+    /// Pixel coordinates (u, v) of a point in camera axes (z > 0) through an ideal pinhole:
+    /// what `project` gives when the lens has no distortion (the distortion polynomial is then
+    /// exactly the identity), without evaluating it.
+    pub fn project_pinhole(&self, p: DVec3) -> (f64, f64) {
+        (
+            self.fx * (p.x / p.z) + self.cx,
+            self.fy * (p.y / p.z) + self.cy,
+        )
+    }
+
     /// The farthest image corner from the principal point, in normalised distorted units.
     pub fn corner_reach(&self) -> f64 {
         let (w, h) = (f64::from(self.width), f64::from(self.height));
@@ -235,6 +245,36 @@ mod tests {
                 (u - (f64::from(col) + 0.5)).abs() < 1e-9
                     && (v - (f64::from(row) + 0.5)).abs() < 1e-9
             );
+        }
+    }
+
+    #[test]
+    fn a_pinhole_projects_to_the_same_bits_either_way() {
+        let k = Intrinsics::from_fov_y(640, 480, 0.9);
+        let coordinates = [
+            0.0,
+            -0.0,
+            1e-300,
+            -3.7e-9,
+            0.25,
+            -1.0 / 3.0,
+            7.5,
+            -1234.5,
+            1e12,
+        ];
+        for &x in &coordinates {
+            for &y in &coordinates {
+                for z in [1e-9, 0.3, 2.0, 1e7] {
+                    let p = DVec3::new(x, y, z);
+                    let (u, v) = k.project(p);
+                    let (pu, pv) = k.project_pinhole(p);
+                    assert_eq!(
+                        (u.to_bits(), v.to_bits()),
+                        (pu.to_bits(), pv.to_bits()),
+                        "{p}"
+                    );
+                }
+            }
         }
     }
 

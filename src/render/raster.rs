@@ -207,7 +207,7 @@ fn bin(
             if !(p.z >= near) {
                 return None;
             }
-            let (u, v) = k.project(p);
+            let (u, v) = k.project_pinhole(p);
             *out = DVec2::new(u, v);
         }
         let Some(triangle) = Projected::new(projected, plane, original, size) else {
