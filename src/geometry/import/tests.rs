@@ -166,7 +166,7 @@ pub(super) fn write_gltf(dir: &Path, name: &str, mesh: &Mesh, nodes: &str) -> Pa
     write(dir, &format!("{name}.gltf"), json.as_bytes())
 }
 
-fn assert_same_geometry(got: &Mesh, want: &Mesh, volume: f64, what: &str) {
+pub(super) fn assert_same_geometry(got: &Mesh, want: &Mesh, volume: f64, what: &str) {
     assert_eq!(position_set(got), position_set(want), "{what}: positions");
     assert_eq!(
         got.triangles.len(),
