@@ -10,7 +10,7 @@
 //!
 //! Owns: cellular noise. Must not touch: gradient noise, materials.
 
-use super::{Noise, axis_word, cell, corner_hash};
+use super::{MemoTag, Noise, axis_word, cell, corner_hash};
 use glam::DVec3;
 
 /// The two nearest cell points of a cellular pattern.
@@ -64,10 +64,6 @@ impl Noise {
         let q = p / size;
         let axes = [cell(q.x), cell(q.y), cell(q.z)];
         let f = DVec3::new(axes[0].1, axes[1].1, axes[2].1);
-        let words: [[u64; 3]; 3] = std::array::from_fn(|k| {
-            let i = axes[k].0;
-            [i - 1, i, i + 1].map(|i| axis_word(i, k, self.cell_key))
-        });
         // Squared distance from the position to the slab of each offset, per axis.
         let slab: [[f64; 3]; 3] =
             std::array::from_fn(|k| [f[k] * f[k], 0.0, (1.0 - f[k]) * (1.0 - f[k])]);
@@ -77,21 +73,22 @@ impl Noise {
             id: 0,
         };
         let (mut first, mut second) = (none, none);
-        for o in NEAREST_FIRST {
-            if slab[0][o[0]] + slab[1][o[1]] + slab[2][o[2]] >= second.d2 {
-                continue;
+        CUBE_MEMO.with_borrow_mut(|memo| {
+            let slot = (size.to_bits().wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 62) as usize;
+            let around = memo[slot].points(self.cell_key, [axes[0].0, axes[1].0, axes[2].0]);
+            for (o, &(point, id)) in NEAREST_FIRST.iter().zip(around) {
+                if slab[0][o[0]] + slab[1][o[1]] + slab[2][o[2]] >= second.d2 {
+                    continue;
+                }
+                let d2 = point.distance_squared(f);
+                let found = Found { d2, point, id };
+                if d2 < first.d2 {
+                    (first, second) = (found, first);
+                } else if d2 < second.d2 {
+                    second = found;
+                }
             }
-            let id = corner_hash(words[0][o[0]], words[1][o[1]], words[2][o[2]]);
-            let corner = DVec3::new(o[0] as f64, o[1] as f64, o[2] as f64) - DVec3::ONE;
-            let point = corner + jitter(id);
-            let d2 = point.distance_squared(f);
-            let found = Found { d2, point, id };
-            if d2 < first.d2 {
-                (first, second) = (found, first);
-            } else if d2 < second.d2 {
-                second = found;
-            }
-        }
+        });
         // Distance from the position to the bisecting plane of the two nearest points.
         let border = (second.d2 - first.d2) / (2.0 * first.point.distance(second.point));
         Cells {
@@ -101,6 +98,52 @@ impl Noise {
             neighbour: second.id,
         }
     }
+}
+
+/// The points of the 27 cubes around one cube of a cellular lattice, in `NEAREST_FIRST`
+/// order, relative to that cube, with their ids. Neighbouring pixels mostly fall into the
+/// same cube, and the points are a function of the cube's integer coordinates and the lattice
+/// key alone: a memo holding the cube asked for gives exactly the points hashing would, so it
+/// saves time and changes no value, whatever the order of points or threads.
+#[derive(Clone, Copy)]
+struct CubeMemo {
+    tag: MemoTag,
+    points: [(DVec3, u64); 27],
+}
+
+impl CubeMemo {
+    const EMPTY: CubeMemo = CubeMemo {
+        tag: MemoTag::EMPTY,
+        points: [(DVec3::ZERO, 0); 27],
+    };
+
+    /// The points around cube `cube` of the lattice under `key`, from the memo or hashed.
+    #[inline(always)]
+    fn points(&mut self, key: u64, cube: [i64; 3]) -> &[(DVec3, u64); 27] {
+        if !self.tag.holds(key, cube) {
+            let words: [[u64; 3]; 3] = std::array::from_fn(|k| {
+                let i = cube[k];
+                [i - 1, i, i + 1].map(|i| axis_word(i, k, key))
+            });
+            self.points = NEAREST_FIRST.map(|o| {
+                let id = corner_hash(words[0][o[0]], words[1][o[1]], words[2][o[2]]);
+                let corner = DVec3::new(o[0] as f64, o[1] as f64, o[2] as f64) - DVec3::ONE;
+                (corner + jitter(id), id)
+            });
+            self.tag = MemoTag {
+                key,
+                cell: cube,
+                filled: true,
+            };
+        }
+        &self.points
+    }
+}
+
+thread_local! {
+    /// A few memos, picked by the cell size: a material draws at most a few patterns.
+    static CUBE_MEMO: std::cell::RefCell<[CubeMemo; 4]> =
+        const { std::cell::RefCell::new([CubeMemo::EMPTY; 4]) };
 }
 
 /// The cell's point within its cube, from three 21-bit fields of its id.
@@ -126,6 +169,11 @@ mod tests {
         let id = corner_hash(w[0], w[1], w[2]);
         let corner = DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64);
         (corner + jitter(id), id)
+    }
+
+    #[test]
+    fn the_cube_memo_changes_no_value() {
+        super::super::memo_changes_nothing(|n, p| n.cells(p, 0.01));
     }
 
     #[test]

@@ -14,9 +14,10 @@
 //! Owns: gradient noise, fractal sums, the ladder. Must not touch: cellular noise, materials.
 
 use super::lanes::{F4, U4};
-use super::{Noise, axis_word, cell, corner_hash};
+use super::{MemoTag, Noise, axis_word, cell, corner_hash};
 use glam::DVec3;
 use std::cell::Cell;
+use std::mem::MaybeUninit;
 
 /// Noises one lattice evaluation gives (lanes of a group).
 pub const LANES: usize = 4;
@@ -43,7 +44,13 @@ const OCTAVE_SHIFT: f64 = 17.31;
 impl Noise {
     /// Gradient noise with features about `wavelength` metres apart, in [−1, 1].
     pub fn gradient(&self, p: DVec3, wavelength: f64) -> f64 {
-        f64::from(self.lanes(p / wavelength, self.keys[0])[0])
+        f64::from(
+            self.lanes(
+                p / wavelength,
+                self.keys[0],
+                free_slot(wavelength, u32::MAX),
+            )[0],
+        )
     }
 
     /// Fractal sum of `octaves` gradient noises, the first `wavelength` metres, each next one
@@ -64,7 +71,8 @@ impl Noise {
     ) -> [f64; N] {
         let mut sum = [0f32; N];
         for octave in Octaves::new(wavelength, octaves, footprint) {
-            let values = self.octave(p, octave.scale, octave.index, self.keys[0]);
+            let slot = free_slot(octave.scale, octave.index);
+            let values = self.octave(p, octave.scale, octave.index, self.keys[0], slot);
             for (s, v) in sum.iter_mut().zip(values) {
                 *s += octave.weight * v;
             }
@@ -75,41 +83,40 @@ impl Noise {
     /// One octave's noises at `p`: lattice coordinates `p · scale`, shifted by the octave's
     /// `index` so that octaves do not share lattice points.
     #[inline(always)]
-    fn octave(&self, p: DVec3, scale: f64, index: u32, key: u64) -> [f32; LANES] {
+    fn octave(&self, p: DVec3, scale: f64, index: u32, key: u64, slot: usize) -> [f32; LANES] {
         let shift = OCTAVE_SHIFT * f64::from(index);
-        self.lanes(p * scale + DVec3::splat(shift), key)
+        self.lanes(p * scale + DVec3::splat(shift), key, slot)
     }
 
-    /// Four independent gradient noises at lattice coordinates `q` under hash `key`.
+    /// Four independent gradient noises at lattice coordinates `q` under hash `key`, the
+    /// cell's corner gradients memoised in `slot` of the thread's `CellMemo`.
     #[inline(always)]
-    fn lanes(&self, q: DVec3, key: u64) -> [f32; LANES] {
-        let (x, y, z) = (
-            Axis::new(q.x, 0, key),
-            Axis::new(q.y, 1, key),
-            Axis::new(q.z, 2, key),
-        );
-        let corner = |a: usize, b: usize, c: usize| {
-            let h = corner_hash(x.words[a], y.words[b], z.words[c]);
-            edge_dots(h, [x.offsets[a], y.offsets[b], z.offsets[c]])
-        };
-        let near = lerp(
-            lerp(corner(0, 0, 0), corner(1, 0, 0), x.fade),
-            lerp(corner(0, 1, 0), corner(1, 1, 0), x.fade),
-            y.fade,
-        );
-        let far = lerp(
-            lerp(corner(0, 0, 1), corner(1, 0, 1), x.fade),
-            lerp(corner(0, 1, 1), corner(1, 1, 1), x.fade),
-            y.fade,
-        );
-        lerp(near, far, z.fade).mul(F4::splat(SCALE)).to_array()
+    fn lanes(&self, q: DVec3, key: u64, slot: usize) -> [f32; LANES] {
+        let (x, y, z) = (Axis::new(q.x), Axis::new(q.y), Axis::new(q.z));
+        CELL_MEMO.with_borrow_mut(|memo| {
+            let g = memo.gradients(slot, key, [x.cell, y.cell, z.cell]);
+            let corner = |a: usize, b: usize, c: usize| {
+                g[a + 2 * b + 4 * c].dot([x.offsets[a], y.offsets[b], z.offsets[c]])
+            };
+            let near = lerp(
+                lerp(corner(0, 0, 0), corner(1, 0, 0), x.fade),
+                lerp(corner(0, 1, 0), corner(1, 1, 0), x.fade),
+                y.fade,
+            );
+            let far = lerp(
+                lerp(corner(0, 0, 1), corner(1, 0, 1), x.fade),
+                lerp(corner(0, 1, 1), corner(1, 1, 1), x.fade),
+                y.fade,
+            );
+            lerp(near, far, z.fade).mul(F4::splat(SCALE)).to_array()
+        })
     }
 }
 
 /// A lattice cell along one axis.
 struct Axis {
-    /// Hash words of the cell's two faces.
-    words: [u64; 2],
+    /// Integer coordinate of the cell's lower face.
+    cell: i64,
     /// Offsets from the two faces (the position in the cell, and that less one), as lane bits.
     offsets: [U4; 2],
     /// The fade of the position in the cell, in every lane.
@@ -117,38 +124,144 @@ struct Axis {
 }
 
 impl Axis {
-    /// Along `axis` (0–2) of lattice coordinate `t`.
+    /// Along lattice coordinate `t`.
     #[inline(always)]
-    fn new(t: f64, axis: usize, key: u64) -> Axis {
+    fn new(t: f64) -> Axis {
         let (i, f) = cell(t);
         let f = f as f32;
         Axis {
-            words: [axis_word(i, axis, key), axis_word(i + 1, axis, key)],
+            cell: i,
             offsets: [F4::splat(f).bits(), F4::splat(f - 1.0).bits()],
             fade: F4::splat(fade(f)),
         }
     }
 }
 
-/// Four lanes' dot products of Perlin's edge gradients with the offset `d` (lane bits of x, y,
-/// z) from a corner whose hash is `h`. Lane k reads the k-th 16-bit word of the hash: bits
-/// 12–13 name the axis the gradient lacks (z, y, x, and z again: Perlin's 12 edges, four of
-/// them twice), bits 14–15 the signs of its two ±1 components — so the dot product is a sum
-/// of offsets with their sign bits flipped and one masked out, with no multiplication.
-#[inline(always)]
-fn edge_dots(h: u64, d: [U4; 3]) -> F4 {
-    let w = U4::words(h);
-    let missing = w.shr::<12>().and(U4::splat(3));
-    let sign = U4::splat(0x8000_0000);
-    let sx = w.shl::<17>().and(sign);
-    let sy = w.shl::<16>().and(sign);
-    let drop_x = missing.eq(U4::splat(2));
-    let drop_y = missing.eq(U4::splat(1));
-    let keep_z = drop_x.or(drop_y);
-    let x = F4::from_bits(d[0].xor(sx).and_not(drop_x));
-    let y = F4::from_bits(d[1].xor(sy).and_not(drop_y));
-    let z = F4::from_bits(d[2].xor(sx.xor(sy)).and(keep_z));
-    x.add(y).add(z)
+/// Perlin's edge gradient of one lattice corner in every lane, kept as the sign flips and
+/// masks that take its dot product with an offset without a multiplication. Lane k reads the
+/// k-th 16-bit word of the corner's hash: bits 12–13 name the axis the gradient lacks (z, y,
+/// x, and z again: Perlin's 12 edges, four of them twice), bits 14–15 the signs of its two ±1
+/// components.
+#[derive(Clone, Copy)]
+struct Gradient {
+    flip_x: U4,
+    flip_y: U4,
+    flip_z: U4,
+    drop_x: U4,
+    drop_y: U4,
+    keep_z: U4,
+}
+
+impl Gradient {
+    /// A placeholder for a memo slot not yet filled.
+    const NONE: Gradient = Gradient {
+        flip_x: U4::ZERO,
+        flip_y: U4::ZERO,
+        flip_z: U4::ZERO,
+        drop_x: U4::ZERO,
+        drop_y: U4::ZERO,
+        keep_z: U4::ZERO,
+    };
+
+    /// The gradients of the corner whose hash is `h`.
+    #[inline(always)]
+    fn of(h: u64) -> Gradient {
+        let w = U4::words(h);
+        let missing = w.shr::<12>().and(U4::splat(3));
+        let sign = U4::splat(0x8000_0000);
+        let flip_x = w.shl::<17>().and(sign);
+        let flip_y = w.shl::<16>().and(sign);
+        let drop_x = missing.eq(U4::splat(2));
+        let drop_y = missing.eq(U4::splat(1));
+        Gradient {
+            flip_x,
+            flip_y,
+            flip_z: flip_x.xor(flip_y),
+            drop_x,
+            drop_y,
+            keep_z: drop_x.or(drop_y),
+        }
+    }
+
+    /// Dot products with the offset `d` (lane bits of x, y, z) from the corner: a sum of the
+    /// offsets with their sign bits flipped and one of them masked out.
+    #[inline(always)]
+    fn dot(&self, d: [U4; 3]) -> F4 {
+        let x = F4::from_bits(d[0].xor(self.flip_x).and_not(self.drop_x));
+        let y = F4::from_bits(d[1].xor(self.flip_y).and_not(self.drop_y));
+        let z = F4::from_bits(d[2].xor(self.flip_z).and(self.keep_z));
+        x.add(y).add(z)
+    }
+}
+
+/// Slots of the thread's `CellMemo`: one per rung of each lane group of a ladder, then a few
+/// shared by the fractal sums and single noises outside ladders.
+const LADDER_SLOTS: usize = GROUPS * RUNGS;
+const SLOTS: usize = LADDER_SLOTS + 16;
+
+/// The slot of rung `index` of lane group `group`.
+fn ladder_slot(group: usize, index: u32) -> usize {
+    group * RUNGS + index as usize
+}
+
+/// A slot outside ladders for octave `index` of a lattice with `scale` cells per metre.
+fn free_slot(scale: f64, index: u32) -> usize {
+    let h = (scale.to_bits() ^ u64::from(index)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    LADDER_SLOTS + (h >> 60) as usize
+}
+
+/// The corner gradients of the lattice cell each slot last needed. Neighbouring pixels mostly
+/// fall into the same cell of every octave coarser than a few pixels, and a cell's gradients
+/// are a function of its integer coordinates and the lattice key alone: a slot holding the
+/// cell asked for gives exactly the gradients hashing would. The memo saves time and changes
+/// no value, whatever the order of points, threads or slots.
+struct CellMemo {
+    cells: [MemoCell; SLOTS],
+}
+
+#[derive(Clone, Copy)]
+struct MemoCell {
+    tag: MemoTag,
+    /// Corner (a, b, c) ∈ {0, 1}³ at index a + 2b + 4c.
+    gradients: [Gradient; 8],
+}
+
+impl MemoCell {
+    const EMPTY: MemoCell = MemoCell {
+        tag: MemoTag::EMPTY,
+        gradients: [Gradient::NONE; 8],
+    };
+}
+
+impl CellMemo {
+    /// The corner gradients of lattice cell `cell` under `key`, from `slot` or hashed into it.
+    #[inline(always)]
+    fn gradients(&mut self, slot: usize, key: u64, cell: [i64; 3]) -> &[Gradient; 8] {
+        let memo = &mut self.cells[slot];
+        if !memo.tag.holds(key, cell) {
+            let words: [[u64; 2]; 3] = std::array::from_fn(|k| {
+                [axis_word(cell[k], k, key), axis_word(cell[k] + 1, k, key)]
+            });
+            memo.gradients = std::array::from_fn(|i| {
+                let h = corner_hash(words[0][i & 1], words[1][(i >> 1) & 1], words[2][i >> 2]);
+                Gradient::of(h)
+            });
+            memo.tag = MemoTag {
+                key,
+                cell,
+                filled: true,
+            };
+        }
+        &memo.gradients
+    }
+}
+
+thread_local! {
+    static CELL_MEMO: std::cell::RefCell<CellMemo> = const {
+        std::cell::RefCell::new(CellMemo {
+            cells: [MemoCell::EMPTY; SLOTS],
+        })
+    };
 }
 
 /// Perlin's quintic fade 6t⁵ − 15t⁴ + 10t³ (Horner form).
@@ -301,7 +414,9 @@ pub struct Ladder<'a> {
     resolved_top: f64,
     /// Per lane group, a bit for every rung evaluated.
     done: [Cell<u32>; GROUPS],
-    rungs: [[Cell<[f32; LANES]>; RUNGS]; GROUPS],
+    /// The rungs evaluated so far (the others are never read: a ladder is made for every
+    /// shaded point, and filling 512 bytes it mostly does not use cost more than reading them).
+    rungs: [[Cell<MaybeUninit<[f32; LANES]>>; RUNGS]; GROUPS],
 }
 
 impl<'a> Ladder<'a> {
@@ -312,7 +427,7 @@ impl<'a> Ladder<'a> {
             p,
             resolved_top: resolution(rung_scale(0), footprint),
             done: [const { Cell::new(0) }; GROUPS],
-            rungs: [const { [const { Cell::new([0.0; LANES]) }; RUNGS] }; GROUPS],
+            rungs: [const { [const { Cell::new(MaybeUninit::uninit()) }; RUNGS] }; GROUPS],
         }
     }
 
@@ -337,10 +452,14 @@ impl<'a> Ladder<'a> {
         let cell = &self.rungs[group][index as usize];
         if self.done[group].get() & bit == 0 {
             let key = self.noise.keys[group];
-            cell.set(self.noise.octave(self.p, scale, index, key));
+            let slot = ladder_slot(group, index);
+            cell.set(MaybeUninit::new(
+                self.noise.octave(self.p, scale, index, key, slot),
+            ));
             self.done[group].set(self.done[group].get() | bit);
         }
-        cell.get()
+        // SAFETY: the rung's bit in `done` is set only once the rung has been written.
+        unsafe { cell.get().assume_init() }
     }
 }
 
@@ -353,6 +472,67 @@ fn rung_scale(index: u32) -> f64 {
 mod tests {
     use super::super::spread_points;
     use super::*;
+
+    /// Perlin's noise at lattice coordinates `q` from its definition, in f64: each corner's
+    /// gradient read from its hash (lane `lane`'s 16-bit word: bits 12–13 the axis it lacks,
+    /// bits 14 and 15 the signs of x and y, z's sign their product), dotted with the offset
+    /// from the corner, interpolated with the quintic fade, scaled by 2/√3.
+    fn perlin(q: DVec3, key: u64, lane: usize) -> f64 {
+        let base = q.floor();
+        let f = q - base;
+        let fade = |t: f64| t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+        let mut sum = 0.0;
+        for corner in 0..8usize {
+            let c = [corner & 1, (corner >> 1) & 1, corner >> 2];
+            let words: [u64; 3] =
+                std::array::from_fn(|k| axis_word(base[k] as i64 + c[k] as i64, k, key));
+            let w = (corner_hash(words[0], words[1], words[2]) >> (16 * lane)) & 0xffff;
+            let sign = |bit: u64| if w >> bit & 1 == 1 { -1.0 } else { 1.0 };
+            let (sx, sy) = (sign(14), sign(15));
+            let g = match (w >> 12) & 3 {
+                2 => DVec3::new(0.0, sy, sx * sy),
+                1 => DVec3::new(sx, 0.0, sx * sy),
+                _ => DVec3::new(sx, sy, 0.0),
+            };
+            let offset = f - DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64);
+            let weight: f64 = (0..3)
+                .map(|k| {
+                    if c[k] == 1 {
+                        fade(f[k])
+                    } else {
+                        1.0 - fade(f[k])
+                    }
+                })
+                .product();
+            sum += weight * g.dot(offset);
+        }
+        sum * 2.0 / 3f64.sqrt()
+    }
+
+    #[test]
+    fn lanes_are_perlin_noise_by_its_definition() {
+        let n = Noise::new(13);
+        for q in spread_points(3000, DVec3::new(-1.7, 40.2, -3.3)) {
+            let q = q * 3.0;
+            let lanes = n.lanes(q, n.keys[1], 0);
+            for (lane, got) in lanes.iter().enumerate() {
+                let want = perlin(q, n.keys[1], lane);
+                assert!(
+                    (f64::from(*got) - want).abs() < 2e-6,
+                    "{q} lane {lane}: {got} vs {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_cell_memo_changes_no_value() {
+        super::super::memo_changes_nothing(|n, p| n.fractals::<4>(p, 0.02, 4, 1e-5));
+        super::super::memo_changes_nothing(|n, p| {
+            let ladder = Ladder::new(n, p, 2e-4);
+            [Field::new(2, 0.32, 6), Field::new(5, 0.01, 3)].map(|f| ladder.get(f))
+        });
+    }
 
     #[test]
     fn same_seed_same_values_other_seed_other_values() {
@@ -387,7 +567,7 @@ mod tests {
             let field = Field::new(0, 0.32, 5);
             let mut direct = 0f32;
             for o in Octaves::from_index(2, rung_scale(2), 5, resolution(rung_scale(2), 1e-3)) {
-                direct += o.weight * n.octave(p, o.scale, o.index, n.keys[0])[0];
+                direct += o.weight * n.octave(p, o.scale, o.index, n.keys[0], 0)[0];
             }
             assert_eq!(ladder.get(field), f64::from(direct) * normaliser(5));
             // Asking again reads the same rungs.

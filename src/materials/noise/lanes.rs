@@ -69,6 +69,10 @@ impl F4 {
 
 #[cfg(target_arch = "x86_64")]
 impl U4 {
+    /// Every bit clear.
+    // SAFETY: an all-zero `__m128i` is a valid value (four zero lanes).
+    pub const ZERO: U4 = U4(unsafe { std::mem::zeroed() });
+
     #[inline(always)]
     pub fn splat(x: u32) -> U4 {
         U4(unsafe { _mm_set1_epi32(x as i32) })
@@ -158,6 +162,9 @@ impl F4 {
 
 #[cfg(not(target_arch = "x86_64"))]
 impl U4 {
+    /// Every bit clear.
+    pub const ZERO: U4 = U4([0; 4]);
+
     #[inline(always)]
     pub fn splat(x: u32) -> U4 {
         U4([x; 4])
