@@ -6,7 +6,7 @@ use shmgen::build::mesh_beam;
 use shmgen::cameras::{Camera, CameraRig, Distance, Intrinsics, Orbit, Poses};
 use shmgen::geometry::Mesh;
 use shmgen::mechanics::{Load, Section, Support, Target, Theory};
-use shmgen::render::{NO_HIT, TraceMesh};
+use shmgen::render::{NO_HIT, PixelSet, TraceMesh};
 use shmgen::scene::{BeamSpec, Tessellation};
 use shmgen::seeds::{Scope, Stream};
 
@@ -836,6 +836,73 @@ fn meshes_finer_than_the_pixels_are_rasterised_exactly() {
         let trace = TraceMesh::build(&mesh);
         for (c, cam) in probing_cameras_of_size(&mesh, size).iter().enumerate() {
             rasterised_matches_traced(&mesh, &trace, cam, c);
+        }
+    }
+}
+
+/// Points within a pixel at which `sub_pixel_hits_match_one_ray_each` samples: the four of
+/// anti-aliasing's pattern but one, and a pixel's corners on both sides (where two pixels'
+/// samples meet).
+const SUB_PIXEL_POINTS: [(f64, f64); 5] = [
+    (0.25, 0.25),
+    (0.75, 0.25),
+    (0.25, 0.75),
+    (0.0, 0.0),
+    (1.0, 0.5),
+];
+
+/// The first hits of rays through points within pixels, as anti-aliasing asks for them (in
+/// one call for many pixels, rasterised when that is exact and pays), against one ray per
+/// point: the same triangle and depth bits at every point but grazes (within 10⁻⁵ px of an
+/// edge of a triangle either saw), and at most one in a thousand of those. Every pixel of the
+/// image, and a scattered fifth of them (so most triangles cover no pixel of the set).
+#[test]
+fn sub_pixel_hits_match_one_ray_each() {
+    for beam in deformed_beams() {
+        let mesh = mesh_beam(&beam, 2e-2).unwrap().mesh;
+        let trace = TraceMesh::build(&mesh);
+        for (c, cam) in probing_cameras(&mesh).iter().enumerate() {
+            let k = cam.intrinsics;
+            for every in [1, 5] {
+                let rows: Vec<Vec<u32>> = (0..k.height)
+                    .map(|row| {
+                        (0..k.width)
+                            .filter(|col| (row * 3 + col) % every == 0)
+                            .collect()
+                    })
+                    .collect();
+                let pixels = PixelSet::from_rows(&rows);
+                let hits = trace.sample_hits(cam, &pixels, &SUB_PIXEL_POINTS);
+                assert_eq!(hits.len(), pixels.len());
+                let mut grazes = 0;
+                for (i, samples) in hits.iter().enumerate() {
+                    let (row, col) = pixels.at(i);
+                    for (&got, (du, dv)) in samples.iter().zip(SUB_PIXEL_POINTS) {
+                        let point = DVec2::new(col + du, row + dv);
+                        let want = trace.first_hit(cam, k.ray_through(point.x, point.y));
+                        if got.map(|(_, t)| t) == want.map(|(_, t)| t) {
+                            let bits = |h: Option<(f32, u32)>| h.map(|(d, _)| d.to_bits());
+                            assert_eq!(bits(got), bits(want), "camera {c}, {point}");
+                            continue;
+                        }
+                        let near_edge = [got, want]
+                            .iter()
+                            .flatten()
+                            .any(|&(_, t)| edge_distance(&mesh, t, cam, point) < 1e-5);
+                        assert!(near_edge, "camera {c}, {point}: {got:?}, traced {want:?}");
+                        grazes += 1;
+                    }
+                }
+                assert!(grazes * 1000 <= hits.len(), "camera {c}: {grazes} grazes");
+                assert!(
+                    hits.iter().flatten().any(Option::is_none),
+                    "camera {c}: background"
+                );
+                assert!(
+                    hits.iter().flatten().any(Option::is_some),
+                    "camera {c}: the beam"
+                );
+            }
         }
     }
 }

@@ -29,4 +29,4 @@ pub use fields::{Deformed, displacement, flow, normals, ray_distance};
 pub use shade::{Surfaces, shade};
 pub use shared_bvh::SharedBvhs;
 pub use surfaces::SampleSurfaces;
-pub use trace::{GBuffer, NO_HIT, TraceMesh, Traced};
+pub use trace::{GBuffer, NO_HIT, PixelSet, TraceMesh, Traced};

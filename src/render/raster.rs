@@ -22,7 +22,7 @@
 //! Owns: projecting triangles, per-band coverage and the depth test. Must not touch: shading,
 //! the BVH or anything after the geometric buffer.
 
-use super::trace::{GBuffer, NO_HIT, PrimaryRays};
+use super::trace::{GBuffer, NO_HIT, PixelSet, PrimaryRays};
 use crate::cameras::Camera;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -70,6 +70,36 @@ impl Plane {
     }
 }
 
+/// Where in its pixel each sample point lies: offsets from the pixel's corner along u and v,
+/// the least and the greatest (a pixel's centre alone: 0.5 and 0.5).
+pub(super) struct Samples {
+    u: (f64, f64),
+    v: (f64, f64),
+}
+
+impl Samples {
+    /// The pixel centres.
+    const CENTRE: Samples = Samples {
+        u: (0.5, 0.5),
+        v: (0.5, 0.5),
+    };
+
+    /// The points at `offsets` within each pixel.
+    pub(super) fn at(offsets: &[(f64, f64)]) -> Samples {
+        let extent = |pick: fn(&(f64, f64)) -> f64| {
+            let along = offsets.iter().map(pick);
+            (
+                along.clone().fold(f64::INFINITY, f64::min),
+                along.fold(f64::NEG_INFINITY, f64::max),
+            )
+        };
+        Samples {
+            u: extent(|o| o.0),
+            v: extent(|o| o.1),
+        }
+    }
+}
+
 /// A triangle projected into the image: pixel coordinates of its corners, its index in the
 /// scene mesh, its plane and the rows and columns of pixel centres within its bounds. The
 /// plane travels with it so that depth tests read nothing from the mesh: in a band, triangles
@@ -85,15 +115,16 @@ struct Projected {
 
 impl Projected {
     /// The triangle with corners at image points `corners`, or None when its bounds hold no
-    /// pixel centre of a `width` × `height` image (then it covers none).
+    /// sample point of a `width` × `height` image (then it covers none).
     fn new(
         corners: [DVec2; 3],
         plane: Plane,
         original: u32,
         (width, height): (usize, usize),
+        samples: &Samples,
     ) -> Option<Self> {
-        let rows = centre_range(span(corners.map(|c| c.y)), height)?;
-        let cols = centre_range(span(corners.map(|c| c.x)), width)?;
+        let rows = sample_range(span(corners.map(|c| c.y)), height, samples.v)?;
+        let cols = sample_range(span(corners.map(|c| c.x)), width, samples.u)?;
         let ends = |r: std::ops::Range<usize>| [r.start as u32, r.end as u32];
         Some(Projected {
             corners,
@@ -104,12 +135,12 @@ impl Projected {
         })
     }
 
-    /// The rows of pixel centres within the triangle's bounds.
+    /// The rows of pixels with a sample point within the triangle's bounds.
     fn rows(&self) -> std::ops::Range<usize> {
         self.rows[0] as usize..self.rows[1] as usize
     }
 
-    /// The columns of pixel centres within the triangle's bounds.
+    /// The columns of pixels with a sample point within the triangle's bounds.
     fn cols(&self) -> std::ops::Range<usize> {
         self.cols[0] as usize..self.cols[1] as usize
     }
@@ -132,7 +163,14 @@ pub(super) fn rasterise(
     let mut binned = BINS.with_borrow_mut(std::mem::take);
     binned.iter_mut().for_each(Vec::clear);
     binned.resize_with(height.div_ceil(BAND), Vec::new);
-    bin(camera, triangles, near, &mut binned)?;
+    bin(
+        camera,
+        triangles,
+        near,
+        &Samples::CENTRE,
+        &mut binned,
+        |_| true,
+    )?;
     let mut depth = vec![0.0f32; width * height];
     let mut triangle = vec![NO_HIT; width * height];
     depth
@@ -152,10 +190,7 @@ pub(super) fn rasterise(
                         let i = (row - rows.start) * width + col;
                         covered = covered.start.min(i)..covered.end.max(i + 1);
                         let d = t.plane.hit(rays.through(row, col));
-                        let nearer = triangle[i] == NO_HIT
-                            || d < nearest[i]
-                            || (d == nearest[i] && t.original < triangle[i]);
-                        if d > 0.0 && d.is_finite() && nearer {
+                        if replaces(d, t.original, (nearest[i], triangle[i])) {
                             nearest[i] = d;
                             triangle[i] = t.original;
                         }
@@ -165,12 +200,9 @@ pub(super) fn rasterise(
                 let depth = &mut depth[covered.clone()];
                 let nearest = &nearest[covered.clone()];
                 for ((out, &d), tri) in depth.iter_mut().zip(nearest).zip(&mut triangle[covered]) {
-                    // A depth that leaves f32's range is no surface, as for traced rays.
-                    let d = d as f32;
-                    if *tri != NO_HIT && d > 0.0 && d.is_finite() {
-                        *out = d;
-                    } else {
-                        *tri = NO_HIT;
+                    match label(d, *tri) {
+                        Some((d, _)) => *out = d,
+                        None => *tri = NO_HIT,
                     }
                 }
             });
@@ -184,14 +216,142 @@ pub(super) fn rasterise(
     })
 }
 
+/// Where the rays through the sample points at `offsets` within each pixel of `pixels` first
+/// meet `triangles` (in the order of `pixels`), or None when rasterising would not be exact
+/// (see `rasterise`). As for centre rays, "the ray meets T" is "the point lies in T's
+/// projection", decided by the same edge functions, and the depth is the plane's along the
+/// ray; only bands holding one of `pixels` are rasterised, and in them only those pixels.
+pub(super) fn rasterise_samples<const N: usize>(
+    camera: &Camera,
+    triangles: impl Iterator<Item = SceneTriangle>,
+    near: f64,
+    pixels: &PixelSet,
+    offsets: &[(f64, f64); N],
+) -> Option<Vec<[Option<(f32, u32)>; N]>> {
+    let k = camera.intrinsics;
+    if !k.distortion.is_none() {
+        return None;
+    }
+    let height = k.height as usize;
+    let band_rows = |band: usize| band * BAND..(band * BAND + BAND).min(height);
+    let mut binned = BINS.with_borrow_mut(std::mem::take);
+    binned.iter_mut().for_each(Vec::clear);
+    binned.resize_with(height.div_ceil(BAND), Vec::new);
+    let marked = Marks::of(pixels, k.width as usize, height);
+    let samples = Samples::at(offsets);
+    bin(camera, triangles, near, &samples, &mut binned, |t| {
+        marked.any_in(t.rows(), t.cols())
+    })?;
+    let mut nearest = vec![[(f64::INFINITY, NO_HIT); N]; pixels.len()];
+    let mut rest = nearest.as_mut_slice();
+    let mut bands = Vec::with_capacity(binned.len());
+    for band in 0..binned.len() {
+        let (head, tail) = rest.split_at_mut(pixels.in_rows(band_rows(band)).len());
+        bands.push(head);
+        rest = tail;
+    }
+    bands
+        .into_par_iter()
+        .zip(binned.par_iter())
+        .enumerate()
+        .for_each(|(band, (nearest, binned))| {
+            let first = pixels.in_rows(band_rows(band)).start;
+            // The rays as `TraceMesh::first_hit` takes them, for the same depths.
+            let rays: Vec<[DVec3; N]> = (first..first + nearest.len())
+                .map(|i| {
+                    let (row, col) = pixels.at(i);
+                    offsets.map(|(du, dv)| camera.rotation * k.ray_through(col + du, row + dv))
+                })
+                .collect();
+            for t in binned {
+                let Some(coverage) = Coverage::of(t) else {
+                    continue;
+                };
+                let rows = band_rows(band);
+                for row in rows.start.max(t.rows().start)..rows.end.min(t.rows().end) {
+                    for i in pixels.in_row_between(row, t.cols()) {
+                        let (v, u) = pixels.at(i);
+                        for (s, (du, dv)) in offsets.iter().enumerate() {
+                            if coverage.contains(DVec2::new(u + du, v + dv)) {
+                                let d = t.plane.hit(rays[i - first][s]);
+                                let held = &mut nearest[i - first][s];
+                                if replaces(d, t.original, *held) {
+                                    *held = (d, t.original);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        });
+    BINS.with_borrow_mut(|bins| *bins = binned);
+    Some(
+        nearest
+            .into_iter()
+            .map(|samples| samples.map(|(d, tri)| label(d, tri)))
+            .collect(),
+    )
+}
+
+/// Which pixels of an image are in a `PixelSet`, a bit each, row by row: whether a triangle's
+/// bounds hold one is a few word tests.
+struct Marks {
+    words_per_row: usize,
+    bits: Vec<u64>,
+}
+
+impl Marks {
+    fn of(pixels: &PixelSet, width: usize, height: usize) -> Marks {
+        let words_per_row = width.div_ceil(64);
+        let mut bits = vec![0u64; words_per_row * height];
+        for i in 0..pixels.len() {
+            let (row, col) = pixels.at(i);
+            let (row, col) = (row as usize, col as usize);
+            bits[row * words_per_row + col / 64] |= 1 << (col % 64);
+        }
+        Marks {
+            words_per_row,
+            bits,
+        }
+    }
+
+    /// Whether a pixel of `rows` × `cols` (within the image) is marked.
+    fn any_in(&self, rows: std::ops::Range<usize>, cols: std::ops::Range<usize>) -> bool {
+        if cols.is_empty() {
+            return false;
+        }
+        let (first, last) = (cols.start / 64, (cols.end - 1) / 64);
+        let mask = |word: usize| {
+            let low = if word == first {
+                !0u64 << (cols.start % 64)
+            } else {
+                !0
+            };
+            let high = if word == last {
+                !0u64 >> (63 - (cols.end - 1) % 64)
+            } else {
+                !0
+            };
+            low & high
+        };
+        rows.into_iter().any(|row| {
+            let line = &self.bits[row * self.words_per_row..][..self.words_per_row];
+            (first..=last).any(|w| line[w] & mask(w) != 0)
+        })
+    }
+}
+
 /// Projects `triangles` through `camera` into `bins` (one per band of rows, empty), each
-/// triangle into every band holding a pixel centre within its bounds; None when a corner is
-/// closer to the camera's plane than `near` (see `rasterise`).
+/// triangle that holds a sample point within its bounds and that `keep` keeps into every band
+/// its bounds reach; None when a corner is closer to the camera's plane than `near` (see
+/// `rasterise`).
 fn bin(
     camera: &Camera,
     triangles: impl Iterator<Item = SceneTriangle>,
     near: f64,
+    samples: &Samples,
     bins: &mut [Vec<Projected>],
+    keep: impl Fn(&Projected) -> bool,
 ) -> Option<()> {
     let k = camera.intrinsics;
     let size = (k.width as usize, k.height as usize);
@@ -210,9 +370,12 @@ fn bin(
             let (u, v) = k.project_pinhole(p);
             *out = DVec2::new(u, v);
         }
-        let Some(triangle) = Projected::new(projected, plane, original, size) else {
+        let Some(triangle) = Projected::new(projected, plane, original, size, samples) else {
             continue;
         };
+        if !keep(&triangle) {
+            continue;
+        }
         let rows = triangle.rows();
         for bin in &mut bins[rows.start / BAND..rows.end.div_ceil(BAND)] {
             bin.push(triangle);
@@ -227,14 +390,18 @@ fn span(coordinates: [f64; 3]) -> (f64, f64) {
     (a.min(b).min(c), a.max(b).max(c))
 }
 
-/// Pixels whose centre (index + 0.5) lies within `lo..=hi` along one image axis of `size`
-/// pixels, or None when there is none.
-fn centre_range((lo, hi): (f64, f64), size: usize) -> Option<std::ops::Range<usize>> {
+/// Pixels with a sample point (index + an offset from `offsets.0` to `offsets.1`) within
+/// `lo..=hi` along one image axis of `size` pixels, or None when there is none.
+fn sample_range(
+    (lo, hi): (f64, f64),
+    size: usize,
+    offsets: (f64, f64),
+) -> Option<std::ops::Range<usize>> {
     // Clamped to the image give or take a pixel first (NaN: to the far end, as `max` and
     // `min` take it), where rounding by conversion to an integer is exact.
     let edge = size as f64;
-    let first = ceil_small((lo - 0.5).max(-1.0).min(edge)).max(0);
-    let last = floor_small((hi - 0.5).min(edge).max(-1.0)).min(size as i64 - 1);
+    let first = ceil_small((lo - offsets.1).max(-1.0).min(edge)).max(0);
+    let last = floor_small((hi - offsets.0).min(edge).max(-1.0)).min(size as i64 - 1);
     (first <= last).then(|| first as usize..last as usize + 1)
 }
 
@@ -262,18 +429,9 @@ fn cover(
     width: usize,
     mut visit: impl FnMut(usize, usize),
 ) {
-    let [a, b, c] = t.corners;
-    let edges = [Edge::new(a, b), Edge::new(b, c), Edge::new(c, a)];
-    // Which side of each edge the triangle lies on: that of its opposite corner. A corner on
-    // the line through the other two: the triangle is seen edge-on, it covers nothing.
-    let inside = [
-        sign(edges[0].function(c)),
-        sign(edges[1].function(a)),
-        sign(edges[2].function(b)),
-    ];
-    if inside.contains(&0) {
+    let Some(coverage) = Coverage::of(t) else {
         return;
-    }
+    };
     let (own_rows, own_cols) = (t.rows(), t.cols());
     for row in rows.start.max(own_rows.start)..rows.end.min(own_rows.end) {
         let v = row as f64 + 0.5;
@@ -287,8 +445,7 @@ fn cover(
             }
         };
         for col in cols {
-            let p = DVec2::new(col as f64 + 0.5, v);
-            if edges.iter().zip(inside).all(|(e, s)| e.side(p) == s) {
+            if coverage.contains(DVec2::new(col as f64 + 0.5, v)) {
                 visit(row, col);
             }
         }
@@ -316,7 +473,55 @@ fn row_span(corners: &[DVec2; 3], v: f64, width: usize) -> Option<std::ops::Rang
     if lo > hi {
         return None; // the line passes above or below the triangle
     }
-    centre_range((lo - 1.0, hi + 1.0), width)
+    sample_range((lo - 1.0, hi + 1.0), width, Samples::CENTRE.u)
+}
+
+/// The three edges of a projected triangle and the side of each it lies on.
+struct Coverage {
+    edges: [Edge; 3],
+    inside: [i8; 3],
+}
+
+impl Coverage {
+    /// The triangle's edges, or None when it is seen edge-on (it covers nothing then).
+    fn of(t: &Projected) -> Option<Coverage> {
+        let [a, b, c] = t.corners;
+        let edges = [Edge::new(a, b), Edge::new(b, c), Edge::new(c, a)];
+        // Which side of each edge the triangle lies on: that of its opposite corner. A corner
+        // on the line through the other two: the triangle is seen edge-on.
+        let inside = [
+            sign(edges[0].function(c)),
+            sign(edges[1].function(a)),
+            sign(edges[2].function(b)),
+        ];
+        (!inside.contains(&0)).then_some(Coverage { edges, inside })
+    }
+
+    /// Whether the triangle covers image point `p` (on an edge: as nudged by `Edge::side`).
+    fn contains(&self, p: DVec2) -> bool {
+        self.edges
+            .iter()
+            .zip(self.inside)
+            .all(|(e, s)| e.side(p) == s)
+    }
+}
+
+/// Whether a hit at ray parameter `d` on triangle `tri` replaces the nearest found so far
+/// (`held`; none when its triangle is `NO_HIT`): in front of the camera and finite, and
+/// nearer, or as near on a lower triangle index, so the order triangles come in changes
+/// nothing.
+fn replaces(d: f64, tri: u32, (held_d, held_tri): (f64, u32)) -> bool {
+    d > 0.0
+        && d.is_finite()
+        && (held_tri == NO_HIT || d < held_d || (d == held_d && tri < held_tri))
+}
+
+/// The label of the nearest hit found (ray parameter `d` on triangle `tri`, or `NO_HIT`):
+/// planar depth and triangle, or None for no surface. A depth that leaves f32's range is no
+/// surface, as for traced rays.
+fn label(d: f64, tri: u32) -> Option<(f32, u32)> {
+    let d = d as f32;
+    (tri != NO_HIT && d > 0.0 && d.is_finite()).then_some((d, tri))
 }
 
 /// An edge as a line through two image points, always taken from the lesser endpoint (by
@@ -372,7 +577,9 @@ mod tests {
         let mut count = vec![0; size * size];
         for (i, corners) in triangles.iter().enumerate() {
             let plane = plane_at(1.0, 0.0);
-            if let Some(t) = Projected::new(*corners, plane, i as u32, (size, size)) {
+            if let Some(t) =
+                Projected::new(*corners, plane, i as u32, (size, size), &Samples::CENTRE)
+            {
                 cover(&t, 0..size, size, |row, col| count[row * size + col] += 1);
             }
         }
@@ -464,11 +671,12 @@ mod tests {
     }
 
     #[test]
-    fn centre_ranges_round_as_libm_does() {
-        // The range as written with libm's ceil and floor.
-        let libm = |(lo, hi): (f64, f64), size: usize| {
-            let first = (lo - 0.5).ceil().max(0.0);
-            let last = (hi - 0.5).floor().min(size as f64 - 1.0);
+    fn sample_ranges_round_as_libm_does() {
+        // The range as written with libm's ceil and floor: pixels i with i + o in lo..=hi for
+        // some offset o between the two.
+        let libm = |(lo, hi): (f64, f64), size: usize, (o0, o1): (f64, f64)| {
+            let first = (lo - o1).ceil().max(0.0);
+            let last = (hi - o0).floor().min(size as f64 - 1.0);
             (first <= last).then(|| first as usize..last as usize + 1)
         };
         let mut ends = vec![f64::NAN, -1e300, -7.0, 1e300, f64::INFINITY, -f64::INFINITY];
@@ -476,14 +684,16 @@ mod tests {
             let x = f64::from(i) / 8.0;
             ends.extend([x, x.next_up(), x.next_down(), -0.0]);
         }
-        for &lo in &ends {
-            for &hi in &ends {
-                for size in [1, 9, 12] {
-                    assert_eq!(
-                        centre_range((lo, hi), size),
-                        libm((lo, hi), size),
-                        "{lo}..{hi} in {size}"
-                    );
+        for offsets in [(0.5, 0.5), (0.25, 0.75), (0.125, 0.875)] {
+            for &lo in &ends {
+                for &hi in &ends {
+                    for size in [1, 9, 12] {
+                        assert_eq!(
+                            sample_range((lo, hi), size, offsets),
+                            libm((lo, hi), size, offsets),
+                            "{lo}..{hi} in {size}, offsets {offsets:?}"
+                        );
+                    }
                 }
             }
         }

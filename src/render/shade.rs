@@ -15,7 +15,7 @@
 
 use super::daylight::{DiskPattern, environment_light, pixel_turn, sky_light, sun_visibility};
 use super::gloss::Lobe;
-use super::trace::{GBuffer, NO_HIT, TraceMesh};
+use super::trace::{GBuffer, NO_HIT, PixelSet, TraceMesh};
 use crate::cameras::Camera;
 use crate::materials::light::turn_about_z;
 use crate::materials::{Backdrop, Film, Lighting, Surface, srgb_to_linear};
@@ -321,7 +321,8 @@ impl<S: Surfaces> Shading<'_, S> {
 
     /// Re-shades from four fixed sub-pixel rays every pixel (near the hits of `spans`, see
     /// `hit_spans`) whose `flat` colour, or whether it sees a surface, differs from a
-    /// neighbour's.
+    /// neighbour's. The sub-rays' first hits are found for all those pixels at once
+    /// (`TraceMesh::sample_hits`).
     fn antialias_edges(
         &self,
         g: &GBuffer,
@@ -335,26 +336,37 @@ impl<S: Surfaces> Shading<'_, S> {
         let differs = |i: usize, j: usize| {
             hit(i) != hit(j) || (hit(i) && visibly_different(colour(i), colour(j)))
         };
+        let edges: Vec<Vec<u32>> = (0..g.height as usize)
+            .into_par_iter()
+            .map(|row| {
+                near_hits(spans, row, width)
+                    .filter(|&col| {
+                        let i = row * width + col;
+                        (col > 0 && differs(i, i - 1))
+                            || (col + 1 < width && differs(i, i + 1))
+                            || (row > 0 && differs(i, i - width))
+                            || (i + width < g.triangle.len() && differs(i, i + width))
+                    })
+                    .map(|col| col as u32)
+                    .collect()
+            })
+            .collect();
+        let edges = PixelSet::from_rows(&edges);
+        let hits = self.mesh.sample_hits(self.camera, &edges, &EDGE_SAMPLES);
         rgb.par_chunks_mut(width * 3)
             .enumerate()
             .for_each(|(row, out)| {
                 let mut last = LastMatte::default();
-                for col in near_hits(spans, row, width) {
-                    let i = row * width + col;
-                    let edge = (col > 0 && differs(i, i - 1))
-                        || (col + 1 < width && differs(i, i + 1))
-                        || (row > 0 && differs(i, i - width))
-                        || (i + width < g.triangle.len() && differs(i, i + width));
-                    if !edge {
-                        continue;
-                    }
-                    let mean = self.edge_pixel(col, row, &mut last);
+                for i in edges.in_rows(row..row + 1) {
+                    let col = edges.at(i).1 as usize;
+                    let mean = self.edge_pixel(col, row, &hits[i], &mut last);
                     out[3 * col..3 * col + 3].copy_from_slice(&encode(mean));
                 }
             });
     }
 
-    /// Mean linear radiance of the four sub-rays of pixel (`col`, `row`).
+    /// Mean linear radiance of the four sub-rays of pixel (`col`, `row`), which first meet
+    /// the surfaces `hits`.
     ///
     /// Each sub-ray is lit at its own point, with its own normal. What it sees there is shared
     /// within the pixel: a sub-ray meeting an untextured triangle an earlier sub-ray met takes
@@ -363,31 +375,40 @@ impl<S: Surfaces> Shading<'_, S> {
     /// `continues`. Materials filter their texture over the whole pixel's footprint, so one
     /// evaluation per pixel and face is the filter every other pixel gets; evaluating at each
     /// sub-ray would blur an edge pixel's texture more than its neighbours'.
-    fn edge_pixel(&self, col: usize, row: usize, last: &mut LastMatte) -> [f64; 3] {
+    fn edge_pixel(
+        &self,
+        col: usize,
+        row: usize,
+        hits: &[Option<(f32, u32)>; EDGE_SAMPLES.len()],
+        last: &mut LastMatte,
+    ) -> [f64; 3] {
         let k = self.camera.intrinsics;
         let mut radiances = FoundInPixel::<[f64; 3]>::default();
         let mut surfaces = FoundInPixel::<Surface>::default();
-        EDGE_SAMPLES.iter().fold([0.0; 3], |acc, &(du, dv)| {
-            let (u, v) = (col as f64 + du, row as f64 + dv);
-            let view = k.ray_through(u, v);
-            let c = match self.mesh.first_hit(self.camera, view) {
-                None => self.backdrop(view, u, v),
-                Some((depth, tri)) if self.surfaces.textured(tri) => {
-                    let surface = surfaces.get_or_insert(
+        EDGE_SAMPLES
+            .iter()
+            .zip(hits)
+            .fold([0.0; 3], |acc, (&(du, dv), &hit)| {
+                let (u, v) = (col as f64 + du, row as f64 + dv);
+                let view = k.ray_through(u, v);
+                let c = match hit {
+                    None => self.backdrop(view, u, v),
+                    Some((depth, tri)) if self.surfaces.textured(tri) => {
+                        let surface = surfaces.get_or_insert(
+                            tri,
+                            |earlier| self.surfaces.continues(earlier, tri),
+                            || self.surface_at_centre(tri, depth, (col, row)),
+                        );
+                        self.hit_radiance(view, depth, tri, (u, v), Some(surface)).0
+                    }
+                    Some((depth, tri)) => radiances.get_or_insert(
                         tri,
-                        |earlier| self.surfaces.continues(earlier, tri),
-                        || self.surface_at_centre(tri, depth, (col, row)),
-                    );
-                    self.hit_radiance(view, depth, tri, (u, v), Some(surface)).0
-                }
-                Some((depth, tri)) => radiances.get_or_insert(
-                    tri,
-                    |earlier| earlier == tri,
-                    || self.matte_radiance(view, depth, tri, (u, v), last).0,
-                ),
-            };
-            std::array::from_fn(|k| acc[k] + c[k] / 4.0)
-        })
+                        |earlier| earlier == tri,
+                        || self.matte_radiance(view, depth, tri, (u, v), last).0,
+                    ),
+                };
+                std::array::from_fn(|k| acc[k] + c[k] / 4.0)
+            })
     }
 
     /// Linear radiance along the ray `view` through image point (u, v), given what it hit,

@@ -1,7 +1,7 @@
 //! BVH construction and primary-ray tracing into a geometric buffer (handing pinhole views
 //! of a mesh in front of the camera to `raster`, which finds the same first hits).
 
-use super::raster::{Plane, SceneTriangle, rasterise};
+use super::raster::{Plane, SceneTriangle, rasterise, rasterise_samples};
 use super::tiles::{PixelRect, TILE, visible_tiles};
 use super::watertight::ShearedRay;
 use crate::cameras::Camera;
@@ -69,6 +69,13 @@ impl PlaneEquation {
 /// faster; 480² (4.3) 10 slower.
 const RASTER_LIMIT: usize = 3;
 
+/// Triangles per sub-pixel ray up to which the rays' hits are rasterised rather than traced:
+/// rasterising costs about the projection of every triangle, tracing a BVH walk per ray. On
+/// the benchmark's 10⁶-triangle torus (one thread, 960², 37,000–68,000 anti-aliased pixels
+/// of four rays each) the two break even at about seven triangles per ray: rasterised 90–156
+/// ms per view, traced 106–279 ms.
+const TRIANGLES_PER_RAY: usize = 8;
+
 /// Triangles above which a BVH is built for speed rather than quality.
 const LARGE_MESH: usize = 200_000;
 
@@ -103,6 +110,63 @@ pub struct GBuffer {
     pub depth: Vec<f32>,
     /// Index of the triangle each pixel sees, in the scene mesh (`NO_HIT` = none).
     pub triangle: Vec<u32>,
+}
+
+/// Some pixels of an image, row by row, each row's columns ascending.
+pub struct PixelSet {
+    /// Where each row's pixels start in `rows` and `cols`, and (last) where they end.
+    starts: Vec<usize>,
+    rows: Vec<u32>,
+    cols: Vec<u32>,
+}
+
+impl PixelSet {
+    /// The pixels of `columns[row]` in each row (columns ascending).
+    pub fn from_rows(columns: &[Vec<u32>]) -> PixelSet {
+        let mut starts = Vec::with_capacity(columns.len() + 1);
+        let (mut rows, mut cols) = (Vec::new(), Vec::new());
+        for (row, line) in columns.iter().enumerate() {
+            debug_assert!(line.windows(2).all(|w| w[0] < w[1]));
+            starts.push(cols.len());
+            rows.extend(std::iter::repeat_n(row as u32, line.len()));
+            cols.extend(line);
+        }
+        starts.push(cols.len());
+        PixelSet { starts, rows, cols }
+    }
+
+    /// How many pixels.
+    pub fn len(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.cols.is_empty()
+    }
+
+    /// Row and column of pixel `i`, as image coordinates of the pixel's corner.
+    pub fn at(&self, i: usize) -> (f64, f64) {
+        (f64::from(self.rows[i]), f64::from(self.cols[i]))
+    }
+
+    /// The indices of the pixels in `rows`.
+    pub fn in_rows(&self, rows: std::ops::Range<usize>) -> std::ops::Range<usize> {
+        let clamp = |r: usize| self.starts[r.min(self.starts.len() - 1)];
+        clamp(rows.start)..clamp(rows.end)
+    }
+
+    /// The indices of the pixels of `row` whose columns lie in `cols`.
+    pub fn in_row_between(
+        &self,
+        row: usize,
+        cols: std::ops::Range<usize>,
+    ) -> std::ops::Range<usize> {
+        let all = self.in_rows(row..row + 1);
+        let line = &self.cols[all.clone()];
+        let from = |col: usize| all.start + line.partition_point(|&c| (c as usize) < col);
+        from(cols.start)..from(cols.end)
+    }
 }
 
 /// A mesh with its BVH: the unloaded twin of a sample's mesh, traced for the unloaded image.
@@ -219,20 +283,55 @@ impl TraceMesh {
         if self.triangles.len() > RASTER_LIMIT * pixels {
             return self.trace_rays_along(camera, &rays);
         }
-        let triangles = self
-            .original
+        rasterise(camera, &rays, self.seen_by(camera), self.near())
+            .unwrap_or_else(|| self.trace_rays_along(camera, &rays))
+    }
+
+    /// Planar depth and triangle first met by the ray through each point at `offsets` within
+    /// each of `pixels` (image coordinates from the pixel's corner), in the order of
+    /// `pixels`: rasterised where that is exact and costs less than the rays (see `raster`),
+    /// else traced, giving the hits `first_hit` gives.
+    pub fn sample_hits<const N: usize>(
+        &self,
+        camera: &Camera,
+        pixels: &PixelSet,
+        offsets: &[(f64, f64); N],
+    ) -> Vec<[Option<(f32, u32)>; N]> {
+        if self.triangles.len() <= TRIANGLES_PER_RAY * N * pixels.len() {
+            let near = self.near();
+            if let Some(hits) =
+                rasterise_samples(camera, self.seen_by(camera), near, pixels, offsets)
+            {
+                return hits;
+            }
+        }
+        let k = camera.intrinsics;
+        (0..pixels.len())
+            .into_par_iter()
+            .map(|i| {
+                let (row, col) = pixels.at(i);
+                offsets.map(|(du, dv)| self.first_hit(camera, k.ray_through(col + du, row + dv)))
+            })
+            .collect()
+    }
+
+    /// The triangles as the rasteriser takes them from `camera`, in BVH leaf order.
+    fn seen_by<'a>(&'a self, camera: &Camera) -> impl Iterator<Item = SceneTriangle> + 'a {
+        let from = camera.position - self.anchor;
+        self.original
             .iter()
             .zip(&self.triangles)
             .zip(&self.leaf_planes)
-            .map(|((&original, corners), plane)| SceneTriangle {
+            .map(move |((&original, corners), plane)| SceneTriangle {
                 original,
                 corners: corners.map(|c| c.as_dvec3() + self.anchor),
-                plane: plane.seen_from(camera.position - self.anchor),
-            });
-        // Closer than this to the camera's plane, a corner's projection loses its precision.
-        let near = 1e-3 * self.reach;
-        rasterise(camera, &rays, triangles, near)
-            .unwrap_or_else(|| self.trace_rays_along(camera, &rays))
+                plane: plane.seen_from(from),
+            })
+    }
+
+    /// Closer than this to the camera's plane, a corner's projection loses its precision.
+    fn near(&self) -> f64 {
+        1e-3 * self.reach
     }
 
     /// Traces one centre ray per pixel (never rasterised), in the tiles where the BVH's boxes
