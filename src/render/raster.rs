@@ -239,6 +239,10 @@ pub(super) fn rasterise_samples<const N: usize>(
     binned.resize_with(height.div_ceil(BAND), Vec::new);
     let marked = Marks::of(pixels, k.width as usize, height);
     let samples = Samples::at(offsets);
+    // The lines of sample points within a row, from its top.
+    let mut lines: Vec<f64> = offsets.iter().map(|o| o.1).collect();
+    lines.sort_by(f64::total_cmp);
+    lines.dedup();
     bin(camera, triangles, near, &samples, &mut binned, |t| {
         marked.any_in(t.rows(), t.cols())
     })?;
@@ -269,7 +273,10 @@ pub(super) fn rasterise_samples<const N: usize>(
                 };
                 let rows = band_rows(band);
                 for row in rows.start.max(t.rows().start)..rows.end.min(t.rows().end) {
-                    for i in pixels.in_row_between(row, t.cols()) {
+                    let Some(cols) = sample_cols(t, row, &lines, k.width as usize) else {
+                        continue;
+                    };
+                    for i in pixels.in_row_between(row, cols) {
                         let (v, u) = pixels.at(i);
                         for (s, (du, dv)) in offsets.iter().enumerate() {
                             if coverage.contains(DVec2::new(u + du, v + dv)) {
@@ -450,6 +457,28 @@ fn cover(
             }
         }
     }
+}
+
+/// The columns where triangle `t` may hold a sample point of pixel row `row`, whose sample
+/// points lie on `lines` (offsets from the row's top): within its bounds, and for a wide
+/// triangle only about where each of those lines crosses it.
+fn sample_cols(
+    t: &Projected,
+    row: usize,
+    lines: &[f64],
+    width: usize,
+) -> Option<std::ops::Range<usize>> {
+    let own = t.cols();
+    if own.len() <= NARROW {
+        return Some(own);
+    }
+    let spans = lines
+        .iter()
+        .filter_map(|dv| row_span(&t.corners, row as f64 + dv, width));
+    let (start, end) = spans.fold((usize::MAX, 0), |(s, e), span| {
+        (s.min(span.start), e.max(span.end))
+    });
+    (start < end).then(|| start.max(own.start)..end.min(own.end))
 }
 
 /// The columns a triangle may cover on the line of pixel centres at `v`: between where the
