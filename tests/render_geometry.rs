@@ -144,6 +144,24 @@ fn narrow_fields_of_view_are_exact() {
     }
 }
 
+/// A closed solid (the beam box) seen from inside: every wall is turned away from the camera,
+/// so leaving out the triangles of a solid seen from behind, which is right only for a camera
+/// outside it, would leave the view empty. Every pixel must see the far wall, along the x
+/// axis 2.0 m off, at its exact planar depth.
+#[test]
+fn a_camera_inside_a_closed_solid_sees_its_walls() {
+    let mesh = box_mesh(DVec3::ZERO);
+    assert_eq!(mesh.solids().count, 1, "the box is a closed solid");
+    let trace = TraceMesh::build(&mesh);
+    let k = Intrinsics::from_fov_y(64, 48, 0.2);
+    let cam = Camera::look_at(k, DVec3::ZERO, DVec3::X, DVec3::Z);
+    let g = trace.trace(&cam);
+    for (i, (&tri, &depth)) in g.triangle.iter().zip(&g.depth).enumerate() {
+        assert_ne!(tri, NO_HIT, "pixel {i}");
+        assert!((f64::from(depth) - 2.0).abs() < 1e-6, "pixel {i}: {depth}");
+    }
+}
+
 fn paper_intrinsics() -> Intrinsics {
     Intrinsics::from_fov_y(960, 960, std::f64::consts::FRAC_PI_3)
 }

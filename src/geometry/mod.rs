@@ -8,9 +8,11 @@
 pub mod import;
 pub mod outline;
 pub mod primitives;
+mod solids;
 mod sweep;
 
 pub use outline::SectionOutline;
+pub use solids::{NOT_SOLID, Solids};
 pub use sweep::{Frame3, sweep};
 
 use glam::DVec3;

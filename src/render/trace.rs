@@ -32,6 +32,10 @@ pub struct TraceMesh {
     /// The same planes in BVH leaf order, as `triangles`: rasterising reads them in step
     /// with the corners (through `original` they would be read all over memory).
     leaf_planes: Vec<PlaneEquation>,
+    /// The closed solid (`Mesh::solids`) each triangle belongs to, in BVH leaf order.
+    leaf_solids: Vec<u32>,
+    /// Bounds of each solid, relative to `anchor`: a camera outside them is outside it.
+    solid_bounds: Vec<(DVec3, DVec3)>,
     anchor: DVec3,
     /// Radius about `anchor` of a sphere holding every vertex.
     reach: f64,
@@ -237,7 +241,22 @@ impl TraceMesh {
                 }
             })
             .collect();
+        let solids = mesh.solids();
+        let mut solid_bounds = vec![(DVec3::INFINITY, DVec3::NEG_INFINITY); solids.count];
+        for (t, &solid) in solids.of_triangle.iter().enumerate() {
+            if let Some((lo, hi)) = solid_bounds.get_mut(solid as usize) {
+                for p in mesh.triangle(t) {
+                    (*lo, *hi) = (lo.min(p - anchor), hi.max(p - anchor));
+                }
+            }
+        }
         TraceMesh {
+            leaf_solids: bvh
+                .primitive_indices
+                .iter()
+                .map(|&i| solids.of_triangle[i as usize])
+                .collect(),
+            solid_bounds,
             leaf_planes: bvh
                 .primitive_indices
                 .iter()
@@ -315,17 +334,35 @@ impl TraceMesh {
             .collect()
     }
 
-    /// The triangles as the rasteriser takes them from `camera`, in BVH leaf order.
+    /// The triangles as the rasteriser takes them from `camera`, in BVH leaf order, but
+    /// those of a closed solid that the camera, outside it, sees from behind: a ray meeting
+    /// one has met one of the solid's triangles facing it first, nearer (see `Mesh::solids`).
+    /// Only triangles clearly turned away are left out (by more than a billionth of the
+    /// scene's scale, far above the plane's rounding), so one seen edge-on always stays.
     fn seen_by<'a>(&'a self, camera: &Camera) -> impl Iterator<Item = SceneTriangle> + 'a {
         let from = camera.position - self.anchor;
+        let margin = 1e-9 * (from.length() + self.reach);
+        let outside: Vec<bool> = self
+            .solid_bounds
+            .iter()
+            .map(|&(lo, hi)| {
+                let grown = DVec3::splat(margin);
+                from.cmplt(lo - grown).any() || from.cmpgt(hi + grown).any()
+            })
+            .collect();
         self.original
             .iter()
             .zip(&self.triangles)
             .zip(&self.leaf_planes)
-            .map(move |((&original, corners), plane)| SceneTriangle {
-                original,
-                corners: corners.map(|c| c.as_dvec3() + self.anchor),
-                plane: plane.seen_from(from),
+            .zip(&self.leaf_solids)
+            .filter_map(move |(((&original, corners), plane), &solid)| {
+                let plane = plane.seen_from(from);
+                let behind = plane.ahead > margin && outside.get(solid as usize) == Some(&true);
+                (!behind).then(|| SceneTriangle {
+                    original,
+                    corners: corners.map(|c| c.as_dvec3() + self.anchor),
+                    plane,
+                })
             })
     }
 
