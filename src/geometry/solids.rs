@@ -124,33 +124,12 @@ mod tests {
 
     /// A unit cube about `centre`, wound outwards (or inwards).
     fn cube(centre: DVec3, outwards: bool) -> Mesh {
-        let positions = (0..8)
-            .map(|i| {
-                centre
-                    + DVec3::new(
-                        f64::from(i & 1) - 0.5,
-                        f64::from((i >> 1) & 1) - 0.5,
-                        f64::from((i >> 2) & 1) - 0.5,
-                    )
-            })
-            .collect();
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let triangles = quads
-            .iter()
-            .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
-            .map(|t: [u32; 3]| if outwards { t } else { [t[0], t[2], t[1]] })
-            .collect();
-        Mesh {
-            positions,
-            triangles,
+        let mut cube = crate::geometry::import::tests::cube();
+        cube.transform(&DAffine3::from_translation(centre - DVec3::splat(0.5)));
+        if !outwards {
+            cube.triangles.iter_mut().for_each(|t| t.swap(1, 2));
         }
+        cube
     }
 
     #[test]
@@ -196,12 +175,13 @@ mod tests {
         let other = cube(DVec3::new(1.0, 1.0, 0.0), true);
         let base = touching.positions.len() as u32;
         touching.append(&other);
-        // Weld the shared edge: vertices 3 and 7 of the first are 0 and 4 of the second.
+        assert_eq!(touching.solids().count, 2, "apart, two solids");
+        // Weld the shared edge: vertices 2 and 6 of the first are 0 and 4 of the second.
         for t in &mut touching.triangles[12..] {
             for i in t.iter_mut() {
                 *i = match *i - base {
-                    0 => 3,
-                    4 => 7,
+                    0 => 2,
+                    4 => 6,
                     _ => *i,
                 };
             }

@@ -16,7 +16,7 @@ mod obj;
 mod ply;
 mod stl;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 mod validate;
 
 use std::path::Path;

@@ -76,7 +76,8 @@ const CUBE_QUADS: [[u32; 4]; 6] = [
     [0, 4, 7, 3],
 ];
 
-pub(super) fn cube() -> Mesh {
+/// The unit cube [0, 1]³, wound outwards.
+pub(crate) fn cube() -> Mesh {
     Mesh {
         positions: CUBE_CORNERS
             .iter()
