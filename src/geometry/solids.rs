@@ -27,25 +27,42 @@ impl Mesh {
     /// shared edges).
     pub fn solids(&self) -> Solids {
         let n = self.triangles.len();
-        // Every edge once per triangle using it: its endpoints in increasing order, whether
-        // the triangle runs it that way, and the triangle.
-        let mut edges: Vec<(u64, bool, u32)> = Vec::with_capacity(3 * n);
+        // Every edge once per triangle using it, filed under its lesser endpoint (a counting
+        // sort: linear, where sorting all 3n edges took a fifth of a 10⁶-triangle BVH build):
+        // its greater endpoint, whether the triangle runs it that way, and the triangle.
+        let mut starts = vec![0usize; self.positions.len() + 1];
+        for tri in &self.triangles {
+            for k in 0..3 {
+                starts[tri[k].min(tri[(k + 1) % 3]) as usize + 1] += 1;
+            }
+        }
+        for v in 1..starts.len() {
+            starts[v] += starts[v - 1];
+        }
+        let mut next = starts.clone();
+        let mut edges = vec![(0u32, false, 0u32); 3 * n];
         for (t, tri) in self.triangles.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-                edges.push((key, a < b, t as u32));
+                let slot = &mut next[a.min(b) as usize];
+                edges[*slot] = (a.max(b), a < b, t as u32);
+                *slot += 1;
             }
         }
-        edges.sort_unstable();
         let mut pieces = Pieces::new(n);
         let mut open = vec![false; n];
-        for group in edges.chunk_by(|x, y| x.0 == y.0) {
-            match group {
-                [(_, forward, s), (_, backward, t)] if forward != backward => pieces.join(*s, *t),
-                // A border, a fold shared by more than two triangles, or two triangles
-                // running the edge the same way.
-                _ => group.iter().for_each(|&(_, _, t)| open[t as usize] = true),
+        for bucket in starts.windows(2) {
+            let around = &mut edges[bucket[0]..bucket[1]];
+            around.sort_unstable();
+            for group in around.chunk_by(|x, y| x.0 == y.0) {
+                match group {
+                    [(_, forward, s), (_, backward, t)] if forward != backward => {
+                        pieces.join(*s, *t)
+                    }
+                    // A border, a fold shared by more than two triangles, or two triangles
+                    // running the edge the same way.
+                    _ => group.iter().for_each(|&(_, _, t)| open[t as usize] = true),
+                }
             }
         }
         let roots: Vec<u32> = (0..n as u32).map(|t| pieces.root(t)).collect();
