@@ -16,7 +16,14 @@ fn png(
     let mut encoder = ::png::Encoder::new(&mut out, width, height);
     encoder.set_color(colour);
     encoder.set_depth(depth);
-    encoder.set_compression(::png::Compression::Fast);
+    // Label images (masks, ids, millimetres) are flat over large regions: the "up" filter
+    // (`Fastest`) packs them within 4 % of the per-row best filter (`Fast`) in half the time
+    // (a 960² mask: 0.24 against 0.5 ms). Photographs keep the per-row choice, whose files are
+    // 5–27 % smaller than "up" alone for twice the time (a 960² A1 view: 2.2 against 1.3 ms).
+    encoder.set_compression(match colour {
+        ::png::ColorType::Grayscale => ::png::Compression::Fastest,
+        _ => ::png::Compression::Fast,
+    });
     let mut writer = encoder.write_header().expect("PNG header into memory");
     writer.write_image_data(data).expect("PNG data into memory");
     writer.finish().expect("PNG end into memory");
