@@ -296,7 +296,7 @@ fn breakdown(name: &str, recipe: &Recipe, samples: u64) {
     pool.install(|| {
         for s in 0..recipe.dataset.samples.min(samples) {
             let sample = stages.time("prepare (per sample)", || prepare(recipe, s).unwrap());
-            let mesh = stages.time("BVH build (per sample)", || TraceMesh::build(&sample.mesh));
+            let mesh = stages.time("scene mesh (per sample)", || TraceMesh::build(&sample.mesh));
             for view in 0..recipe.dataset.views {
                 let camera = view_camera(&recipe.dataset, &sample, view).unwrap().camera;
                 let g = view_stages(&sample, &mesh, &camera, dir.path(), &mut stages);

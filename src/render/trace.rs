@@ -12,6 +12,7 @@ use obvhs::bvh2::{Bvh2, builder::build_bvh2_from_tris};
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
+use std::sync::OnceLock;
 use std::time::Duration;
 
 /// Triangle id of a pixel that saw no surface.
@@ -21,21 +22,21 @@ pub const NO_HIT: u32 = u32::MAX;
 /// the mesh bounds), so geometry far from the world origin keeps its precision; rays start in
 /// f32 only where they enter the mesh's bounding sphere, so a camera far away (a narrow field
 /// of view) loses nothing either. Depths come from each triangle's plane in f64.
+///
+/// The BVH is built when a ray is first traced: views the rasteriser sees in full (every
+/// pinhole view in front of a mesh, with rasterised sub-pixel rays and no shadows) never walk
+/// it, and a 10⁶-triangle mesh's build costs as much as several of its views.
 pub struct TraceMesh {
-    bvh: Bvh2,
-    /// Triangles in BVH leaf order.
-    triangles: Vec<[Vec3A; 3]>,
-    /// Original triangle index of each BVH-ordered triangle.
-    original: Vec<u32>,
-    /// The plane of each original triangle.
+    /// Corners of each triangle, relative to `anchor`, in the mesh's order.
+    corners: Vec<Triangle>,
+    /// The plane of each triangle.
     planes: Vec<PlaneEquation>,
-    /// The same planes in BVH leaf order, as `triangles`: rasterising reads them in step
-    /// with the corners (through `original` they would be read all over memory).
-    leaf_planes: Vec<PlaneEquation>,
-    /// The closed solid (`Mesh::solids`) each triangle belongs to, in BVH leaf order.
-    leaf_solids: Vec<u32>,
+    /// The closed solid (`Mesh::solids`) each triangle belongs to.
+    solids: Vec<u32>,
     /// Bounds of each solid, relative to `anchor`: a camera outside them is outside it.
     solid_bounds: Vec<(DVec3, DVec3)>,
+    /// The BVH over `corners`, built on first use.
+    tree: OnceLock<Tree>,
     anchor: DVec3,
     /// Radius about `anchor` of a sphere holding every vertex.
     reach: f64,
@@ -46,6 +47,38 @@ pub struct TraceMesh {
     /// or occlusion ray that misses them can meet nothing but the ground, which never blocks
     /// one (see `occluded_within`).
     core_bounds: (DVec3, DVec3),
+}
+
+/// A BVH and its triangles in leaf order, where traversal reads them.
+struct Tree {
+    bvh: Bvh2,
+    /// Corners of each leaf's triangle.
+    triangles: Vec<[Vec3A; 3]>,
+    /// The mesh's index of each leaf's triangle.
+    original: Vec<u32>,
+}
+
+impl Tree {
+    /// Builds the BVH of `corners` (one thread: the build may run inside a pool's task).
+    fn build(corners: &[Triangle]) -> Tree {
+        let bvh = build_bvh2_from_tris(
+            corners,
+            build_params(corners.len()),
+            &mut Duration::default(),
+        );
+        Tree {
+            triangles: bvh
+                .primitive_indices
+                .iter()
+                .map(|&i| {
+                    let t = &corners[i as usize];
+                    [t.v0, t.v1, t.v2]
+                })
+                .collect(),
+            original: bvh.primitive_indices.clone(),
+            bvh,
+        }
+    }
 }
 
 /// A triangle's plane: outward unit normal n (zero for a degenerate triangle) and n · a for
@@ -217,7 +250,7 @@ impl TraceMesh {
         };
         let anchor = 0.5 * (lo + hi);
         let local = |i: u32| (mesh.positions[i as usize] - anchor).as_vec3a();
-        let tris: Vec<Triangle> = mesh
+        let corners: Vec<Triangle> = mesh
             .triangles
             .iter()
             .map(|t| Triangle {
@@ -226,11 +259,6 @@ impl TraceMesh {
                 v2: local(t[2]),
             })
             .collect();
-        let bvh = build_bvh2_from_tris(&tris, build_params(tris.len()), &mut Duration::default());
-        let triangles = bvh.primitive_indices.iter().map(|&i| {
-            let t = &tris[i as usize];
-            [t.v0, t.v1, t.v2]
-        });
         let planes: Vec<PlaneEquation> = (0..mesh.triangles.len())
             .map(|t| {
                 let [a, b, c] = mesh.triangle(t);
@@ -251,21 +279,11 @@ impl TraceMesh {
             }
         }
         TraceMesh {
-            leaf_solids: bvh
-                .primitive_indices
-                .iter()
-                .map(|&i| solids.of_triangle[i as usize])
-                .collect(),
-            solid_bounds,
-            leaf_planes: bvh
-                .primitive_indices
-                .iter()
-                .map(|&i| planes[i as usize])
-                .collect(),
+            corners,
             planes,
-            triangles: triangles.collect(),
-            original: bvh.primitive_indices.clone(),
-            bvh,
+            solids: solids.of_triangle,
+            solid_bounds,
+            tree: OnceLock::new(),
             anchor,
             reach: 0.5 * (hi - lo).length(),
             core_diagonal: (core_hi - core_lo).length(),
@@ -274,6 +292,11 @@ impl TraceMesh {
                 (core_lo - anchor - margin, core_hi - anchor + margin)
             },
         }
+    }
+
+    /// The BVH, built on first use.
+    fn tree(&self) -> &Tree {
+        self.tree.get_or_init(|| Tree::build(&self.corners))
     }
 
     /// Ray parameter where the ray from world point `origin` along `dir` meets the plane of
@@ -299,7 +322,7 @@ impl TraceMesh {
         let rays = PrimaryRays::new(camera);
         let k = camera.intrinsics;
         let pixels = k.width as usize * k.height as usize;
-        if self.triangles.len() > RASTER_LIMIT * pixels {
+        if self.corners.len() > RASTER_LIMIT * pixels {
             return self.trace_rays_along(camera, &rays);
         }
         rasterise(camera, &rays, self.seen_by(camera), self.near())
@@ -316,7 +339,7 @@ impl TraceMesh {
         pixels: &PixelSet,
         offsets: &[(f64, f64); N],
     ) -> Vec<[Option<(f32, u32)>; N]> {
-        if self.triangles.len() <= TRIANGLES_PER_RAY * N * pixels.len() {
+        if self.corners.len() <= TRIANGLES_PER_RAY * N * pixels.len() {
             let near = self.near();
             if let Some(hits) =
                 rasterise_samples(camera, self.seen_by(camera), near, pixels, offsets)
@@ -350,17 +373,17 @@ impl TraceMesh {
                 from.cmplt(lo - grown).any() || from.cmpgt(hi + grown).any()
             })
             .collect();
-        self.original
-            .iter()
-            .zip(&self.triangles)
-            .zip(&self.leaf_planes)
-            .zip(&self.leaf_solids)
-            .filter_map(move |(((&original, corners), plane), &solid)| {
+        (0u32..)
+            .zip(&self.corners)
+            .zip(&self.planes)
+            .zip(&self.solids)
+            .filter_map(move |(((original, corners), plane), &solid)| {
                 let plane = plane.seen_from(from);
                 let behind = plane.ahead > margin && outside.get(solid as usize) == Some(&true);
                 (!behind).then(|| SceneTriangle {
                     original,
-                    corners: corners.map(|c| c.as_dvec3() + self.anchor),
+                    corners: [corners.v0, corners.v1, corners.v2]
+                        .map(|c| c.as_dvec3() + self.anchor),
                     plane,
                 })
             })
@@ -382,7 +405,7 @@ impl TraceMesh {
         let (w, h) = (k.width as usize, k.height as usize);
         let mut depth = vec![0.0f32; w * h];
         let mut triangle = vec![NO_HIT; w * h];
-        let tiles = visible_tiles(&self.bvh, camera, |lo, hi| self.box_bounds(camera, lo, hi));
+        let tiles = visible_tiles(&self.tree().bvh, camera, |lo, hi| self.box_bounds(camera, lo, hi));
         let origin = camera.position - self.anchor;
         depth
             .par_chunks_mut(w * TILE)
@@ -440,8 +463,9 @@ impl TraceMesh {
         let sheared = ShearedRay::new(origin, dir);
         let ray = Ray::new(origin, dir, 0.0, reach as f32);
         // Stops at the first blocker found.
-        !self.bvh.ray_traverse_miss(ray, |r, id| {
-            let [a, b, c] = self.triangles[id];
+        let tree = self.tree();
+        !tree.bvh.ray_traverse_miss(ray, |r, id| {
+            let [a, b, c] = tree.triangles[id];
             sheared.intersect(a, b, c, r.tmax)
         })
     }
@@ -457,14 +481,15 @@ impl TraceMesh {
         let sheared = ShearedRay::new(start, dir32);
         let ray = Ray::new(start, dir32, 0.0, f32::INFINITY);
         let mut hit = RayHit::none();
-        let found = self.bvh.ray_traverse(ray, &mut hit, |r, id| {
-            let [a, b, c] = self.triangles[id];
+        let tree = self.tree();
+        let found = tree.bvh.ray_traverse(ray, &mut hit, |r, id| {
+            let [a, b, c] = tree.triangles[id];
             sheared.intersect(a, b, c, r.tmax)
         });
         if !found {
             return None;
         }
-        let tri = self.original[hit.primitive_id as usize];
+        let tri = tree.original[hit.primitive_id as usize];
         let refined = self.plane_hit(tri, origin + self.anchor, dir);
         let t = if refined.is_finite() && refined > 0.0 {
             refined
@@ -634,5 +659,35 @@ mod tests {
         ));
         // A grazing ray along a face is inside its slab: it meets the box.
         assert!(meets([-5.0, 1.0, 0.0], [1.0, 0.0, 0.0], f64::INFINITY));
+    }
+
+    /// A view the rasteriser sees in full walks no BVH, so none is built: a cube's centre
+    /// rays and sub-pixel rays rasterised leave it unbuilt. Traced ray by ray afterwards (the
+    /// BVH built then), every pixel meets the triangle the rasteriser found, at its depth.
+    #[test]
+    fn rasterised_views_build_no_bvh_and_traced_rays_agree() {
+        let trace = TraceMesh::build(&crate::geometry::import::tests::cube());
+        let k = crate::cameras::Intrinsics::from_fov_y(64, 48, 1.0);
+        let eye = DVec3::new(1.6, -0.9, 1.3);
+        let camera = Camera::look_at(k, eye, DVec3::splat(0.5), DVec3::Z);
+        let g = trace.trace(&camera);
+        let rows: Vec<Vec<u32>> = (0..48).map(|_| (0..64).collect()).collect();
+        let pixels = PixelSet::from_rows(&rows);
+        let centres = trace.sample_hits(&camera, &pixels, &[(0.5, 0.5)]);
+        assert!(trace.tree.get().is_none(), "a BVH was built");
+        let mut seen = 0;
+        for (i, [hit]) in centres.into_iter().enumerate() {
+            let (row, col) = pixels.at(i);
+            let traced = trace.first_hit(&camera, k.ray_through(col + 0.5, row + 0.5));
+            let rasterised = (g.triangle[i] != NO_HIT).then_some((g.depth[i], g.triangle[i]));
+            for found in [rasterised, hit] {
+                assert_eq!(found.map(|h| h.1), traced.map(|h| h.1), "pixel {i}");
+                if let (Some((d, _)), Some((t, _))) = (found, traced) {
+                    assert!((d - t).abs() <= 1e-6 * t, "pixel {i}: {d} against {t}");
+                }
+            }
+            seen += usize::from(traced.is_some());
+        }
+        assert!(trace.tree.get().is_some() && seen > 500, "{seen} pixels meet the cube");
     }
 }
