@@ -549,7 +549,7 @@ fn main() {
             million_recipe(million_dir.path(), &[]),
         ),
         (
-            "the same mesh, 10 samples × 2 views (one BVH shared)",
+            "the same mesh, 10 samples × 2 views (its triangles shared)",
             million_recipe(million_dir.path(), &[("samples", "10"), ("views", "2")]),
         ),
     ];
