@@ -405,7 +405,9 @@ impl TraceMesh {
         let (w, h) = (k.width as usize, k.height as usize);
         let mut depth = vec![0.0f32; w * h];
         let mut triangle = vec![NO_HIT; w * h];
-        let tiles = visible_tiles(&self.tree().bvh, camera, |lo, hi| self.box_bounds(camera, lo, hi));
+        let tiles = visible_tiles(&self.tree().bvh, camera, |lo, hi| {
+            self.box_bounds(camera, lo, hi)
+        });
         let origin = camera.position - self.anchor;
         depth
             .par_chunks_mut(w * TILE)
@@ -688,6 +690,9 @@ mod tests {
             }
             seen += usize::from(traced.is_some());
         }
-        assert!(trace.tree.get().is_some() && seen > 500, "{seen} pixels meet the cube");
+        assert!(
+            trace.tree.get().is_some() && seen > 500,
+            "{seen} pixels meet the cube"
+        );
     }
 }
