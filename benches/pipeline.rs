@@ -8,7 +8,7 @@
 //!
 //! Rows: the A1 smoke run with the paper's prompts, the quickstart, the A2 smoke run, an
 //! imported mesh of a million triangles (written by the benchmark; 2 samples × 10 views, and
-//! 10 × 2, where ten samples share its BVH), a streaming run of tiny
+//! 10 × 2, where ten samples share its prepared triangles), a streaming run of tiny
 //! views at growing sample counts (throughput and peak resident memory, each count in its own
 //! process), and the time per pair at 3840×3840 against 960×960. Then the cost per view of
 //! each daylight and camera effect, on and off (`SHMGEN_BENCH_ONLY=daylight`: only that;

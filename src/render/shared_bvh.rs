@@ -1,6 +1,7 @@
-//! BVHs shared between samples whose traced meshes are the same: an imported mesh that no load
-//! moves and no draw changes is built once per run instead of once per sample (on a 10⁶-triangle
-//! mesh the build costs as much as several of its views).
+//! Traced meshes shared between samples whose meshes are the same: an imported mesh that no
+//! load moves and no draw changes has its triangles, planes and solids (and its BVH, once a
+//! ray needs one) prepared once per run instead of once per sample (on a 10⁶-triangle mesh
+//! they cost as much as a view, the BVH as several).
 //!
 //! Owns: recognising a mesh already built (by a BLAKE3 fingerprint of its vertex and index
 //! bytes) and holding the latest BVH. Must not touch: how a BVH is built or traced. A shared
