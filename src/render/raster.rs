@@ -259,7 +259,8 @@ pub(super) fn rasterise_samples<const N: usize>(
         .zip(binned.par_iter())
         .enumerate()
         .for_each(|(band, (nearest, binned))| {
-            let first = pixels.in_rows(band_rows(band)).start;
+            let rows = band_rows(band);
+            let first = pixels.in_rows(rows.clone()).start;
             // The rays as `TraceMesh::first_hit` takes them, for the same depths.
             let rays: Vec<[DVec3; N]> = (first..first + nearest.len())
                 .map(|i| {
@@ -271,7 +272,6 @@ pub(super) fn rasterise_samples<const N: usize>(
                 let Some(coverage) = Coverage::of(t) else {
                     continue;
                 };
-                let rows = band_rows(band);
                 for row in rows.start.max(t.rows().start)..rows.end.min(t.rows().end) {
                     let Some(cols) = sample_cols(t, row, &lines, k.width as usize) else {
                         continue;

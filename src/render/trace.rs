@@ -340,10 +340,8 @@ impl TraceMesh {
         offsets: &[(f64, f64); N],
     ) -> Vec<[Option<(f32, u32)>; N]> {
         if self.corners.len() <= TRIANGLES_PER_RAY * N * pixels.len() {
-            let near = self.near();
-            if let Some(hits) =
-                rasterise_samples(camera, self.seen_by(camera), near, pixels, offsets)
-            {
+            let seen = self.seen_by(camera);
+            if let Some(hits) = rasterise_samples(camera, seen, self.near(), pixels, offsets) {
                 return hits;
             }
         }
@@ -357,7 +355,7 @@ impl TraceMesh {
             .collect()
     }
 
-    /// The triangles as the rasteriser takes them from `camera`, in BVH leaf order, but
+    /// The triangles as the rasteriser takes them from `camera`, in the mesh's order, but
     /// those of a closed solid that the camera, outside it, sees from behind: a ray meeting
     /// one has met one of the solid's triangles facing it first, nearer (see `Mesh::solids`).
     /// Only triangles clearly turned away are left out (by more than a billionth of the
