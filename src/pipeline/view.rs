@@ -168,8 +168,8 @@ impl<'a> SampleRenderer<'a> {
         }
     }
 
-    /// The unloaded structure and its BVH, built on first use: the loaded mesh's triangles
-    /// over the undeformed vertices.
+    /// The unloaded structure ready for tracing, prepared on first use: the loaded mesh's
+    /// triangles over the undeformed vertices.
     fn rest(&self) -> &Traced {
         self.rest.get_or_init(|| {
             let s = self.sample;

@@ -3,29 +3,29 @@
 //! ray needs one) prepared once per run instead of once per sample (on a 10⁶-triangle mesh
 //! they cost as much as a view, the BVH as several).
 //!
-//! Owns: recognising a mesh already built (by a BLAKE3 fingerprint of its vertex and index
-//! bytes) and holding the latest BVH. Must not touch: how a BVH is built or traced. A shared
-//! BVH is the one the sample would have built (the build is a pure function of the mesh), so
-//! sharing changes no output byte.
+//! Owns: recognising a mesh already prepared (by a BLAKE3 fingerprint of its vertex and index
+//! bytes) and holding the latest one. Must not touch: how a mesh is prepared, its BVH built or
+//! traced. A shared traced mesh is the one the sample would have prepared (preparing, and the
+//! BVH's build, are pure functions of the mesh), so sharing changes no output byte.
 
 use super::TraceMesh;
 use crate::geometry::Mesh;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// A BVH being built or built, shared by the samples that ask for it.
+/// A traced mesh being prepared or prepared, shared by the samples that ask for it.
 type Slot = Arc<OnceLock<Arc<TraceMesh>>>;
 
-/// The BVH of the mesh most recently asked for. Samples under way at once (one per thread)
-/// that ask for the same mesh wait for one build; a different mesh replaces it, so at most
-/// one BVH outlives the samples that used it.
+/// The traced mesh most recently asked for. Samples under way at once (one per thread) that
+/// ask for the same mesh wait for one preparation; a different mesh replaces it, so at most
+/// one traced mesh outlives the samples that used it.
 #[derive(Default)]
 pub struct SharedBvhs {
     latest: Mutex<Option<(blake3::Hash, Slot)>>,
 }
 
 impl SharedBvhs {
-    /// The BVH of `mesh` whose first `core` triangles are the structures (see
-    /// `TraceMesh::build_with_core`), built unless the latest mesh asked for is the same.
+    /// `mesh`, whose first `core` triangles are the structures, prepared for tracing (see
+    /// `TraceMesh::build_with_core`) unless the latest mesh asked for is the same.
     pub fn get(&self, mesh: &Mesh, core: usize) -> Arc<TraceMesh> {
         let key = fingerprint(mesh, core);
         let slot = {

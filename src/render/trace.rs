@@ -206,17 +206,18 @@ impl PixelSet {
     }
 }
 
-/// A mesh with its BVH: the unloaded twin of a sample's mesh, traced for the unloaded image.
+/// A mesh ready for tracing: the unloaded twin of a sample's mesh, traced for the unloaded
+/// image.
 pub struct Traced {
     /// The mesh.
     pub mesh: Mesh,
-    /// Its BVH.
+    /// The mesh prepared for tracing (its BVH built when a ray first needs one).
     pub bvh: TraceMesh,
 }
 
 impl Traced {
     /// `mesh`'s triangles over other positions of its vertices (the unloaded ones, in the
-    /// same order), with their BVH; the first `core` triangles are the structures (see
+    /// same order), ready for tracing; the first `core` triangles are the structures (see
     /// [`TraceMesh::build_with_core`]).
     pub fn with_positions(mesh: &Mesh, positions: &[DVec3], core: usize) -> Self {
         let mesh = Mesh {
@@ -229,12 +230,13 @@ impl Traced {
 }
 
 impl TraceMesh {
-    /// Builds the BVH. The mesh must be non-empty with finite vertices (checked upstream).
+    /// Prepares `mesh` for tracing (its BVH is built on first use). The mesh must be
+    /// non-empty with finite vertices (checked upstream).
     pub fn build(mesh: &Mesh) -> Self {
         Self::build_with_core(mesh, mesh.triangles.len())
     }
 
-    /// Builds the BVH of a mesh whose first `core` triangles are the structures and the rest a
+    /// Prepares a mesh whose first `core` triangles are the structures and the rest a
     /// ground far larger than them: shadow rays leave a surface by a step scaled to the
     /// structures near the anchor, and to the distance from it far out on the ground, where
     /// f32 coordinates are coarser.
