@@ -6,7 +6,8 @@
 //!     cargo bench --bench pipeline                        (about a quarter of an hour on 2 cores)
 //!     SHMGEN_BENCH_RUNS=1 SHMGEN_BENCH_STREAM=10000 cargo bench --bench pipeline   (quicker)
 //!
-//! Rows: the A1 smoke run with the paper's prompts, the quickstart, the A2 smoke run, an
+//! Rows: the A1 smoke run with the paper's prompts, the quickstart, the A2 smoke run, the A1
+//! and A2 smoke runs untextured (each prompt's plain colour: what the materials cost), an
 //! imported mesh of a million triangles (written by the benchmark; 2 samples × 10 views, and
 //! 10 × 2, where ten samples share its prepared triangles), a streaming run of tiny
 //! views at growing sample counts (throughput and peak resident memory, each count in its own
@@ -543,6 +544,22 @@ fn main() {
         (
             "a2_silo.rhai smoke (3 silos × 20 views)",
             load(&scripts().join("a2_silo.rhai"), &[("samples", "3")]),
+        ),
+        // What the geometry, the light and the writers cost alone: the same runs with every
+        // structure in its prompt's plain colour (`textures=false`).
+        (
+            "a1_beams.rhai smoke, textures=false",
+            load(
+                &scripts().join("a1_beams.rhai"),
+                &[("samples", "12"), ("textures", "false")],
+            ),
+        ),
+        (
+            "a2_silo.rhai smoke, textures=false",
+            load(
+                &scripts().join("a2_silo.rhai"),
+                &[("samples", "3"), ("textures", "false")],
+            ),
         ),
         (
             "imported mesh, 1,000,000 triangles (2 × 10 views)",

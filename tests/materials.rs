@@ -747,6 +747,95 @@ fn an_explicit_texture_is_recorded_as_explicit() {
     }
 }
 
+#[test]
+fn a_plain_material_is_its_prompts_colour_flat_and_matte() {
+    let dir = tempfile::tempdir().unwrap();
+    let rusty = "A photo of rusty steel beam for construction";
+    // An image under the prompt's name is not shown either.
+    write(
+        dir.path(),
+        "textures/a-photo-of-rusty-steel-beam-for-construction.png",
+        solid_png([0, 255, 0], 4),
+    );
+    let with = |name: &str, call: &str| {
+        let recipe = write(dir.path(), &format!("{name}.rhai"), beam_recipe(2, call));
+        let out = dir.path().join(name);
+        ok(run(&recipe, &out, &[]));
+        out
+    };
+    let plain = with(
+        "plain",
+        &format!(r#"material("{rusty}", #{{ plain: true }})"#),
+    );
+    let material =
+        &read_json(&view_file(&plain, 0, 0, "json"))["scene"]["structures"][0]["material"];
+    let compiled = prompt::compile(rusty, true).unwrap().material;
+    assert_eq!(
+        material["prompt"], rusty,
+        "the record says what the colour stands for"
+    );
+    assert_eq!(material["base"], "plain");
+    assert_eq!(
+        (
+            material["roughness"].as_f64(),
+            material["specular"].as_f64()
+        ),
+        (Some(1.0), Some(0.0))
+    );
+    assert_eq!(
+        material["texture"],
+        serde_json::json!({ "source": "procedural" })
+    );
+    let colour: Vec<f64> = (0..3)
+        .map(|k| material["colour"][k].as_f64().unwrap())
+        .collect();
+    assert_eq!(colour, compiled.colour);
+
+    // The same pictures as the colour given by hand, and not those of the textured prompt.
+    let [r, g, b] = compiled.colour;
+    let by_hand = with("by-hand", &format!("colour([{r:?}, {g:?}, {b:?}])"));
+    let textured = with("textured", &format!(r#"material("{rusty}")"#));
+    for sample in 0..2 {
+        let rgb = |out: &Path| read_png(&view_file(out, sample, 0, "rgb.png")).3;
+        assert_eq!(rgb(&plain), rgb(&by_hand), "sample {sample}");
+        assert_ne!(rgb(&plain), rgb(&textured), "sample {sample}");
+    }
+    // The material's own colour option still applies.
+    let red = with(
+        "red",
+        &format!(r#"material("{rusty}", #{{ plain: true, colour: [0.8, 0.1, 0.1] }})"#),
+    );
+    assert_eq!(
+        read_json(&view_file(&red, 0, 0, "json"))["scene"]["structures"][0]["material"]["colour"],
+        serde_json::json!([0.8, 0.1, 0.1])
+    );
+
+    // A plain material naming a texture, or a flag that is not one, is refused at the call.
+    for (name, options, says) in [
+        (
+            "both",
+            r#"#{ plain: true, texture: "art/blue.png" }"#,
+            "material options.plain = true",
+        ),
+        (
+            "word",
+            r#"#{ plain: "yes" }"#,
+            "material options.plain = yes must be true or false",
+        ),
+    ] {
+        let recipe = write(
+            dir.path(),
+            &format!("{name}.rhai"),
+            beam_recipe(1, &format!(r#"material("steel", {options})"#)),
+        );
+        rejects(
+            dir.path(),
+            &recipe,
+            &["error:", says, &location(&recipe, "material(")],
+        );
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // 6. Continuity across shared edges and under deformation (library level).
 

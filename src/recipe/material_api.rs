@@ -4,7 +4,9 @@
 //! A prompt compiles into a procedural material (`materials::prompt`). An image in the recipe's
 //! `textures/` folder named after the prompt (`textures/rusty-steel.png` for "rusty steel")
 //! replaces the procedural albedo, so textures made elsewhere drop in without editing the
-//! recipe; `texture: "file.png"` names one explicitly.
+//! recipe; `texture: "file.png"` names one explicitly. `plain: true` keeps only the material's
+//! colour, flat and matte: a run that needs the geometry more than the look is several times
+//! faster (see the README's benchmarks).
 
 use super::diagnostics::Warnings;
 use super::files::RecipeFiles;
@@ -122,6 +124,20 @@ fn adjust(m: &mut Material, o: &mut Options, files: &RecipeFiles, text: &str) ->
         }
     }
     let explicit = o.string("texture", "")?;
+    if o.flag("plain", false)? {
+        if !explicit.is_empty() {
+            return Err(format!(
+                "material options.plain = true shows no texture, but material options.texture = \"{}\" names one: drop one of them",
+                clip(&explicit, 60)
+            ));
+        }
+        // The prompt stays in the record: what this flat colour stands in for.
+        *m = Material {
+            prompt: m.prompt.take(),
+            ..Material::plain(m.colour)
+        };
+        return Ok(());
+    }
     let chosen = if explicit.is_empty() {
         files
             .image_named(TEXTURES_FOLDER, &slug(text))?
