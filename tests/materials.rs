@@ -810,12 +810,18 @@ fn a_plain_material_is_its_prompts_colour_flat_and_matte() {
         serde_json::json!([0.8, 0.1, 0.1])
     );
 
-    // A plain material naming a texture, or a flag that is not one, is refused at the call.
+    // A plain material given what it leaves out (a texture, a gloss), or a flag that is not
+    // one, is refused at the call.
     for (name, options, says) in [
         (
-            "both",
+            "texture",
             r#"#{ plain: true, texture: "art/blue.png" }"#,
-            "material options.plain = true",
+            "material options.texture does not change",
+        ),
+        (
+            "gloss",
+            r#"#{ roughness: 0.2, plain: true }"#,
+            "material options.roughness does not change",
         ),
         (
             "word",

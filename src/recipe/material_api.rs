@@ -99,6 +99,9 @@ fn adjust(m: &mut Material, o: &mut Options, files: &RecipeFiles, text: &str) ->
     if let Some(v) = o.take("colour") {
         m.colour = options::colour(&v, "material options.colour")?;
     }
+    if o.flag("plain", false)? {
+        return make_plain(m, o);
+    }
     m.roughness = o.number("roughness", m.roughness)?;
     m.specular = o.number("specular", m.specular)?;
     m.scale = o.number("scale", m.scale)?;
@@ -124,20 +127,6 @@ fn adjust(m: &mut Material, o: &mut Options, files: &RecipeFiles, text: &str) ->
         }
     }
     let explicit = o.string("texture", "")?;
-    if o.flag("plain", false)? {
-        if !explicit.is_empty() {
-            return Err(format!(
-                "material options.plain = true shows no texture, but material options.texture = \"{}\" names one: drop one of them",
-                clip(&explicit, 60)
-            ));
-        }
-        // The prompt stays in the record: what this flat colour stands in for.
-        *m = Material {
-            prompt: m.prompt.take(),
-            ..Material::plain(m.colour)
-        };
-        return Ok(());
-    }
     let chosen = if explicit.is_empty() {
         files
             .image_named(TEXTURES_FOLDER, &slug(text))?
@@ -157,6 +146,24 @@ fn adjust(m: &mut Material, o: &mut Options, files: &RecipeFiles, text: &str) ->
             pixels: file.image,
         };
     }
+    Ok(())
+}
+
+/// The material's colour alone, flat and matte (`plain: true`); an option that would shape
+/// what it leaves out is an error rather than ignored.
+fn make_plain(m: &mut Material, o: &mut Options) -> OptResult<()> {
+    for unused in ["roughness", "specular", "scale", "texture", "texture_size"] {
+        if o.take(unused).is_some() {
+            return Err(format!(
+                "material options.plain = true is a flat matte colour, which material options.{unused} does not change: drop one of them"
+            ));
+        }
+    }
+    // The prompt stays in the record: what this flat colour stands in for.
+    *m = Material {
+        prompt: m.prompt.take(),
+        ..Material::plain(m.colour)
+    };
     Ok(())
 }
 
