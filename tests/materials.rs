@@ -810,29 +810,54 @@ fn a_plain_material_is_its_prompts_colour_flat_and_matte() {
         serde_json::json!([0.8, 0.1, 0.1])
     );
 
-    // A plain material given what it leaves out (a texture, a gloss), or a flag that is not
-    // one, is refused at the call.
-    for (name, options, says) in [
+    // `plain: false` is the prompt as it is.
+    let not_plain = with(
+        "not-plain",
+        &format!(r#"material("{rusty}", #{{ plain: false }})"#),
+    );
+    for sample in 0..2 {
+        let rgb = |out: &Path| read_png(&view_file(out, sample, 0, "rgb.png")).3;
+        assert_eq!(rgb(&not_plain), rgb(&textured), "sample {sample}");
+    }
+    // A condition's pattern goes with the texture: a cracked prompt made plain has none.
+    let cracked = with(
+        "cracked",
+        r#"material("heavily cracked concrete", #{ plain: true })"#,
+    );
+    let record = &read_json(&view_file(&cracked, 0, 0, "json"))["scene"]["structures"][0];
+    assert_eq!(record["material"]["conditions"], serde_json::json!([]));
+
+    // Given what it leaves out, or a flag that is not one, it is refused at the call, the
+    // value named.
+    let mut refused: Vec<(String, String)> = vec![
         (
-            "texture",
-            r#"#{ plain: true, texture: "art/blue.png" }"#,
-            "material options.texture does not change",
+            r#"plain: "yes""#.into(),
+            r#"material options.plain = "yes" must be true or false"#.into(),
         ),
         (
-            "gloss",
-            r#"#{ roughness: 0.2, plain: true }"#,
-            "material options.roughness does not change",
+            "plain: ()".into(),
+            "material options.plain = () must be true or false".into(),
         ),
-        (
-            "word",
-            r#"#{ plain: "yes" }"#,
-            "material options.plain = yes must be true or false",
-        ),
+    ];
+    for (option, value) in [
+        ("texture", r#""art/blue.png""#),
+        ("texture_size", "0.5"),
+        ("roughness", "0.2"),
+        ("specular", "0.5"),
+        ("scale", "2.0"),
     ] {
+        refused.push((
+            format!("{option}: {value}, plain: true"),
+            format!(
+                "material options.{option} = {value} has no effect beside material options.plain = true"
+            ),
+        ));
+    }
+    for (k, (options, says)) in refused.iter().enumerate() {
         let recipe = write(
             dir.path(),
-            &format!("{name}.rhai"),
-            beam_recipe(1, &format!(r#"material("steel", {options})"#)),
+            &format!("refused-{k}.rhai"),
+            beam_recipe(1, &format!(r#"material("steel", #{{ {options} }})"#)),
         );
         rejects(
             dir.path(),

@@ -153,9 +153,11 @@ fn adjust(m: &mut Material, o: &mut Options, files: &RecipeFiles, text: &str) ->
 /// what it leaves out is an error rather than ignored.
 fn make_plain(m: &mut Material, o: &mut Options) -> OptResult<()> {
     for unused in ["roughness", "specular", "scale", "texture", "texture_size"] {
-        if o.take(unused).is_some() {
+        if let Some(value) = o.take(unused) {
             return Err(format!(
-                "material options.plain = true is a flat matte colour, which material options.{unused} does not change: drop one of them"
+                "material options.{unused} = {} has no effect beside material options.plain = \
+                 true (a flat matte colour): drop one of them",
+                options::shown(&value)
             ));
         }
     }

@@ -42,9 +42,17 @@ pub fn number(value: &Dynamic, name: &str) -> OptResult<f64> {
 const MAX_SHOWN_CHARS: usize = 80;
 
 /// A script value as messages show it: as Rhai prints it (large and small floats in exponent
-/// form), cut to a readable length.
+/// form), strings in quotes and the unit as `()` (so `"true"` is not mistaken for `true`, nor
+/// a missing value for nothing), cut to a readable length.
 pub fn shown(value: &Dynamic) -> String {
-    clip(&value.to_string(), MAX_SHOWN_CHARS).into_owned()
+    let text = if value.is_string() {
+        format!("\"{value}\"")
+    } else if value.is_unit() {
+        "()".to_string()
+    } else {
+        value.to_string()
+    };
+    clip(&text, MAX_SHOWN_CHARS).into_owned()
 }
 
 pub fn positive(value: &Dynamic, name: &str, unit: &str) -> OptResult<f64> {
