@@ -4,9 +4,10 @@
 //! A prompt compiles into a procedural material (`materials::prompt`). An image in the recipe's
 //! `textures/` folder named after the prompt (`textures/rusty-steel.png` for "rusty steel")
 //! replaces the procedural albedo, so textures made elsewhere drop in without editing the
-//! recipe; `texture: "file.png"` names one explicitly. `plain: true` keeps only the material's
-//! colour, flat and matte: a run that needs the geometry more than the look is several times
-//! faster (see the README's benchmarks).
+//! recipe; `texture: "file.png"` names one explicitly. `plain: true` keeps only the colour of
+//! the prompt's substance or paint, flat and matte (no conditions, texture or gloss): a run
+//! that needs the geometry more than the look is several times faster (see the README's
+//! benchmarks).
 
 use super::diagnostics::Warnings;
 use super::files::RecipeFiles;
