@@ -24,7 +24,7 @@ pub use view::{RenderedView, SampleRenderer, view_camera};
 
 use crate::output::DatasetFolder;
 use crate::recipe::Recipe;
-use crate::render::SharedBvhs;
+use crate::render::SharedTraceMeshes;
 use anyhow::{Context, Result, bail};
 use progress::Progress;
 use std::path::PathBuf;
@@ -163,13 +163,13 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
     let todo = mine - done.len();
     let progress = Progress::new("rendering", todo, options.quiet);
     let rendered = AtomicU64::new(0);
-    let bvhs = SharedBvhs::default();
+    let shared = SharedTraceMeshes::default();
     let bytes = in_order(
         shard.samples(total).filter(|s| !done.contains(*s)),
         |index| {
             let sample = prepare(recipe, index)?;
             let mut stage = folder.stage(index)?;
-            let views = write_sample(recipe, &sample, &bvhs, &mut stage)?;
+            let views = write_sample(recipe, &sample, &shared, &mut stage)?;
             let bytes = stage.bytes;
             folder
                 .commit(stage, views)

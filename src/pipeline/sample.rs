@@ -12,7 +12,7 @@ use crate::output::{
     MAX_SEGMENTATION_ID, SAMPLE_WRITERS, SampleStage, ViewLayers, WRITERS, sample_file, view_file,
 };
 use crate::recipe::Recipe;
-use crate::render::SharedBvhs;
+use crate::render::SharedTraceMeshes;
 use crate::scene::{DatasetSpec, GeometryMode};
 use anyhow::{Result, bail};
 use rayon::prelude::*;
@@ -62,8 +62,8 @@ fn check_segmentation(recipe: &Recipe, sample: &BuiltSample) -> Result<()> {
 }
 
 /// Renders every view of the sample, clean and augmented, and stages its files, the sample's
-/// own files first; the BVH comes from `bvhs` (shared with samples of the same mesh). Returns
-/// the number of images written.
+/// own files first; its mesh, ready for tracing, comes from `shared` (prepared once for
+/// samples of the same mesh). Returns the number of images written.
 ///
 /// Views are rendered and encoded in parallel, as many at a time as there are threads (so a
 /// run's last sample, or a run of fewer samples than threads, still keeps every core busy),
@@ -72,12 +72,12 @@ fn check_segmentation(recipe: &Recipe, sample: &BuiltSample) -> Result<()> {
 pub fn write_sample(
     recipe: &Recipe,
     sample: &BuiltSample,
-    bvhs: &SharedBvhs,
+    shared: &SharedTraceMeshes,
     stage: &mut SampleStage,
 ) -> Result<u32> {
     let dataset = &recipe.dataset;
-    let bvh = bvhs.get(&sample.mesh, sample.structure_triangles());
-    let renderer = SampleRenderer::with_bvh(dataset, sample, bvh);
+    let trace_mesh = shared.get(&sample.mesh, sample.structure_triangles());
+    let renderer = SampleRenderer::with_trace_mesh(dataset, sample, trace_mesh);
     let mut record = SampleRecord::new(sample);
     record.files = write_sample_files(dataset, sample, stage)?;
     let views: Vec<u32> = (0..dataset.cameras_per_sample()).collect();

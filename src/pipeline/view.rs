@@ -140,23 +140,23 @@ pub struct RenderedView<'a> {
 }
 
 impl<'a> SampleRenderer<'a> {
-    /// Builds the BVH and surfaces of `sample`, a sample of `dataset`.
+    /// Prepares the mesh and surfaces of `sample`, a sample of `dataset`.
     pub fn new(dataset: &'a DatasetSpec, sample: &'a BuiltSample) -> Self {
-        let bvh = TraceMesh::build_with_core(&sample.mesh, sample.structure_triangles());
-        Self::with_bvh(dataset, sample, Arc::new(bvh))
+        let trace_mesh = TraceMesh::build_with_core(&sample.mesh, sample.structure_triangles());
+        Self::with_trace_mesh(dataset, sample, Arc::new(trace_mesh))
     }
 
-    /// The renderer of `sample` with `bvh`, the BVH of its mesh (built by
+    /// The renderer of `sample` with `trace_mesh`, its mesh ready for tracing (prepared by
     /// `TraceMesh::build_with_core` with its structure triangles as the core).
-    pub fn with_bvh(
+    pub fn with_trace_mesh(
         dataset: &'a DatasetSpec,
         sample: &'a BuiltSample,
-        bvh: Arc<TraceMesh>,
+        trace_mesh: Arc<TraceMesh>,
     ) -> Self {
         SampleRenderer {
             dataset,
             sample,
-            trace_mesh: bvh,
+            trace_mesh,
             surfaces: SampleSurfaces {
                 mesh: &sample.mesh,
                 rest: &sample.rest,
@@ -312,13 +312,13 @@ impl RenderedView<'_> {
             .collect()
     }
 
-    /// RGB of what `g` saw through this view's camera in the mesh `bvh`, with the sample's
+    /// RGB of what `g` saw through this view's camera in `mesh`, with the sample's
     /// light and this view's backdrop, through the sensor.
-    fn shaded(&self, g: &GBuffer, bvh: &TraceMesh, surfaces: &SampleSurfaces) -> Vec<u8> {
+    fn shaded(&self, g: &GBuffer, mesh: &TraceMesh, surfaces: &SampleSurfaces) -> Vec<u8> {
         let r = self.renderer;
         let mut rgb = shade(
             g,
-            bvh,
+            mesh,
             &self.camera,
             &r.sample.lighting,
             surfaces,
@@ -338,7 +338,7 @@ impl RenderedView<'_> {
 
     fn rest_gbuffer(&self) -> &GBuffer {
         self.rest_gbuffer
-            .get_or_init(|| self.renderer.rest().bvh.trace(&self.camera))
+            .get_or_init(|| self.renderer.rest().trace_mesh.trace(&self.camera))
     }
 }
 
@@ -436,7 +436,7 @@ impl ViewLayers for RenderedView<'_> {
                 mesh: &rest.mesh,
                 ..r.surfaces
             };
-            self.shaded(self.rest_gbuffer(), &rest.bvh, &surfaces)
+            self.shaded(self.rest_gbuffer(), &rest.trace_mesh, &surfaces)
         })
     }
 

@@ -127,7 +127,7 @@ pub fn flow(
     let tolerance = occlusion_tolerance(camera);
     per_hit(rest_g, |row, col, tri, depth| {
         let view = k.ray_through_pixel(row, col);
-        let (p, _, _) = hit_geometry(camera, &rest.bvh, tri, view, depth);
+        let (p, _, _) = hit_geometry(camera, &rest.trace_mesh, tri, view, depth);
         let moved = camera.world_to_camera(carried(&rest.mesh, tri, p, &deformed.mesh.positions));
         if !(moved.z > 0.0) {
             return None;

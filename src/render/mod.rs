@@ -19,7 +19,7 @@ mod fields;
 mod gloss;
 mod raster;
 mod shade;
-mod shared_bvh;
+mod shared_meshes;
 mod surfaces;
 mod tiles;
 mod trace;
@@ -27,6 +27,6 @@ mod watertight;
 
 pub use fields::{Deformed, displacement, flow, normals, ray_distance};
 pub use shade::{Surfaces, shade};
-pub use shared_bvh::SharedBvhs;
+pub use shared_meshes::SharedTraceMeshes;
 pub use surfaces::SampleSurfaces;
 pub use trace::{GBuffer, NO_HIT, PixelSet, TraceMesh, Traced};

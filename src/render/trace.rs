@@ -212,7 +212,7 @@ pub struct Traced {
     /// The mesh.
     pub mesh: Mesh,
     /// The mesh prepared for tracing (its BVH built when a ray first needs one).
-    pub bvh: TraceMesh,
+    pub trace_mesh: TraceMesh,
 }
 
 impl Traced {
@@ -224,8 +224,8 @@ impl Traced {
             positions: positions.to_vec(),
             triangles: mesh.triangles.clone(),
         };
-        let bvh = TraceMesh::build_with_core(&mesh, core);
-        Traced { mesh, bvh }
+        let trace_mesh = TraceMesh::build_with_core(&mesh, core);
+        Traced { mesh, trace_mesh }
     }
 }
 

@@ -19,11 +19,11 @@ type Slot = Arc<OnceLock<Arc<TraceMesh>>>;
 /// ask for the same mesh wait for one preparation; a different mesh replaces it, so at most
 /// one traced mesh outlives the samples that used it.
 #[derive(Default)]
-pub struct SharedBvhs {
+pub struct SharedTraceMeshes {
     latest: Mutex<Option<(blake3::Hash, Slot)>>,
 }
 
-impl SharedBvhs {
+impl SharedTraceMeshes {
     /// `mesh`, whose first `core` triangles are the structures, prepared for tracing (see
     /// `TraceMesh::build_with_core`) unless the latest mesh asked for is the same.
     pub fn get(&self, mesh: &Mesh, core: usize) -> Arc<TraceMesh> {
@@ -88,16 +88,16 @@ mod tests {
     }
 
     #[test]
-    fn the_same_mesh_shares_its_bvh_and_any_change_builds_anew() {
-        let bvhs = SharedBvhs::default();
-        let first = bvhs.get(&triangle(0.0), 1);
-        assert!(Arc::ptr_eq(&first, &bvhs.get(&triangle(0.0), 1)));
+    fn the_same_mesh_is_prepared_once_and_any_change_anew() {
+        let shared = SharedTraceMeshes::default();
+        let first = shared.get(&triangle(0.0), 1);
+        assert!(Arc::ptr_eq(&first, &shared.get(&triangle(0.0), 1)));
         // The least change of a coordinate, the core count or the winding is another mesh.
-        let moved = bvhs.get(&triangle(f64::from_bits(1)), 1);
+        let moved = shared.get(&triangle(f64::from_bits(1)), 1);
         assert!(!Arc::ptr_eq(&first, &moved));
         assert!(!Arc::ptr_eq(
             &moved,
-            &bvhs.get(&triangle(f64::from_bits(1)), 0)
+            &shared.get(&triangle(f64::from_bits(1)), 0)
         ));
         let mut turned = triangle(0.0);
         turned.triangles[0] = [0, 2, 1];
