@@ -792,13 +792,13 @@ fn a_plain_material_is_its_prompts_colour_flat_and_matte() {
     assert_eq!(colour, compiled.colour);
 
     // The same pictures as the colour given by hand, and not those of the textured prompt.
+    let rgb = |out: &Path, sample: u64| read_png(&view_file(out, sample, 0, "rgb.png")).3;
     let [r, g, b] = compiled.colour;
     let by_hand = with("by-hand", &format!("colour([{r:?}, {g:?}, {b:?}])"));
     let textured = with("textured", &format!(r#"material("{rusty}")"#));
-    for sample in 0..2 {
-        let rgb = |out: &Path| read_png(&view_file(out, sample, 0, "rgb.png")).3;
-        assert_eq!(rgb(&plain), rgb(&by_hand), "sample {sample}");
-        assert_ne!(rgb(&plain), rgb(&textured), "sample {sample}");
+    for s in 0..2 {
+        assert_eq!(rgb(&plain, s), rgb(&by_hand, s), "sample {s}");
+        assert_ne!(rgb(&plain, s), rgb(&textured, s), "sample {s}");
     }
     // The material's own colour option still applies.
     let red = with(
@@ -815,9 +815,8 @@ fn a_plain_material_is_its_prompts_colour_flat_and_matte() {
         "not-plain",
         &format!(r#"material("{rusty}", #{{ plain: false }})"#),
     );
-    for sample in 0..2 {
-        let rgb = |out: &Path| read_png(&view_file(out, sample, 0, "rgb.png")).3;
-        assert_eq!(rgb(&not_plain), rgb(&textured), "sample {sample}");
+    for s in 0..2 {
+        assert_eq!(rgb(&not_plain, s), rgb(&textured, s), "sample {s}");
     }
     // A condition's pattern goes with the texture: a cracked prompt made plain has none.
     let cracked = with(
