@@ -273,10 +273,16 @@ pub(super) fn rasterise_samples<const N: usize>(
                     continue;
                 };
                 for row in rows.start.max(t.rows().start)..rows.end.min(t.rows().end) {
-                    let Some(cols) = sample_cols(t, row, &lines, k.width as usize) else {
-                        continue;
-                    };
-                    for i in pixels.in_row_between(row, cols) {
+                    // The row's pixels within the triangle's bounds; of more than a few, only
+                    // those about where its sample lines cross the triangle.
+                    let mut candidates = pixels.in_row_between(row, t.cols());
+                    if candidates.len() > FEW_PIXELS {
+                        let Some(cols) = sample_cols(t, row, &lines, k.width as usize) else {
+                            continue;
+                        };
+                        candidates = pixels.in_row_between(row, cols);
+                    }
+                    for i in candidates {
                         let (v, u) = pixels.at(i);
                         for (s, (du, dv)) in offsets.iter().enumerate() {
                             if coverage.contains(DVec2::new(u + du, v + dv)) {
@@ -459,9 +465,14 @@ fn cover(
     }
 }
 
+/// Pixels of a row within a triangle's bounds up to which each is tested for sub-pixel
+/// samples, rather than first narrowing the columns to where the triangle crosses the row
+/// (`sample_cols`, a division per edge and sample line: about the cost of testing two).
+const FEW_PIXELS: usize = 4;
+
 /// The columns where triangle `t` may hold a sample point of pixel row `row`, whose sample
-/// points lie on `lines` (offsets from the row's top): within its bounds, and for a wide
-/// triangle only about where each of those lines crosses it.
+/// points lie on `lines` (offsets from the row's top): within its bounds, about where each of
+/// those lines crosses it.
 fn sample_cols(
     t: &Projected,
     row: usize,
@@ -469,9 +480,6 @@ fn sample_cols(
     width: usize,
 ) -> Option<std::ops::Range<usize>> {
     let own = t.cols();
-    if own.len() <= NARROW {
-        return Some(own);
-    }
     let spans = lines
         .iter()
         .filter_map(|dv| row_span(&t.corners, row as f64 + dv, width));
@@ -505,10 +513,9 @@ fn row_span(corners: &[DVec2; 3], v: f64, width: usize) -> Option<std::ops::Rang
     sample_range((lo - 1.0, hi + 1.0), width, Samples::CENTRE.u)
 }
 
-/// The three edges of a projected triangle and the side of each it lies on.
+/// The three edges of a projected triangle, each turned towards the triangle.
 struct Coverage {
-    edges: [Edge; 3],
-    inside: [i8; 3],
+    edges: [Inward; 3],
 }
 
 impl Coverage {
@@ -523,15 +530,55 @@ impl Coverage {
             sign(edges[1].function(a)),
             sign(edges[2].function(b)),
         ];
-        (!inside.contains(&0)).then_some(Coverage { edges, inside })
+        if inside.contains(&0) {
+            return None;
+        }
+        let [ab, bc, ca] = edges;
+        Some(Coverage {
+            edges: [
+                Inward::new(ab, inside[0]),
+                Inward::new(bc, inside[1]),
+                Inward::new(ca, inside[2]),
+            ],
+        })
     }
 
-    /// Whether the triangle covers image point `p` (on an edge: as nudged by `Edge::side`).
+    /// Whether the triangle covers image point `p` (on an edge: as nudged by
+    /// `Edge::tie_side`).
     fn contains(&self, p: DVec2) -> bool {
-        self.edges
-            .iter()
-            .zip(self.inside)
-            .all(|(e, s)| e.side(p) == s)
+        self.edges.iter().all(|e| e.holds(p))
+    }
+}
+
+/// An edge with the triangle on the positive side of its function: the shared `Edge`'s
+/// function, negated where the triangle lies on its negative side. Negating the direction
+/// negates the function exactly (round to nearest is symmetric), so the triangles on either
+/// side of a shared edge still decide from one value.
+struct Inward {
+    edge: Edge,
+    /// Whether a point exactly on the line counts as inside (see `Edge::tie_side`).
+    ties_inside: bool,
+}
+
+impl Inward {
+    /// `edge` of a triangle lying on its `inside` side (+1 or −1).
+    fn new(edge: Edge, inside: i8) -> Inward {
+        let ties_inside = edge.tie_side() == inside;
+        let along = if inside < 0 { -edge.along } else { edge.along };
+        Inward {
+            edge: Edge {
+                from: edge.from,
+                along,
+            },
+            ties_inside,
+        }
+    }
+
+    /// Whether `p` is on the triangle's side of the line, or on the line and counted so (a
+    /// NaN, as no sign, counts as on it).
+    fn holds(&self, p: DVec2) -> bool {
+        let f = self.edge.function(p);
+        f > 0.0 || (self.ties_inside && !(f < 0.0))
     }
 }
 
@@ -579,14 +626,14 @@ impl Edge {
         self.along.x * d.y - self.along.y * d.x
     }
 
-    /// The side of the line pixel centre `p` is on, +1 or −1: the sign of the edge function,
-    /// and where that is exactly zero the sign it takes at `p` nudged by an infinitesimal
-    /// step along +u, then +v (∂/∂u = −along.y, ∂/∂v = along.x).
-    fn side(&self, p: DVec2) -> i8 {
-        match sign(self.function(p)) {
-            0 if self.along.y != 0.0 => sign(-self.along.y),
-            0 => sign(self.along.x),
-            s => s,
+    /// The side, +1 or −1, of a point exactly on the line: the sign the edge function takes
+    /// there nudged by an infinitesimal step along +u, then +v (∂/∂u = −along.y,
+    /// ∂/∂v = along.x).
+    fn tie_side(&self) -> i8 {
+        if self.along.y != 0.0 {
+            sign(-self.along.y)
+        } else {
+            sign(self.along.x)
         }
     }
 }

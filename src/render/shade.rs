@@ -228,18 +228,35 @@ pub fn shade(
             .for_each(|(row, out)| s.centre_row(g, row, span(row), out, None));
         return rgb;
     }
-    let mut flat = vec![0u8; rgb.len()];
+    let mut flat = vec![NO_SURFACE; g.triangle.len()];
     rgb.par_chunks_mut(width * 3)
-        .zip(flat.par_chunks_mut(width * 3))
+        .zip(flat.par_chunks_mut(width))
         .enumerate()
         .for_each(|(row, (out, flat))| s.centre_row(g, row, span(row), out, Some(flat)));
     s.antialias_edges(g, &flat, &spans, &mut rgb);
     rgb
 }
 
-/// Whether two sRGB colours differ by more than one level in a channel.
-fn visibly_different(a: [u8; 3], b: [u8; 3]) -> bool {
-    a != b && a.iter().zip(&b).any(|(x, y)| x.abs_diff(*y) > 1)
+/// What a pixel shows, as far as finding edges goes: a surface's colour (see `centre_row`)
+/// packed below a flag, or no surface (`NO_SURFACE`), one word to compare with a neighbour's.
+fn edge_key(surface: Option<[u8; 3]>) -> u32 {
+    surface.map_or(NO_SURFACE, |[r, g, b]| {
+        1 << 24 | u32::from(r) << 16 | u32::from(g) << 8 | u32::from(b)
+    })
+}
+
+/// The `edge_key` of a pixel that sees no surface.
+const NO_SURFACE: u32 = 0;
+
+/// Whether two pixels' `edge_key`s differ visibly: one sees a surface and the other does not,
+/// or their colours differ by more than one level in a channel (backgrounds never differ).
+fn visibly_different(a: u32, b: u32) -> bool {
+    let channel = |key: u32, shift: u32| (key >> shift) as u8;
+    a != b
+        && (a >> 24 != b >> 24
+            || [16, 8, 0]
+                .into_iter()
+                .any(|shift| channel(a, shift).abs_diff(channel(b, shift)) > 1))
 }
 
 /// The columns of each row from its first hit to its last (empty for a row without one).
@@ -271,16 +288,16 @@ fn near_hits(spans: &[std::ops::Range<usize>], row: usize, width: usize) -> std:
 
 impl<S: Surfaces> Shading<'_, S> {
     /// Centre rays of columns `span` of a row: the shaded sRGB colour into `out` and, when
-    /// anti-aliasing, into `flat` the colour that decides where edges are (the untextured
-    /// albedo lit without shadows or gloss for a textured surface; the shaded colour
-    /// otherwise). Pixels of a plain background are left as they are.
+    /// anti-aliasing, into `flat` the `edge_key` of the colour that decides where edges are
+    /// (the untextured albedo lit without shadows or gloss for a textured surface; the
+    /// shaded colour otherwise). Pixels of a plain background are left as they are.
     fn centre_row(
         &self,
         g: &GBuffer,
         row: usize,
         span: std::ops::Range<usize>,
         out: &mut [u8],
-        mut flat: Option<&mut [u8]>,
+        mut flat: Option<&mut [u32]>,
     ) {
         let width = g.width as usize;
         let k = self.camera.intrinsics;
@@ -302,19 +319,20 @@ impl<S: Surfaces> Shading<'_, S> {
             let colour = shaded.encode(linear);
             out[3 * col..3 * col + 3].copy_from_slice(&colour);
             if let Some(flat) = flat.as_deref_mut() {
-                let flat_colour = match hit {
-                    Some((_, tri)) if self.surfaces.textured(tri) => {
-                        let film = &self.lighting.film;
+                let flat_colour = hit.map(|(_, tri)| {
+                    if self.surfaces.textured(tri) {
+                        let albedo = self.surfaces.flat(tri);
                         untextured.encode(reflected(
-                            film,
-                            self.surfaces.flat(tri),
+                            &self.lighting.film,
+                            albedo,
                             unshadowed,
                             [0.0; 3],
                         ))
+                    } else {
+                        colour
                     }
-                    _ => colour,
-                };
-                flat[3 * col..3 * col + 3].copy_from_slice(&flat_colour);
+                });
+                flat[col] = edge_key(flat_colour);
             }
         }
     }
@@ -326,16 +344,12 @@ impl<S: Surfaces> Shading<'_, S> {
     fn antialias_edges(
         &self,
         g: &GBuffer,
-        flat: &[u8],
+        flat: &[u32],
         spans: &[std::ops::Range<usize>],
         rgb: &mut [u8],
     ) {
         let width = g.width as usize;
-        let hit = |i: usize| g.triangle[i] != NO_HIT;
-        let colour = |i: usize| [flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]];
-        let differs = |i: usize, j: usize| {
-            hit(i) != hit(j) || (hit(i) && visibly_different(colour(i), colour(j)))
-        };
+        let differs = |i: usize, j: usize| visibly_different(flat[i], flat[j]);
         let edges: Vec<Vec<u32>> = (0..g.height as usize)
             .into_par_iter()
             .map(|row| {
@@ -718,6 +732,25 @@ mod tests {
         cases.extend((0..100_000).map(|i| f64::from(i) * 0.040_95));
         for y in cases {
             assert_eq!(round_half_up(y), y.round() as usize, "{y}");
+        }
+    }
+
+    #[test]
+    fn edges_are_where_a_surface_meets_none_or_its_colour_steps_by_two_levels() {
+        let grey = Some([100, 100, 100]);
+        let edge = |a, b| visibly_different(edge_key(a), edge_key(b));
+        // Seeing a surface or not differs whatever the colours, even black against none.
+        assert!(edge(grey, None) && edge(None, grey) && edge(Some([0; 3]), None));
+        assert!(!edge(None, None));
+        for channel in 0..3 {
+            for (step, differs) in [(0, false), (1, false), (2, true), (255 - 100, true)] {
+                let mut up = [100u8; 3];
+                up[channel] += step;
+                let mut down = [100u8; 3];
+                down[channel] = down[channel].saturating_sub(step);
+                assert_eq!(edge(grey, Some(up)), differs, "{up:?}");
+                assert_eq!(edge(Some(down), grey), differs, "{down:?}");
+            }
         }
     }
 
