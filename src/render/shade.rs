@@ -228,12 +228,12 @@ pub fn shade(
             .for_each(|(row, out)| s.centre_row(g, row, span(row), out, None));
         return rgb;
     }
-    let mut flat = vec![NO_SURFACE; g.triangle.len()];
+    let mut edge_keys = vec![NO_SURFACE; g.triangle.len()];
     rgb.par_chunks_mut(width * 3)
-        .zip(flat.par_chunks_mut(width))
+        .zip(edge_keys.par_chunks_mut(width))
         .enumerate()
-        .for_each(|(row, (out, flat))| s.centre_row(g, row, span(row), out, Some(flat)));
-    s.antialias_edges(g, &flat, &spans, &mut rgb);
+        .for_each(|(row, (out, keys))| s.centre_row(g, row, span(row), out, Some(keys)));
+    s.antialias_edges(g, &edge_keys, &spans, &mut rgb);
     rgb
 }
 
@@ -288,8 +288,8 @@ fn near_hits(spans: &[std::ops::Range<usize>], row: usize, width: usize) -> std:
 
 impl<S: Surfaces> Shading<'_, S> {
     /// Centre rays of columns `span` of a row: the shaded sRGB colour into `out` and, when
-    /// anti-aliasing, into `flat` the `edge_key` of the colour that decides where edges are
-    /// (the untextured albedo lit without shadows or gloss for a textured surface; the
+    /// anti-aliasing, into `edge_keys` the `edge_key` of the colour that decides where edges
+    /// are (the untextured albedo lit without shadows or gloss for a textured surface; the
     /// shaded colour otherwise). Pixels of a plain background are left as they are.
     fn centre_row(
         &self,
@@ -297,7 +297,7 @@ impl<S: Surfaces> Shading<'_, S> {
         row: usize,
         span: std::ops::Range<usize>,
         out: &mut [u8],
-        mut flat: Option<&mut [u32]>,
+        mut edge_keys: Option<&mut [u32]>,
     ) {
         let width = g.width as usize;
         let k = self.camera.intrinsics;
@@ -318,8 +318,8 @@ impl<S: Surfaces> Shading<'_, S> {
             let (linear, unshadowed) = self.radiance_with_irradiance(hit, view, (u, v), &mut last);
             let colour = shaded.encode(linear);
             out[3 * col..3 * col + 3].copy_from_slice(&colour);
-            if let Some(flat) = flat.as_deref_mut() {
-                let flat_colour = hit.map(|(_, tri)| {
+            if let Some(keys) = edge_keys.as_deref_mut() {
+                let deciding = hit.map(|(_, tri)| {
                     if self.surfaces.textured(tri) {
                         let albedo = self.surfaces.flat(tri);
                         untextured.encode(reflected(
@@ -332,24 +332,24 @@ impl<S: Surfaces> Shading<'_, S> {
                         colour
                     }
                 });
-                flat[col] = edge_key(flat_colour);
+                keys[col] = edge_key(deciding);
             }
         }
     }
 
     /// Re-shades from four fixed sub-pixel rays every pixel (near the hits of `spans`, see
-    /// `hit_spans`) whose `flat` colour, or whether it sees a surface, differs from a
-    /// neighbour's. The sub-rays' first hits are found for all those pixels at once
-    /// (`TraceMesh::sample_hits`).
+    /// `hit_spans`) whose `edge_keys` entry (its deciding colour, or that it sees no surface)
+    /// differs visibly from a neighbour's. The sub-rays' first hits are found for all those
+    /// pixels at once (`TraceMesh::sample_hits`).
     fn antialias_edges(
         &self,
         g: &GBuffer,
-        flat: &[u32],
+        edge_keys: &[u32],
         spans: &[std::ops::Range<usize>],
         rgb: &mut [u8],
     ) {
         let width = g.width as usize;
-        let differs = |i: usize, j: usize| visibly_different(flat[i], flat[j]);
+        let differs = |i: usize, j: usize| visibly_different(edge_keys[i], edge_keys[j]);
         let edges: Vec<Vec<u32>> = (0..g.height as usize)
             .into_par_iter()
             .map(|row| {
