@@ -126,6 +126,13 @@ enum Command {
         #[arg(long)]
         with_copies: bool,
     },
+    /// Check a dataset as received: every file the manifest lists is read, as `export` and
+    /// `eval` read them (no link followed, regular files only), and compared with the size
+    /// and BLAKE3 hash the manifest records. Exits non-zero if any differs.
+    Verify {
+        /// The dataset folder, finished.
+        dataset: PathBuf,
+    },
     /// Score predictions against a finished dataset: depth metrics (AbsRel, SqRel, RMSE,
     /// RMSE log, δ), Chamfer distance and F-score of surfaces, flow and displacement EPE.
     Eval {
@@ -307,6 +314,7 @@ fn execute(command: Command) -> Result<()> {
             );
             Ok(())
         }
+        Command::Verify { dataset } => verify(&dataset),
         Command::Eval {
             dataset,
             predictions,
@@ -324,6 +332,7 @@ fn execute(command: Command) -> Result<()> {
                     mask,
                     fscore_threshold,
                     surface_samples: usize::try_from(surface_samples).unwrap_or(usize::MAX),
+                    json: json.clone(),
                 },
             )?;
             for warning in report.warnings() {
@@ -336,4 +345,35 @@ fn execute(command: Command) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// `shmgen verify`: a line per file that differs, then a summary; an error if any did.
+fn verify(dataset: &std::path::Path) -> Result<()> {
+    let started = std::time::Instant::now();
+    let verified = shmgen::dataset::verify(dataset)?;
+    for failure in &verified.failed {
+        eprintln!("{failure}");
+    }
+    let gb = verified.bytes as f64 / 1e9;
+    let seconds = started.elapsed().as_secs_f64();
+    if !verified.failed.is_empty() {
+        anyhow::bail!(
+            "{}: {} of {} files differ from what manifest.jsonl records (listed above)",
+            dataset.display(),
+            verified.failed.len(),
+            verified.files
+        );
+    }
+    if verified.unrecorded > 0 {
+        println!(
+            "{} files ({gb:.2} GB) read in {seconds:.1} s; {} of them have no hash in manifest.jsonl (written by an older shmgen): they are regular files inside the dataset, their content is unchecked",
+            verified.files, verified.unrecorded
+        );
+    } else {
+        println!(
+            "verified: {} files ({gb:.2} GB) match the sizes and BLAKE3 hashes manifest.jsonl records, in {seconds:.1} s",
+            verified.files
+        );
+    }
+    Ok(())
 }

@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 const ALLOWED: &[(&str, &[&str])] = &[
     (
         "main",
-        &["preview", "pipeline", "recipe", "words", "export", "eval"],
+        &[
+            "preview", "pipeline", "recipe", "words", "export", "eval", "dataset",
+        ],
     ),
     ("export", &["dataset", "output"]),
     ("eval", &["dataset", "geometry", "output"]),

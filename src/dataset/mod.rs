@@ -2,21 +2,28 @@
 //! lists, each view's camera, and the decoders of the files a view holds.
 //!
 //! Owns: deciding whether a folder is a finished shmgen dataset, and listing what it holds,
-//! for the commands that read datasets (`export`, `eval`). Must not touch: anything on disk
-//! (it only reads), recipes, rendering, or how datasets are written (`output` owns the layout
-//! and the writing; this module reads what `manifest.jsonl` lists rather than guessing names).
+//! for the commands that read datasets (`export`, `eval`, `verify`); the rule by which an
+//! untrusted dataset's files are opened (`files`) and checked against the sizes and BLAKE3
+//! hashes the manifest records (`content`). Must not touch:
+//! anything on disk (it only reads), recipes, rendering, or how datasets are written (`output`
+//! owns the layout and the writing; this module reads what `manifest.jsonl` lists rather than
+//! guessing names).
 
 mod camera;
+mod content;
+pub mod files;
 mod read;
 
 pub use camera::Camera;
-pub use read::{GreyImage, Layer, read_exr, read_grey_png};
+pub use content::{Check, Hashing, Verified, check_stream, verify};
+pub use read::{GreyImage, Layer, decode_exr, decode_grey_png};
 
 use anyhow::{Context, Result, bail};
+use files::{Bound, MANIFEST_LINE, RECORD, image_bound, open_inside, read_bounded};
 use serde_json::Value;
-use std::collections::BTreeMap;
-use std::fs;
-use std::io::{BufRead, BufReader};
+use std::collections::{BTreeMap, HashMap};
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
 /// The version tag of `run.json` this reader understands.
@@ -30,6 +37,9 @@ pub struct Dataset {
     pub run: Value,
     /// The samples, in index order (0, 1, …).
     pub samples: Vec<Sample>,
+    /// Size and BLAKE3 of each file, as the manifest records them (none in datasets written
+    /// before the manifest had them).
+    checks: HashMap<String, Check>,
 }
 
 /// One sample: its views (clean and augmented copies) and its per-sample files (meshes).
@@ -136,25 +146,39 @@ fn owner_of(stem: &str) -> Option<Owner> {
 }
 
 impl Dataset {
-    /// Opens the dataset at `root`, refusing a folder that is not a shmgen dataset or whose
-    /// manifest does not yet list every sample (a run still going, or stopped).
+    /// Opens the dataset at `root`, refusing a folder that is not a shmgen dataset, whose
+    /// manifest does not yet list every sample (a run still going, or stopped), or one of whose
+    /// listed files is missing, not a regular file inside it, or not of the recorded size.
     pub fn open(root: &Path) -> Result<Dataset> {
+        let dataset = Dataset::open_unchecked(root)?;
+        for sample in &dataset.samples {
+            let views = sample.views.iter().flat_map(|v| &v.files);
+            for relative in sample.files.iter().chain(views) {
+                dataset.open_file(relative)?;
+            }
+        }
+        Ok(dataset)
+    }
+
+    /// `open` without looking at the listed files (`verify` looks at every one itself).
+    fn open_unchecked(root: &Path) -> Result<Dataset> {
         if !root.is_dir() {
             bail!("{}: no such folder", root.display());
         }
         let run_path = root.join("run.json");
-        let run: Value = match fs::read(&run_path) {
-            Ok(bytes) => serde_json::from_slice(&bytes).with_context(|| {
+        if std::fs::symlink_metadata(&run_path).is_err() {
+            bail!(
+                "{}: not a shmgen dataset (no run.json; give the folder `shmgen run --out` wrote)",
+                root.display()
+            );
+        }
+        let run: Value = serde_json::from_slice(&read_inside(root, "run.json", RECORD)?)
+            .with_context(|| {
                 format!(
                     "{}: not a shmgen dataset (run.json does not parse)",
                     root.display()
                 )
-            })?,
-            Err(_) => bail!(
-                "{}: not a shmgen dataset (no run.json; give the folder `shmgen run --out` wrote)",
-                root.display()
-            ),
-        };
+            })?;
         let schema = run.get("schema").and_then(Value::as_str).unwrap_or("none");
         if schema != RUN_SCHEMA {
             bail!(
@@ -166,7 +190,7 @@ impl Dataset {
             .pointer("/dataset/samples")
             .and_then(Value::as_u64)
             .with_context(|| format!("{}: no dataset.samples", run_path.display()))?;
-        let listed = read_manifest(root)?;
+        let (listed, checks) = read_manifest(root)?;
         let missing = (0..total).find(|s| !listed.contains_key(s));
         if let Some(first) = missing {
             let present = listed.keys().filter(|&&s| s < total).count();
@@ -183,12 +207,13 @@ impl Dataset {
         }
         let mut samples = Vec::with_capacity(listed.len());
         for (index, files) in listed {
-            samples.push(sample_of(root, index, files)?);
+            samples.push(sample_of(index, files)?);
         }
         Ok(Dataset {
             root: root.to_path_buf(),
             run,
             samples,
+            checks,
         })
     }
 
@@ -197,9 +222,78 @@ impl Dataset {
         &self.root
     }
 
-    /// A path relative to the dataset root, made absolute.
+    /// A path relative to the dataset root, made absolute (for messages: files are opened
+    /// with [`Dataset::open_file`]).
     pub fn path(&self, relative: &str) -> PathBuf {
         self.root.join(relative)
+    }
+
+    /// The listed file `relative`, opened as `files` says (a regular file inside the dataset,
+    /// no link followed), with the size and hash the manifest records for it, if any.
+    pub fn open_file(&self, relative: &str) -> Result<(File, Option<Check>)> {
+        let file = open_inside(&self.root, relative)?;
+        let check = self.checks.get(relative).copied();
+        if let Some(check) = check {
+            check.size(file.metadata()?.len(), relative)?;
+        }
+        Ok((file, check))
+    }
+
+    /// All bytes of the listed file `relative`, at most `bound`, checked against the
+    /// manifest's hash when it has one.
+    pub fn read(&self, relative: &str, bound: Bound) -> Result<Vec<u8>> {
+        let (file, check) = self.open_file(relative)?;
+        let bytes = read_bounded(file, relative, bound)?;
+        if let Some(check) = check {
+            check.content(&bytes, relative)?;
+        }
+        Ok(bytes)
+    }
+
+    /// Reads the listed file `relative` through, checking it against the manifest's record.
+    pub fn verify_file(&self, relative: &str) -> Result<()> {
+        let (file, check) = self.open_file(relative)?;
+        check_stream(file, check, relative, &mut std::io::sink()).map(drop)
+    }
+
+    /// The channels `names` of the view's EXR of `kind` (`depth.exr`, `flow.exr`, …), its
+    /// header checked against the view's size before any pixel is decoded.
+    pub fn layer(&self, view: &View, kind: &str, names: &[&str]) -> Result<Layer> {
+        let relative = self.file_of(view, kind)?;
+        let (width, height) = self.size(view)?;
+        let bound = Bound {
+            what: "an EXR of the view's size",
+            bytes: image_bound(width, height, names.len() as u64, 4),
+        };
+        decode_exr(
+            &self.read(relative, bound)?,
+            relative,
+            names,
+            (width, height),
+        )
+    }
+
+    /// The view's grey PNG of `kind` (`mask.png`, `valid.png`, …), its header checked
+    /// against the view's size before it is decoded.
+    pub fn grey(&self, view: &View, kind: &str) -> Result<GreyImage> {
+        let relative = self.file_of(view, kind)?;
+        let (width, height) = self.size(view)?;
+        let bound = Bound {
+            what: "a grey PNG of the view's size",
+            bytes: image_bound(width, height, 1, 2),
+        };
+        decode_grey_png(&self.read(relative, bound)?, relative, (width, height))
+    }
+
+    /// The view's width and height, from its record.
+    pub fn size(&self, view: &View) -> Result<(u32, u32)> {
+        let camera = self.camera(view)?;
+        Ok((camera.width, camera.height))
+    }
+
+    fn file_of<'a>(&self, view: &'a View, kind: &str) -> Result<&'a str> {
+        view.file(kind)
+            .with_context(|| format!("view {} has no {kind} file", view.stem))
     }
 
     /// Every view of every sample, in sample order.
@@ -212,12 +306,9 @@ impl Dataset {
         let json = view
             .file("json")
             .with_context(|| format!("view {} has no record (.json)", view.stem))?;
-        let path = self.path(json);
-        let record: Value = serde_json::from_slice(
-            &fs::read(&path).with_context(|| format!("reading {}", path.display()))?,
-        )
-        .with_context(|| format!("{}: does not parse as JSON", path.display()))?;
-        Camera::from_record(&record).with_context(|| format!("{}", path.display()))
+        let record: Value = serde_json::from_slice(&self.read(json, RECORD)?)
+            .with_context(|| format!("{json}: does not parse as JSON"))?;
+        Camera::from_record(&record).with_context(|| json.to_string())
     }
 
     /// `dataset.name`, `dataset.seed` and the recipe hash: what identifies the dataset an
@@ -233,37 +324,52 @@ impl Dataset {
     }
 }
 
-/// Sample index → its files, from every complete line of the manifest.
-fn read_manifest(root: &Path) -> Result<BTreeMap<u64, Vec<String>>> {
+/// All of the dataset's file `relative` (`run.json`, …), as `files` opens it, at most `bound`.
+fn read_inside(root: &Path, relative: &str, bound: Bound) -> Result<Vec<u8>> {
+    read_bounded(open_inside(root, relative)?, relative, bound)
+}
+
+/// Sample index → its files, from every complete line of the manifest, and the size and
+/// hash of every file whose line records them. Each line is read up to `MANIFEST_LINE`
+/// bytes: a manifest without newlines is refused, never read whole.
+fn read_manifest(root: &Path) -> Result<(BTreeMap<u64, Vec<String>>, HashMap<String, Check>)> {
     #[derive(serde::Deserialize)]
     struct Line {
         sample: u64,
         files: Vec<String>,
+        #[serde(default)]
+        hashes: BTreeMap<String, Check>,
     }
     let path = root.join("manifest.jsonl");
-    let file = fs::File::open(&path).map_err(|_| {
-        anyhow::anyhow!(
+    if std::fs::symlink_metadata(&path).is_err() {
+        bail!(
             "{}: the dataset is not finished (no manifest.jsonl)",
             root.display()
-        )
-    })?;
-    let mut listed = BTreeMap::new();
-    let mut reader = BufReader::new(file);
-    let mut line = String::new();
+        );
+    }
+    let mut reader = BufReader::new(open_inside(root, "manifest.jsonl")?);
+    let (mut listed, mut checks) = (BTreeMap::new(), HashMap::new());
+    let mut line = Vec::new();
     for number in 1.. {
         line.clear();
-        if reader
-            .read_line(&mut line)
-            .with_context(|| format!("reading {}", path.display()))?
-            == 0
-        {
+        let read = (&mut reader)
+            .take(MANIFEST_LINE + 1)
+            .read_until(b'\n', &mut line)
+            .with_context(|| format!("reading {}", path.display()))?;
+        if read == 0 {
             break;
+        }
+        if line.len() as u64 > MANIFEST_LINE {
+            bail!(
+                "{}: line {number} is longer than {MANIFEST_LINE} bytes; not a manifest shmgen wrote",
+                path.display()
+            );
         }
         // A line without its newline is a torn append of a run that was killed: not a
         // finished sample, and never in a finished manifest.
         let parsed = line
-            .ends_with('\n')
-            .then(|| serde_json::from_str::<Line>(&line).ok())
+            .ends_with(b"\n")
+            .then(|| serde_json::from_slice::<Line>(&line).ok())
             .flatten();
         let Some(parsed) = parsed else {
             bail!(
@@ -271,13 +377,16 @@ fn read_manifest(root: &Path) -> Result<BTreeMap<u64, Vec<String>>> {
                 path.display()
             );
         };
-        listed.entry(parsed.sample).or_insert(parsed.files);
+        if let std::collections::btree_map::Entry::Vacant(entry) = listed.entry(parsed.sample) {
+            checks.extend(parsed.hashes);
+            entry.insert(parsed.files);
+        }
     }
-    Ok(listed)
+    Ok((listed, checks))
 }
 
-/// Groups a sample's files into its views and its own files, checking each exists.
-fn sample_of(root: &Path, index: u64, mut files: Vec<String>) -> Result<Sample> {
+/// Groups a sample's files into its views and its own files.
+fn sample_of(index: u64, mut files: Vec<String>) -> Result<Sample> {
     files.sort();
     files.dedup();
     let mut views: BTreeMap<(u32, Option<u32>), View> = BTreeMap::new();
@@ -285,12 +394,6 @@ fn sample_of(root: &Path, index: u64, mut files: Vec<String>) -> Result<Sample> 
     for file in files {
         if file.contains("..") || file.starts_with('/') || file.contains('\\') {
             bail!("manifest.jsonl: sample {index} lists {file:?}, outside the dataset folder");
-        }
-        if !root.join(&file).is_file() {
-            bail!(
-                "{}: {file} is listed in manifest.jsonl but missing",
-                root.display()
-            );
         }
         let name = file.rsplit('/').next().unwrap_or(&file);
         let stem = name.split('.').next().unwrap_or(name);
@@ -321,6 +424,7 @@ fn sample_of(root: &Path, index: u64, mut files: Vec<String>) -> Result<Sample> 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs;
 
     #[test]
     fn stems_name_samples_views_and_copies() {
@@ -381,6 +485,6 @@ mod tests {
         assert_eq!(d.samples[0].views[0].stem, "000000_00");
         assert_eq!(d.samples[0].views[0].folder(), "samples/0000");
         fs::remove_file(dir.path().join("samples/0000/000000_00.json")).unwrap();
-        assert!(err(dir.path()).contains("000000_00.json is listed in manifest.jsonl but missing"));
+        assert!(err(dir.path()).contains("samples/0000/000000_00.json: missing"));
     }
 }

@@ -18,8 +18,9 @@ mod surface;
 
 pub use depth::Align;
 
-use crate::dataset::{Dataset, View, read_exr, read_grey_png};
+use crate::dataset::{Dataset, View};
 use crate::geometry::import::{import_mesh, import_surface};
+use crate::output::refuse_data_target;
 use crate::output::write_atomic;
 use anyhow::{Context, Result, bail};
 use predictions::Quantity;
@@ -27,7 +28,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use serde_json::Value;
 use stats::Mean;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Which pixels depth is scored on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,7 +61,7 @@ impl std::str::FromStr for Mask {
 }
 
 /// How to evaluate.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct EvalOptions {
     /// Per-image alignment of depth predictions.
     pub align: Align,
@@ -70,6 +71,9 @@ pub struct EvalOptions {
     pub fscore_threshold: f64,
     /// Points sampled on each mesh for Chamfer distance and F-score.
     pub surface_samples: usize,
+    /// Where the report's JSON will be written, if anywhere: refused before scoring, which
+    /// may take minutes, if it is or lies inside a dataset or an export.
+    pub json: Option<PathBuf>,
 }
 
 /// The report, as `--json` writes it.
@@ -184,6 +188,9 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
     if options.surface_samples == 0 {
         bail!("--surface-samples 0: at least one point per surface is needed");
     }
+    if let Some(json) = &options.json {
+        refuse_data_target(json, "--json", Some(root), false)?;
+    }
     let dataset = Dataset::open(root)?;
     let samples = predictions::samples_folder(predictions)?;
     let views: Vec<&View> = dataset.views().collect();
@@ -274,8 +281,8 @@ fn score_view(
     {
         return Ok(out);
     }
-    let depth_file = truth(view, "depth.exr", "depth")?;
-    let depth_layer = read_exr(&dataset.path(depth_file), &["Z"])?;
+    truth(view, "depth.exr", "depth")?;
+    let depth_layer = dataset.layer(view, "depth.exr", &["Z"])?;
     let (w, h) = (depth_layer.width, depth_layer.height);
     let depth = &depth_layer.channels[0];
     if let Some(path) = depth_prediction {
@@ -285,20 +292,22 @@ fn score_view(
             Mask::Valid => "valid.png",
         };
         let inside = match view.file(kind) {
-            Some(file) => positive(dataset, file, w, h)?,
+            Some(_) => positive(dataset, view, kind)?,
             None => vec![true; w * h],
         };
         out.depth = Some(depth::score(depth, &predicted[0], &inside, options.align));
     }
     if let Some(path) = flow_prediction {
-        let truth_flow = read_exr(&dataset.path(truth(view, "flow.exr", "flow")?), &["U", "V"])?;
-        let valid = positive(dataset, truth(view, "flow_valid.png", "flow")?, w, h)?;
+        truth(view, "flow.exr", "flow")?;
+        let truth_flow = dataset.layer(view, "flow.exr", &["U", "V"])?;
+        truth(view, "flow_valid.png", "flow")?;
+        let valid = positive(dataset, view, "flow_valid.png")?;
         let predicted = predictions::read(&path, Quantity::Flow, w, h)?;
         out.flow = Some(epe::score(&truth_flow.channels, &predicted, &valid));
     }
     if let Some(path) = displacement_prediction {
-        let file = truth(view, "displacement.exr", "displacement")?;
-        let truth_displacement = read_exr(&dataset.path(file), &["X", "Y", "Z"])?;
+        truth(view, "displacement.exr", "displacement")?;
+        let truth_displacement = dataset.layer(view, "displacement.exr", &["X", "Y", "Z"])?;
         // Displacement is that of the surface point the pixel sees: defined where it sees one.
         let valid: Vec<bool> = depth.iter().map(|&d| d > 0.0).collect();
         let predicted = predictions::read(&path, Quantity::Displacement, w, h)?;
@@ -317,16 +326,9 @@ fn truth<'a>(view: &'a View, kind: &str, output: &str) -> Result<&'a str> {
     })
 }
 
-/// Where the grey image `file` is above 0, checked to be `w × h`.
-fn positive(dataset: &Dataset, file: &str, w: usize, h: usize) -> Result<Vec<bool>> {
-    let image = read_grey_png(&dataset.path(file))?;
-    if (image.width, image.height) != (w, h) {
-        bail!(
-            "{file}: {}×{} pixels, the depth has {w}×{h}",
-            image.width,
-            image.height
-        );
-    }
+/// Where the view's grey image of `kind` is above 0.
+fn positive(dataset: &Dataset, view: &View, kind: &str) -> Result<Vec<bool>> {
+    let image = dataset.grey(view, kind)?;
     Ok(image.values.iter().map(|&v| v > 0).collect())
 }
 
@@ -380,6 +382,9 @@ fn surfaces(
                 sample.index, sample.index
             )
         })?;
+        // Checked as every file of an untrusted dataset is (no link, regular, its recorded
+        // size and hash) before the importer reads it.
+        dataset.verify_file(truth_file)?;
         let truth = import_mesh(&dataset.path(truth_file), Default::default())
             .map_err(anyhow::Error::msg)?
             .mesh;
@@ -415,8 +420,10 @@ fn surfaces(
 }
 
 impl Report {
-    /// Writes the report as pretty JSON to `path`, atomically.
+    /// Writes the report as pretty JSON to `path`, atomically; never onto a dataset or an
+    /// export.
     pub fn write_json(&self, path: &Path) -> Result<()> {
+        refuse_data_target(path, "--json", None, false)?;
         let mut bytes = serde_json::to_vec_pretty(self)?;
         bytes.push(b'\n');
         write_atomic(path, &bytes)

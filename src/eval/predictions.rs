@@ -12,7 +12,8 @@
 //! Two files for the same thing are an error (which one was meant is not ours to guess).
 
 use super::npy;
-use crate::dataset::{View, read_exr, read_grey_png};
+use crate::dataset::files::{Bound, image_bound, open_regular, read_bounded};
+use crate::dataset::{View, decode_exr, decode_grey_png};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 
@@ -93,7 +94,9 @@ fn one_of(candidates: impl IntoIterator<Item = PathBuf>) -> Result<Option<PathBu
     }
 }
 
-/// The planes of a prediction file, each `width × height`, as f64.
+/// The planes of a prediction file, each `width × height`, as f64. The file is read up to
+/// the size such an image may have (float64 samples, twice over, plus headers) and its header
+/// is checked against the view's size before anything is decoded.
 pub(super) fn read(
     path: &Path,
     quantity: Quantity,
@@ -102,8 +105,14 @@ pub(super) fn read(
 ) -> Result<Vec<Vec<f64>>> {
     let names = quantity.channels();
     let name = path.to_string_lossy();
+    let size = (width as u32, height as u32);
+    let bound = Bound {
+        what: "a prediction of the view's size",
+        bytes: image_bound(size.0, size.1, names.len() as u64, 8),
+    };
+    let bytes = read_bounded(open_regular(path)?, &name, bound)?;
     let (w, h, planes) = if name.ends_with(".exr") {
-        let layer = read_exr(path, names)?;
+        let layer = decode_exr(&bytes, &name, names, size)?;
         let planes = layer
             .channels
             .into_iter()
@@ -111,7 +120,6 @@ pub(super) fn read(
             .collect();
         (layer.width, layer.height, planes)
     } else if name.ends_with(".npy") {
-        let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
         let array = npy::parse(&bytes).with_context(|| format!("{}", path.display()))?;
         let c = names.len();
         let (h, w) = match (array.shape.as_slice(), c) {
@@ -132,7 +140,7 @@ pub(super) fn read(
             .collect();
         (w, h, planes)
     } else {
-        let png = read_grey_png(path)?;
+        let png = decode_grey_png(&bytes, &name, size)?;
         if png.bits != 16 {
             bail!(
                 "{}: an 8-bit PNG cannot hold millimetres; write 16-bit grey",

@@ -44,7 +44,7 @@ pub(super) fn write(job: &mut Job) -> Result<Value> {
             let name = format!("{}.png", view.stem);
             let rgb = needed(view, "rgb.png", "colmap")?;
             job.placer
-                .place(&dataset.path(rgb), &scene.join("images").join(&name))?;
+                .place(dataset, rgb, &scene.join("images").join(&name))?;
             writeln!(cameras, "{id} {}", camera_line(&camera, view)?)?;
             let [qw, qx, qy, qz] = quaternion(rotation(&camera, view)?);
             let t = camera.w2c_opencv;

@@ -7,11 +7,10 @@
 //! written as 1 and counted (`raised`); one beyond 65.535 m is written as 65535 and counted
 //! (`saturated`). A value that is negative or not finite is not depth, and is an error.
 
-use crate::dataset::read_exr;
+use crate::dataset::{Dataset, View};
 use crate::output::{DEPTH_CHANNEL, grey16_png};
 use anyhow::{Result, bail};
 use rayon::prelude::*;
-use std::path::{Path, PathBuf};
 
 /// Pixels that did not fit whole millimetres in 16 bits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -23,14 +22,13 @@ pub(super) struct Clamped {
 }
 
 /// Millimetres of each depth value in metres; `file` names the source in errors.
-pub(super) fn to_mm(depth: &[f32], width: usize, file: &Path) -> Result<(Vec<u16>, Clamped)> {
+pub(super) fn to_mm(depth: &[f32], width: usize, file: &str) -> Result<(Vec<u16>, Clamped)> {
     let mut clamped = Clamped::default();
     let mut out = Vec::with_capacity(depth.len());
     for (i, &d) in depth.iter().enumerate() {
         if !d.is_finite() || d < 0.0 {
             bail!(
-                "{}: pixel (row {}, column {}) holds {d}, which is not a depth in metres",
-                file.display(),
+                "{file}: pixel (row {}, column {}) holds {d}, which is not a depth in metres",
                 i / width,
                 i % width
             );
@@ -51,19 +49,20 @@ pub(super) fn to_mm(depth: &[f32], width: usize, file: &Path) -> Result<(Vec<u16
     Ok((out, clamped))
 }
 
-/// The depth EXR at `path` as a millimetre PNG.
-pub(super) fn png_of(path: &Path) -> Result<(Vec<u8>, Clamped)> {
-    let layer = read_exr(path, &[DEPTH_CHANNEL])?;
-    let (mm, clamped) = to_mm(&layer.channels[0], layer.width, path)?;
+/// The view's depth EXR as a millimetre PNG.
+pub(super) fn png_of(dataset: &Dataset, view: &View) -> Result<(Vec<u8>, Clamped)> {
+    let layer = dataset.layer(view, "depth.exr", &[DEPTH_CHANNEL])?;
+    let file = view.file("depth.exr").unwrap_or_default();
+    let (mm, clamped) = to_mm(&layer.channels[0], layer.width, file)?;
     Ok((
         grey16_png(layer.width as u32, layer.height as u32, &mm),
         clamped,
     ))
 }
 
-/// `png_of` for each path, on every core, in the paths' order.
-pub(super) fn pngs_of(paths: &[PathBuf]) -> Result<Vec<(Vec<u8>, Clamped)>> {
-    paths.par_iter().map(|p| png_of(p)).collect()
+/// `png_of` for each view, on every core, in the views' order.
+pub(super) fn pngs_of(dataset: &Dataset, views: &[&View]) -> Result<Vec<(Vec<u8>, Clamped)>> {
+    views.par_iter().map(|v| png_of(dataset, v)).collect()
 }
 
 #[cfg(test)]
@@ -73,7 +72,7 @@ mod tests {
     #[test]
     fn millimetres_round_to_nearest_and_clamp_at_both_ends() {
         let depth = [0.0, 1.2344, 1.2346, 0.0004, 0.0006, 65.5344, 65.5356, 100.0];
-        let (mm, clamped) = to_mm(&depth, 4, Path::new("d.exr")).unwrap();
+        let (mm, clamped) = to_mm(&depth, 4, "d.exr").unwrap();
         assert_eq!(mm, [0, 1234, 1235, 1, 1, 65534, 65535, 65535]);
         assert_eq!(
             clamped,
@@ -82,8 +81,8 @@ mod tests {
                 raised: 1
             }
         );
-        let err = to_mm(&[1.0, f32::NAN], 2, Path::new("d.exr")).unwrap_err();
+        let err = to_mm(&[1.0, f32::NAN], 2, "d.exr").unwrap_err();
         assert!(format!("{err}").contains("d.exr: pixel (row 0, column 1) holds NaN"));
-        assert!(to_mm(&[-1.0], 1, Path::new("d.exr")).is_err());
+        assert!(to_mm(&[-1.0], 1, "d.exr").is_err());
     }
 }

@@ -34,11 +34,10 @@ pub(super) fn write(job: &mut Job) -> Result<Value> {
         let masks = views.iter().all(|v| v.file("mask.png").is_some());
         let depths = views.iter().all(|v| v.file("depth.exr").is_some());
         let depth_pngs = if depths {
-            let paths: Vec<_> = views
-                .iter()
-                .map(|v| dataset.path(v.file("depth.exr").unwrap_or_default()))
-                .collect();
-            depth_mm::pngs_of(&paths)?.into_iter().map(Some).collect()
+            depth_mm::pngs_of(dataset, &views)?
+                .into_iter()
+                .map(Some)
+                .collect()
         } else {
             vec![None; views.len()]
         };
@@ -46,7 +45,7 @@ pub(super) fn write(job: &mut Job) -> Result<Value> {
         for ((view, camera), depth_png) in views.iter().zip(&cameras).zip(depth_pngs) {
             let rgb = needed(view, "rgb.png", "nerfstudio")?;
             let image = format!("images/{}.png", view.stem);
-            job.placer.place(&dataset.path(rgb), &scene.join(&image))?;
+            job.placer.place(dataset, rgb, &scene.join(&image))?;
             let [fx, fy, cx, cy] = intrinsics(&camera.k, view)?;
             let mut frame = Map::new();
             frame.insert("file_path".into(), json!(image));
@@ -78,8 +77,8 @@ pub(super) fn write(job: &mut Job) -> Result<Value> {
             }
             if masks {
                 let mask = format!("masks/{}.png", view.stem);
-                let from = dataset.path(view.file("mask.png").unwrap_or_default());
-                job.placer.place(&from, &scene.join(&mask))?;
+                let from = view.file("mask.png").unwrap_or_default();
+                job.placer.place(dataset, from, &scene.join(&mask))?;
                 frame.insert("mask_path".into(), json!(mask));
             }
             list.push(Value::Object(frame));
@@ -96,7 +95,7 @@ pub(super) fn write(job: &mut Job) -> Result<Value> {
         // Gaussians from when the transforms name them.
         if let Some(points) = sample.file("points.ply") {
             job.placer
-                .place(&dataset.path(points), &scene.join("points.ply"))?;
+                .place(dataset, points, &scene.join("points.ply"))?;
             transforms["ply_file_path"] = json!("points.ply");
         }
         let mut bytes = serde_json::to_vec_pretty(&transforms)?;

@@ -16,11 +16,10 @@ pub(super) fn write(job: &mut Job) -> Result<Value> {
     let views: Vec<&View> = dataset.views().collect();
     // Converted a batch at a time on every core, written in order: memory stays bounded.
     for batch in views.chunks(BATCH) {
-        let paths = batch
-            .iter()
-            .map(|v| Ok(dataset.path(needed(v, "depth.exr", "png16")?)))
-            .collect::<Result<Vec<_>>>()?;
-        for (view, (png, clamped)) in batch.iter().zip(depth_mm::pngs_of(&paths)?) {
+        for view in batch {
+            needed(view, "depth.exr", "png16")?;
+        }
+        for (view, (png, clamped)) in batch.iter().zip(depth_mm::pngs_of(dataset, batch)?) {
             let target = format!("{}/{}.depth_mm.png", view.folder(), view.stem);
             job.placer.write(&out.join(target), &png)?;
             job.summary.views += 1;

@@ -7,8 +7,11 @@
 //! filesystem, a filesystem without links) falls back to a copy. Either way the exported bytes
 //! are the dataset's, so the export's content is the same.
 
+use crate::dataset::{Dataset, check_stream};
+use crate::output::refuse_data_target;
 use anyhow::{Context, Result, bail};
-use std::fs;
+use std::fs::{self, File};
+use std::io;
 use std::path::{Path, PathBuf};
 
 /// A hidden folder beside `--out` that becomes `--out` on commit and is removed otherwise.
@@ -21,8 +24,8 @@ pub(super) struct Staging {
 const MARK: &str = ".export-";
 
 impl Staging {
-    /// Refuses an `out` that exists or lies inside the dataset `source`; removes what killed
-    /// exports to the same `out` left; creates the hidden folder.
+    /// Refuses an `out` that exists or lies inside a dataset or an export (`source` or any
+    /// other); removes what killed exports to the same `out` left; creates the hidden folder.
     pub(super) fn create(out: &Path, source: &Path) -> Result<Staging> {
         if fs::symlink_metadata(out).is_ok() {
             bail!(
@@ -38,15 +41,8 @@ impl Staging {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
+        refuse_data_target(out, "--out", Some(source), false)?;
         fs::create_dir_all(&parent).with_context(|| format!("creating {}", parent.display()))?;
-        let (inside, dataset) = (parent.canonicalize()?, source.canonicalize()?);
-        if inside.starts_with(&dataset) {
-            bail!(
-                "--out {}: inside the dataset {}; export next to it instead",
-                out.display(),
-                source.display()
-            );
-        }
         remove_dead(&parent, name)?;
         let tmp = parent.join(format!(".{name}{MARK}{}", std::process::id()));
         if tmp.exists() {
@@ -128,17 +124,40 @@ impl Placer {
         }
     }
 
-    /// `to` gets the bytes of `from`: a hard link where possible, else a copy.
-    pub(super) fn place(&mut self, from: &Path, to: &Path) -> Result<()> {
+    /// `to` gets the bytes of the dataset's file `relative`: a hard link where possible,
+    /// else a copy. Either way the file is opened as an untrusted dataset's files are (no
+    /// link followed, regular files only), and its bytes are checked against the manifest's
+    /// hash as they are read: what is exported is what the run wrote, or nothing.
+    pub(super) fn place(&mut self, dataset: &Dataset, relative: &str, to: &Path) -> Result<()> {
         make_parent(to)?;
-        if !self.copy && fs::hard_link(from, to).is_ok() {
+        let (file, check) = dataset.open_file(relative)?;
+        if !self.copy && self.link(&file, &dataset.path(relative), to)? {
+            check_stream(file, check, relative, &mut io::sink())?;
             self.linked += 1;
             return Ok(());
         }
-        fs::copy(from, to)
-            .with_context(|| format!("copying {} to {}", from.display(), to.display()))?;
+        let mut out = File::create(to).with_context(|| format!("creating {}", to.display()))?;
+        check_stream(file, check, relative, &mut out)
+            .with_context(|| format!("copying {relative} to {}", to.display()))?;
         self.copied += 1;
         Ok(())
+    }
+
+    /// Hard-links `from` (opened as `file`) to `to`, and makes sure the link is that very
+    /// file: had `from` been swapped for a link meanwhile, the export would hold the link.
+    /// False (nothing left at `to`) when the filesystem refuses the link.
+    fn link(&self, file: &File, from: &Path, to: &Path) -> Result<bool> {
+        if fs::hard_link(from, to).is_err() {
+            return Ok(false);
+        }
+        if !same_file(file, to) {
+            fs::remove_file(to).with_context(|| format!("removing {}", to.display()))?;
+            bail!(
+                "{}: changed while being exported (it is no longer the file that was checked)",
+                from.display()
+            );
+        }
+        Ok(true)
     }
 
     /// Writes new bytes to `to`.
@@ -148,6 +167,21 @@ impl Placer {
         self.written += 1;
         Ok(())
     }
+}
+
+/// Whether the opened `file` and the file at `path` (not followed if a link) are one.
+#[cfg(unix)]
+fn same_file(file: &File, path: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (file.metadata(), fs::symlink_metadata(path)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_file(_: &File, path: &Path) -> bool {
+    fs::symlink_metadata(path).is_ok_and(|m| m.is_file())
 }
 
 fn make_parent(path: &Path) -> Result<()> {

@@ -9,11 +9,11 @@
 //! headers with mode 0644, uid and gid 0, empty owner names and mtime 0.
 
 use super::Job;
-use crate::dataset::{Dataset, View};
+use crate::dataset::{Dataset, Hashing, View};
 use anyhow::{Context, Result};
 use serde_json::{Value, json};
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, Read, Write};
 use std::path::Path;
 
 pub(super) fn write(job: &mut Job) -> Result<Value> {
@@ -45,9 +45,11 @@ fn write_shard(dataset: &Dataset, path: &Path, views: &[&View]) -> Result<()> {
     let mut tar = tar::Builder::new(BufWriter::new(file));
     for view in views {
         for relative in &view.files {
-            let source = dataset.path(relative);
-            let data = File::open(&source).with_context(|| format!("opening {relative}"))?;
+            // Opened as an untrusted dataset's files are; packed as far as the size it had
+            // when opened, and checked against the manifest's hash as it is packed.
+            let (data, check) = dataset.open_file(relative)?;
             let size = data.metadata()?.len();
+            let mut data = Hashing::new(data.take(size));
             let name = relative.rsplit('/').next().unwrap_or(relative);
             let mut header = tar::Header::new_ustar();
             header.set_entry_type(tar::EntryType::Regular);
@@ -59,8 +61,11 @@ fn write_shard(dataset: &Dataset, path: &Path, views: &[&View]) -> Result<()> {
             header.set_username("")?;
             header.set_groupname("")?;
             // append_data sets the name and the checksum.
-            tar.append_data(&mut header, name, data)
+            tar.append_data(&mut header, name, &mut data)
                 .with_context(|| format!("adding {relative}"))?;
+            if let Some(check) = check {
+                check.hash(data.hash(), relative)?;
+            }
         }
     }
     let mut writer = tar.into_inner()?;

@@ -49,6 +49,8 @@ pub struct SampleStage {
     dir: PathBuf,
     root: PathBuf,
     files: Vec<String>,
+    /// The manifest's record of each file: its size and BLAKE3, as hex.
+    hashes: serde_json::Map<String, Value>,
     /// Bytes staged so far.
     pub bytes: u64,
 }
@@ -81,6 +83,9 @@ impl SampleStage {
         fault::write_through("stage", bytes, |b| fs::write(&staged, b))
             .map_err(|e| io_error(e, format_args!("writing {relative}"), &self.root))?;
         self.bytes += bytes.len() as u64;
+        let hash = blake3::hash(bytes).to_hex();
+        let record = serde_json::json!({ "bytes": bytes.len(), "blake3": hash.as_str() });
+        self.hashes.insert(relative.clone(), record);
         self.files.push(relative);
         Ok(())
     }
@@ -370,6 +375,7 @@ impl DatasetFolder {
             dir,
             root: self.root.clone(),
             files: Vec::new(),
+            hashes: serde_json::Map::new(),
             bytes: 0,
         })
     }
@@ -392,8 +398,17 @@ impl DatasetFolder {
             })?;
         }
         fault::check("commit")?;
-        let line =
-            serde_json::json!({ "sample": stage.sample, "views": views, "files": stage.files });
+        // Sorted by name whatever order the files were written in, and whichever map type
+        // serde_json is built with: the line's bytes depend on the files' bytes alone.
+        let mut hashes: Vec<(String, Value)> = stage.hashes.into_iter().collect();
+        hashes.sort_by(|a, b| a.0.cmp(&b.0));
+        let hashes: serde_json::Map<String, Value> = hashes.into_iter().collect();
+        let line = serde_json::json!({
+            "sample": stage.sample,
+            "views": views,
+            "files": stage.files,
+            "hashes": hashes,
+        });
         let mut line = serde_json::to_vec(&line)?;
         line.push(b'\n');
         // One write of a whole line in append mode, under the manifest's lock: concurrent
@@ -507,14 +522,70 @@ impl Drop for DatasetFolder {
     }
 }
 
+/// The most of a run.json read (ours are a few kB).
+const RUN_JSON_BYTES: u64 = 16 << 20;
+
+/// Refuses a dataset folder with a link where shmgen reads or writes (run.json, the manifest,
+/// `samples/` and its folders, `.partial/` and its locks): a dataset received from someone
+/// else could otherwise point them elsewhere, and resuming it would append, rename or lock
+/// files outside it. The folder itself may be a link: the user named it.
+fn refuse_links(root: &Path) -> Result<()> {
+    let mut places: Vec<PathBuf> = [RUN_JSON, MANIFEST, SAMPLES, STAGING]
+        .iter()
+        .map(|name| root.join(name))
+        .collect();
+    for folder in [SAMPLES, STAGING] {
+        let folder = root.join(folder);
+        if fs::symlink_metadata(&folder).is_ok_and(|m| m.is_dir()) {
+            places.extend(entries(&folder)?.into_iter().map(|name| folder.join(name)));
+        }
+    }
+    for place in places {
+        if fs::symlink_metadata(&place).is_ok_and(|m| m.file_type().is_symlink()) {
+            bail!(
+                "{}: is a symbolic link; a dataset folder holds no links (a received dataset could point them outside it), so shmgen does not write into this one: remove the link",
+                place.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// run.json's bytes, None if there is none; refused if it is not a regular file or larger
+/// than any run.json shmgen writes.
+fn read_run_json(path: &Path) -> Result<Option<Vec<u8>>> {
+    let mut options = OpenOptions::new();
+    options.read(true);
+    // A FIFO opens without waiting for a writer, and is then refused as not a regular file.
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
+    let file = match options.open(path) {
+        Ok(file) => file,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+    };
+    let meta = file.metadata()?;
+    let len = meta.len();
+    if !meta.is_file() || len > RUN_JSON_BYTES {
+        bail!(
+            "{}: not a run.json shmgen wrote (not a regular file, or {len} bytes)",
+            path.display()
+        );
+    }
+    let mut bytes = Vec::new();
+    file.take(RUN_JSON_BYTES)
+        .read_to_end(&mut bytes)
+        .with_context(|| format!("reading {}", path.display()))?;
+    Ok(Some(bytes))
+}
+
 /// What `root` holds for the dataset `identity`, and this dataset's run.json bytes.
 fn survey(root: &Path, identity: Identity) -> Result<(Holds, Vec<u8>)> {
+    refuse_links(root)?;
     let run_json = root.join(RUN_JSON);
     let recorded = loop {
-        match fs::read(&run_json) {
-            Ok(bytes) => break bytes,
-            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
-            Err(e) => return Err(io_error(e, "reading run.json", root)),
+        if let Some(bytes) = read_run_json(&run_json)? {
+            break bytes;
         }
         let ours = identity(None)?;
         if root.join(MANIFEST).exists() {

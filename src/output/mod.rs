@@ -9,11 +9,13 @@
 //! truncated file under a final name, and a sample appears in the manifest only after all of
 //! its files are complete. File locks keep one process per shard and let shards share a
 //! folder; whatever a crash leaves is ignored, then removed (`folder`). `fault` injects
-//! crashes and full disks for the robustness tests.
+//! crashes and full disks for the robustness tests. `guard` refuses any output path that is
+//! or lies inside a dataset or an export, for every command that writes.
 
 mod encode;
 mod fault;
 mod folder;
+mod guard;
 mod lock;
 mod meshes;
 mod openexr;
@@ -24,6 +26,7 @@ pub use encode::{
     vector_exr,
 };
 pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, write_atomic};
+pub use guard::refuse_data_target;
 pub use meshes::{MeshLayer, PointLayer};
 pub use writers::{
     DEFAULT_OUTPUTS, Flow, SAMPLE_WRITERS, SampleLayers, SampleWriter, ViewLayers, WRITERS, Writer,

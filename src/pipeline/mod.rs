@@ -23,6 +23,7 @@ pub use sample::{for_each_image, prepare, write_sample};
 pub use view::{RenderedView, SampleRenderer, view_camera};
 
 use crate::output::DatasetFolder;
+use crate::output::refuse_data_target;
 use crate::recipe::Recipe;
 use crate::render::SharedTraceMeshes;
 use anyhow::{Context, Result, bail};
@@ -146,6 +147,7 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
 
     // Before writing anything: the folder must be usable, and the first samples to render
     // must build.
+    refuse_data_target(&options.out, "--out", None, true)?;
     let done = DatasetFolder::check(&options.out, &identity, options.force, shard_id, total)?;
     let first = shard.samples(total).filter(|s| !done.contains(*s));
     let ahead = mine.saturating_sub(done.len()).min(VALIDATED_FIRST);

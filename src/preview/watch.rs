@@ -13,6 +13,7 @@
 
 use super::serve::Server;
 use super::sheet::{self, Preview, PreviewOptions};
+use crate::output::refuse_data_target;
 use crate::output::write_atomic;
 use crate::recipe::Recipe;
 use anyhow::{Context, Result, bail};
@@ -58,6 +59,7 @@ pub fn watch(options: &WatchOptions) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| default_out(&options.recipe));
+    refuse_data_target(&out, "--out", None, false)?;
     if options.once {
         let start = Instant::now();
         let (preview, _) = build(options)?;
