@@ -577,6 +577,8 @@ class Dataset(Sequence):
                     raise DatasetError(f"{where} does not parse as a manifest line") from None
                 if index in listed:
                     continue
+                for relative in files:
+                    check_relative(relative, f"{path}: sample {index}")
                 listed[index] = files
                 if "hashes" in entry:
                     self._files.hashes.update(parse_hashes(entry["hashes"], files, where))
@@ -606,8 +608,7 @@ class Dataset(Sequence):
         views: dict = {}
         own = {}
         where = f"{self.root}/manifest.jsonl: sample {index}"
-        for relative in sorted(set(files)):
-            check_relative(relative, where)
+        for relative in sorted(set(files)):  # plain relative paths (checked by _read_manifest)
             path = self.root / relative
             stem, kind = _kind_of(relative)
             match = _STEM.match(stem)
