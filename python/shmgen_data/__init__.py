@@ -8,20 +8,23 @@
 
 Submodules: :mod:`shmgen_data.dataset` (datasets, samples, views), :mod:`shmgen_data.camera`
 (cameras and OpenCV's lens model), :mod:`shmgen_data.geometry` (back-projection, fusion),
-:mod:`shmgen_data.io` (EXR, PNG and binary PLY readers), :mod:`shmgen_data.arrays` (a view as
-training arrays) and :mod:`shmgen_data.torch` (a PyTorch ``Dataset``, if torch is installed).
+:mod:`shmgen_data.io` (EXR, PNG and binary PLY readers), :mod:`shmgen_data.files` (a dataset's
+files opened as untrusted input: no links, bounded reads, :class:`Limits`),
+:mod:`shmgen_data.arrays` (a view as training arrays) and :mod:`shmgen_data.torch` (a PyTorch
+``Dataset``, if torch is installed).
 """
 
 from .arrays import view_arrays
 from .camera import Camera, distort, undistort
-from .dataset import LAYERS, Dataset, Mesh, MissingFileError, Points, Sample, View
+from .dataset import LAYERS, Dataset, Mesh, MissingFileError, Points, Sample, Verification, View
+from .files import DatasetError, Limits
 from .geometry import Cloud, backproject, fuse
 from .io import read_exr, read_ply, read_png
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "Camera", "Cloud", "Dataset", "LAYERS", "Mesh", "MissingFileError", "Points", "Sample",
-    "View", "backproject", "distort", "fuse", "read_exr", "read_ply", "read_png",
-    "undistort", "view_arrays",
+    "Camera", "Cloud", "Dataset", "DatasetError", "LAYERS", "Limits", "Mesh", "MissingFileError",
+    "Points", "Sample", "Verification", "View", "backproject", "distort", "fuse", "read_exr",
+    "read_ply", "read_png", "undistort", "view_arrays",
 ]

@@ -102,6 +102,16 @@ def _matrix(camera: dict, name: str, shape: tuple[int, int]) -> np.ndarray:
     return value
 
 
+def _side(camera: dict, name: str) -> int:
+    try:
+        value = camera[name]
+    except KeyError:
+        raise KeyError(f"camera.{name} is missing") from None
+    if type(value) is not int or value <= 0:
+        raise ValueError(f"camera.{name} is {value!r}, not a positive whole number of pixels")
+    return value
+
+
 @dataclass(frozen=True)
 class Camera:
     """One view's camera: size, intrinsics, poses and lens.
@@ -138,11 +148,13 @@ class Camera:
                 distortion = np.array([d[k] for k in ("k1", "k2", "p1", "p2", "k3")], dtype=np.float64)
             except KeyError as missing:
                 raise KeyError(f"camera.distortion.{missing.args[0]} is missing") from None
+            if not np.all(np.isfinite(distortion)):
+                raise ValueError(f"camera.distortion {distortion.tolist()} is not finite")
         else:
             raise ValueError(f'camera.model {model!r} is neither "pinhole" nor "opencv"')
         return cls(
-            width=int(camera["width"]),
-            height=int(camera["height"]),
+            width=_side(camera, "width"),
+            height=_side(camera, "height"),
             K=_matrix(camera, "K", (3, 3)),
             c2w=_matrix(camera, "c2w_opencv", (4, 4)),
             w2c=_matrix(camera, "w2c_opencv", (4, 4)),

@@ -5,10 +5,20 @@ and from each view's JSON record; file names are parsed as the layout states the
 ``{sample:06}_{view:02}.{kind}`` for a view, ``…_{view:02}a{copy}.{kind}`` for an augmented
 copy and ``{sample:06}.{kind}`` for a sample's own files (meshes, points).
 
-Everything is read lazily: opening a dataset reads ``run.json`` and the manifest only; a
-view's record, camera and images are read when first asked for and kept by that
-:class:`View` object (so ``view.depth`` twice reads the file once). The dataset hands out a
-new :class:`View` at each index access, so iterating over a large dataset keeps nothing.
+Everything is read lazily: opening a dataset reads ``run.json`` and the manifest only (and
+``lstat``s each listed file); a view's record, camera and images are read when first asked
+for and kept by that :class:`View` object (so ``view.depth`` twice reads the file once). The
+dataset hands out a new :class:`View` at each index access, so iterating over a large dataset
+keeps nothing.
+
+A dataset is untrusted input. Its files are opened by :mod:`shmgen_data.files` (no links
+followed below the root, regular files only, reads bounded per kind by :class:`Limits`, sizes
+checked against the manifest's ``hashes`` when it has them); images have their headers
+checked against the view's camera before any pixel is decoded; and the values read are
+checked as the layout defines them (:data:`LAYERS`): depth finite and ≥ 0, normals unit or 0,
+displacement and flow finite, masks 0 or 255, ids within the record's tables, mesh
+coordinates finite and faces within the vertices. :meth:`Dataset.verify` compares every
+file with its BLAKE3.
 """
 
 from __future__ import annotations
@@ -16,7 +26,7 @@ from __future__ import annotations
 import json
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import Iterator, Sequence
@@ -24,9 +34,11 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from .camera import Camera
-from .io import read_exr, read_ply, read_png
+from .files import DatasetError, DatasetFiles, Limits, check_relative, parse_hashes
+from .io import PNG_FORMATS, decode_exr, decode_png, parse_ply
 
-__all__ = ["Dataset", "Sample", "View", "Mesh", "Points", "LAYERS", "MissingFileError"]
+__all__ = ["Dataset", "Sample", "View", "Mesh", "Points", "LAYERS", "MissingFileError",
+           "DatasetError", "Limits", "Verification"]
 
 RUN_SCHEMA = "shmgen.run/1"
 VIEW_SCHEMA = "shmgen.view/1"
@@ -44,6 +56,14 @@ class _Layer:
     read: str  # "rgb", "binary", "ids" or "exr"
     convention: str | None = None  # the record's object naming its EXR channels
     channels: tuple = ()  # default EXR channels, if the record does not name them
+    values: str = ""  # what the values must be: "depth", "unit", "finite", "ids" (see _VALUE_CHECKS)
+    ids_table: str | None = None  # the record's segmentation table an id indexes
+
+    @property
+    def png_formats(self) -> dict:
+        """The PNG ``(bit depth, colour type)`` the layer is written in (see PNG_FORMATS)."""
+        allowed = {"rgb": [(8, 2)], "binary": [(8, 0)], "ids": [(8, 0), (16, 0)]}[self.read]
+        return {fmt: PNG_FORMATS[fmt] for fmt in allowed}
 
 
 #: Every per-view output, by name: ``rgb`` and ``rest_rgb`` are ``(H, W, 3)`` uint8; ``depth``,
@@ -53,22 +73,25 @@ class _Layer:
 #: (True where the file holds 255); ``parts`` and ``instances`` ``(H, W)`` int32 ids.
 LAYERS = {
     "rgb": _Layer("rgb.png", "rgb"),
-    "depth": _Layer("depth.exr", "exr", "depth", ("Z",)),
+    "depth": _Layer("depth.exr", "exr", "depth", ("Z",), "depth"),
     "mask": _Layer("mask.png", "binary"),
-    "parts": _Layer("parts.png", "ids"),
-    "instances": _Layer("instances.png", "ids"),
+    "parts": _Layer("parts.png", "ids", values="ids", ids_table="part_ids"),
+    "instances": _Layer("instances.png", "ids", values="ids", ids_table="instance_ids"),
     "cracks": _Layer("cracks.png", "binary"),
     "erased": _Layer("erased.png", "binary"),
     "valid": _Layer("valid.png", "binary"),
-    "normals": _Layer("normals.exr", "exr", "normals", ("X", "Y", "Z")),
-    "displacement": _Layer("displacement.exr", "exr", "displacement", ("X", "Y", "Z")),
-    "flow": _Layer("flow.exr", "exr", "flow", ("U", "V")),
+    "normals": _Layer("normals.exr", "exr", "normals", ("X", "Y", "Z"), "unit"),
+    "displacement": _Layer("displacement.exr", "exr", "displacement", ("X", "Y", "Z"), "finite"),
+    "flow": _Layer("flow.exr", "exr", "flow", ("U", "V"), "finite"),
     "flow_valid": _Layer("flow_valid.png", "binary"),
     "rest_rgb": _Layer("rest_rgb.png", "rgb"),
     # rest_depth follows the depth convention (the record's `depth` covers both files).
-    "rest_depth": _Layer("rest_depth.exr", "exr", "depth", ("Z",)),
-    "ray_distance": _Layer("ray_distance.exr", "exr", "ray_distance", ("Y",)),
+    "rest_depth": _Layer("rest_depth.exr", "exr", "depth", ("Z",), "depth"),
+    "ray_distance": _Layer("ray_distance.exr", "exr", "ray_distance", ("Y",), "depth"),
 }
+
+#: How far a normal's length may be from 1 (float32 rounding of a unit vector is ~1e-7).
+UNIT_TOLERANCE = 1e-3
 
 _STEM = re.compile(r"^(\d+)(?:_(\d+)(?:a(\d+))?)?$")
 
@@ -105,14 +128,81 @@ class Points:
     normals: np.ndarray
 
 
-def _read_json(path: Path) -> dict:
-    try:
-        with open(path, "rb") as f:
-            return json.load(f)
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{path}: no such file") from None
-    except json.JSONDecodeError as error:
-        raise ValueError(f"{path}: does not parse as JSON ({error})") from None
+def _first_bad(bad: np.ndarray, values: np.ndarray, shown: str, rule: str) -> None:
+    """:class:`DatasetError` naming the first pixel (row, column) where ``bad`` holds, its
+    value and the ``rule`` it breaks; nothing if ``bad`` holds nowhere."""
+    if not bad.any():
+        return
+    row, column = np.unravel_index(int(np.argmax(bad)), bad.shape)
+    value = values[row, column]
+    shown_value = value.tolist() if isinstance(value, np.ndarray) else value.item()
+    raise DatasetError(
+        f"{shown}: pixel (row {row}, column {column}) holds {shown_value}; {rule} "
+        f"({int(bad.sum())} such pixels)"
+    )
+
+
+# Each check first reduces the whole array (no temporaries; NaN fails every comparison) and
+# looks for the first bad pixel only when something is wrong.
+
+
+def _check_depth(values, shown, record, layer):
+    if not (values.min() >= 0 and values.max() < np.inf):
+        _first_bad(~((values >= 0) & (values < np.inf)), values, shown,
+                   "a distance must be finite and ≥ 0 (0 = no surface)")
+
+
+def _unit_or_zero(squared: np.ndarray) -> np.ndarray:
+    """Where a squared length is 0, or that of a unit vector within UNIT_TOLERANCE (False
+    for NaN and inf)."""
+    return (squared == 0) | ((squared >= (1 - UNIT_TOLERANCE) ** 2) & (squared <= (1 + UNIT_TOLERANCE) ** 2))
+
+
+def _check_unit(values, shown, record, layer):
+    squared = np.einsum("...i,...i->...", values, values)
+    _first_bad(~_unit_or_zero(squared), values, shown,
+               f"a normal must be finite with length 1 (within {UNIT_TOLERANCE}) or be 0 (no surface)")
+
+
+def _check_finite(values, shown, record, layer):
+    if not np.isfinite(values).all():
+        _first_bad(~np.all(np.isfinite(values), axis=-1), values, shown, "values must be finite")
+
+
+def _check_ids(values, shown, record, layer):
+    table = (record.get("segmentation") or {}).get(layer.ids_table)
+    if isinstance(table, list):
+        _first_bad(values >= len(table), values, shown,
+                   f"an id must index segmentation.{layer.ids_table} of the view's record ({len(table)} entries)")
+
+
+#: The value checks of :attr:`_Layer.values`: (values, file shown, record, layer) → None.
+_VALUE_CHECKS = {"depth": _check_depth, "unit": _check_unit, "finite": _check_finite, "ids": _check_ids}
+
+
+@dataclass
+class Verification:
+    """What :meth:`Dataset.verify` found.
+
+    ``checked``: how many files had their size and BLAKE3 compared with the manifest's
+    ``hashes``; ``problems``: relative path → what is wrong with it (truncated, altered,
+    missing, a link…); ``unhashed``: the files the manifest has no hash for (a dataset written
+    by a shmgen before content hashes). ``ok`` is True when every file was hashed and matched.
+    """
+
+    checked: int = 0
+    problems: dict = field(default_factory=dict)
+    unhashed: list = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems and not self.unhashed
+
+    def __str__(self) -> str:
+        lines = [f"{self.checked} files checked, {len(self.problems)} with problems, "
+                 f"{len(self.unhashed)} without a hash in the manifest"]
+        lines += [f"  {problem}" for problem in self.problems.values()]
+        return "\n".join(lines)
 
 
 class View:
@@ -134,13 +224,14 @@ class View:
     """
 
     def __init__(self, root: Path, sample: int, view: int, copy: int | None, stem: str,
-                 files: dict):
+                 files: dict, source: DatasetFiles | None = None):
         self.root = root
         self.sample = sample
         self.view = view
         self.copy = copy
         self.stem = stem
         self.files = files
+        self._source = source or DatasetFiles(root)
         self._cache: dict = {}
 
     def __repr__(self) -> str:
@@ -176,9 +267,9 @@ class View:
                 path = self.files["json"]
             except KeyError:
                 raise MissingFileError(f"view {self.stem} of {self.root} has no record (.json)") from None
-            record = _read_json(path)
+            record = self._source.read_json(_relative(self.root, path))
             if record.get("schema") != VIEW_SCHEMA:
-                raise ValueError(f"{path}: schema {record.get('schema')!r}; this reader reads {VIEW_SCHEMA!r}")
+                raise DatasetError(f"{path}: schema {record.get('schema')!r}; this reader reads {VIEW_SCHEMA!r}")
             self._cache["record"] = record
         return self._cache["record"]
 
@@ -188,8 +279,8 @@ class View:
         if "camera" not in self._cache:
             try:
                 self._cache["camera"] = Camera.from_record(self.record)
-            except (KeyError, ValueError) as error:
-                raise ValueError(f"{self.files['json']}: {error}") from None
+            except (KeyError, ValueError, TypeError) as error:
+                raise DatasetError(f"{self.files['json']}: {error}") from None
         return self._cache["camera"]
 
     K = property(lambda self: self.camera.K, doc="Intrinsics, 3 × 3, pixels.")
@@ -218,29 +309,49 @@ class View:
     def _read(self, name: str) -> np.ndarray:
         path = self.path(name)  # raises for unknown and missing outputs
         layer = LAYERS[name]
+        limits = self._source.limits
+        size = self._size(limits)
+        relative, shown = _relative(self.root, path), str(path)
         if layer.read == "exr":
             convention = self.record.get(layer.convention) or {}
             channels = convention.get("channels") or (
                 [convention["channel"]] if "channel" in convention else list(layer.channels)
             )
-            values = read_exr(path, channels)
+            data = self._read_image(relative, size, len(channels), 4)
+            values = decode_exr(data, shown, channels, size, limits)
         else:
-            values = read_png(path)
-            if layer.read == "rgb":
-                if values.ndim != 3 or values.shape[2] != 3:
-                    raise ValueError(f"{path}: an RGB image is expected, it has shape {values.shape}")
-            elif values.ndim != 2:
-                raise ValueError(f"{path}: a one-channel image is expected, it has shape {values.shape}")
-            elif layer.read == "binary":
-                if np.any((values != 0) & (values != 255)):
-                    raise ValueError(f"{path}: a mask holds 0 and 255 only")
+            formats = layer.png_formats
+            data = self._read_image(relative, size, *max(formats.values(), key=lambda f: f[0] * f[1]))
+            values = decode_png(data, shown, formats, size, limits)
+            if layer.read == "binary":
+                _first_bad((values != 0) & (values != 255), values, shown, "a mask holds 0 and 255 only")
                 values = values == 255
-            else:
+            elif layer.read == "ids":
                 values = values.astype(np.int32)
-        expected = (self.camera.height, self.camera.width)
-        if values.shape[:2] != expected:
-            raise ValueError(f"{path}: {values.shape[1]}×{values.shape[0]} pixels, the camera has {expected[1]}×{expected[0]}")
+        if layer.values:
+            _VALUE_CHECKS[layer.values](values, shown, self.record, layer)
         return values
+
+    def _size(self, limits: Limits) -> tuple[int, int]:
+        """The camera's ``(width, height)``, the size every image of the view must have."""
+        camera = self.camera
+        if not (camera.width <= limits.max_side and camera.height <= limits.max_side):
+            raise DatasetError(
+                f"{self.files['json']}: camera {camera.width}×{camera.height} pixels; each side "
+                f"must be at most {limits.max_side} (Limits.max_side)"
+            )
+        return camera.width, camera.height
+
+    def _read_image(self, relative: str, size: tuple[int, int], channels: int, sample_bytes: int) -> bytes:
+        """The bytes of an image file of the view, bounded by what its size allows."""
+        bound = self._source.limits.image_bytes(*size, channels, sample_bytes)
+        what = f"a {size[0]}×{size[1]} image of {channels} × {sample_bytes}-byte samples (Limits.image_bytes)"
+        return self._source.read(relative, bound, what)
+
+
+def _relative(root: Path, path: Path) -> str:
+    """``path`` below ``root`` as the manifest names it."""
+    return path.relative_to(root).as_posix()
 
 
 def _layer_property(name: str):
@@ -258,11 +369,13 @@ class Sample:
     surface). ``record`` is its first view's JSON (the scene, labels and light are the
     sample's); ``structures`` and ``labels`` as for :class:`View`."""
 
-    def __init__(self, root: Path, index: int, entries: list, files: dict):
+    def __init__(self, root: Path, index: int, entries: list, files: dict,
+                 source: DatasetFiles | None = None):
         self.root = root
         self.index = index
         self._entries = entries  # (view, copy, stem, files) in order
         self.files = files  # absolute paths by kind: "mesh.ply", …
+        self._source = source or DatasetFiles(root)
 
     def __repr__(self) -> str:
         return f"Sample({self.index}, views={len(self._entries)}, files={sorted(self.files)})"
@@ -270,7 +383,8 @@ class Sample:
     @property
     def views(self) -> list[View]:
         """Every view of the sample, clean views and copies (new :class:`View` objects)."""
-        return [View(self.root, self.index, v, c, stem, files) for v, c, stem, files in self._entries]
+        return [View(self.root, self.index, v, c, stem, files, self._source)
+                for v, c, stem, files in self._entries]
 
     def clean_views(self) -> list[View]:
         """The sample's clean (not augmented) views."""
@@ -303,13 +417,31 @@ class Sample:
                 f"(it has {', '.join(sorted(self.files)) or 'none'}); add \"{output}\" to the recipe's outputs"
             ) from None
 
+    def _ply(self, kind: str):
+        """The sample's PLY file of ``kind``, read within ``Limits.mesh_bytes``, its
+        vertices checked finite."""
+        path = self.path(kind)
+        limits = self._source.limits
+        data = self._source.read(_relative(self.root, path), limits.mesh_bytes, "a PLY file (Limits.mesh_bytes)")
+        ply = parse_ply(data, str(path))
+        xyz = ply.xyz()
+        _first_vertex(~np.all(np.isfinite(xyz), axis=1), xyz, ply.path, "coordinates must be finite")
+        return ply, xyz
+
     def _mesh(self, kind: str) -> Mesh:
-        ply = read_ply(self.path(kind))
+        ply, vertices = self._ply(kind)
         faces = ply["face"]["vertex_indices"]
         if not isinstance(faces, np.ndarray) or faces.ndim != 2 or faces.shape[1] != 3:
-            raise ValueError(f"{ply.path}: faces are not all triangles")
+            raise DatasetError(f"{ply.path}: faces are not all triangles")
+        faces = faces.astype(np.int64)
+        outside = np.any((faces < 0) | (faces >= len(vertices)), axis=1)
+        if outside.any():
+            face = int(np.argmax(outside))
+            raise DatasetError(
+                f"{ply.path}: face {face} is {faces[face].tolist()}; vertex indices must be 0…{len(vertices) - 1}"
+            )
         parts = ply["face"]["part"].astype(np.int32) if "part" in ply["face"] else None
-        return Mesh(ply.xyz(), faces.astype(np.int64), parts)
+        return Mesh(vertices, faces, parts)
 
     def mesh(self) -> Mesh:
         """The loaded (deformed) mesh, ``{sample:06}.mesh.ply``."""
@@ -322,10 +454,20 @@ class Sample:
 
     def points(self) -> Points:
         """Points uniform by area on the loaded surface, ``{sample:06}.points.ply``."""
-        ply = read_ply(self.path("points.ply"))
+        ply, xyz = self._ply("points.ply")
         vertex = ply["vertex"]
         normals = np.stack([vertex[c] for c in ("nx", "ny", "nz")], axis=1).astype(np.float32)
-        return Points(ply.xyz(), normals)
+        squared = np.einsum("ij,ij->i", normals, normals)
+        _first_vertex(~_unit_or_zero(squared) | (squared == 0), normals, ply.path,
+                      f"a normal must be finite with length 1 (within {UNIT_TOLERANCE})")
+        return Points(xyz, normals)
+
+
+def _first_vertex(bad: np.ndarray, values: np.ndarray, path, rule: str) -> None:
+    """:class:`DatasetError` naming the first vertex where ``bad`` holds, and its values."""
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise DatasetError(f"{path}: vertex {k} holds {values[k].tolist()}; {rule} ({int(bad.sum())} such vertices)")
 
 
 class Dataset(Sequence):
@@ -339,32 +481,43 @@ class Dataset(Sequence):
     ``complete=True`` (the default) refuses a dataset whose manifest does not yet list every
     sample of ``run.json`` (a run still going, or stopped); ``complete=False`` reads the
     samples finished so far. ``copies=False`` leaves augmented copies out of the sequence.
-    Raises ``FileNotFoundError`` for a folder that is not a shmgen dataset, and
-    ``ValueError`` for a manifest listing files that are missing or not of its sample.
+    ``limits`` bounds what is read (:class:`Limits`; the defaults suit any dataset shmgen
+    writes). Raises ``FileNotFoundError`` for a folder that is not a shmgen dataset, and
+    :class:`DatasetError` (a ``ValueError``) for a manifest listing files that are missing,
+    not of its sample, outside the dataset, links, not regular files or not of their hashed
+    size. :meth:`verify` checks every file's BLAKE3 against the manifest's ``hashes``.
     """
 
-    def __init__(self, root: str | os.PathLike, *, complete: bool = True, copies: bool = True):
+    def __init__(self, root: str | os.PathLike, *, complete: bool = True, copies: bool = True,
+                 limits: Limits | None = None):
         self.root = Path(root)
+        self.limits = limits or Limits()
         if not self.root.is_dir():
             raise FileNotFoundError(f"{self.root}: no such folder")
-        run_path = self.root / "run.json"
-        if not run_path.is_file():
+        self._files = DatasetFiles(self.root, self.limits)
+        try:
+            self.run = self._files.read_json("run.json")
+        except FileNotFoundError:
             raise FileNotFoundError(
                 f"{self.root}: not a shmgen dataset (no run.json; give the folder `shmgen run --out` wrote)"
-            )
-        self.run = _read_json(run_path)
+            ) from None
+        run_path = self.root / "run.json"
         if self.run.get("schema") != RUN_SCHEMA:
-            raise ValueError(f"{run_path}: schema {self.run.get('schema')!r}; this reader reads {RUN_SCHEMA!r}")
-        total = int(self.run["dataset"]["samples"])
-        listed = self._read_manifest()
-        missing = [s for s in range(total) if s not in listed]
-        if complete and missing:
-            raise ValueError(
-                f"{self.root}: the dataset is not finished: manifest.jsonl lists {total - len(missing)} "
-                f"of {total} samples (sample {missing[0]} is missing); run `shmgen run` again to "
+            raise DatasetError(f"{run_path}: schema {self.run.get('schema')!r}; this reader reads {RUN_SCHEMA!r}")
+        total = (self.run.get("dataset") or {}).get("samples")
+        if type(total) is not int or total < 0:
+            raise DatasetError(f"{run_path}: dataset.samples is {total!r}, not a count")
+        self._listed = self._read_manifest()
+        first_missing = _first_missing(self._listed, total)
+        if complete and first_missing is not None:
+            found = sum(1 for index in self._listed if 0 <= index < total)
+            raise DatasetError(
+                f"{self.root}: the dataset is not finished: manifest.jsonl lists {found} "
+                f"of {total} samples (sample {first_missing} is missing); run `shmgen run` again to "
                 f"finish it, or pass complete=False to read the finished samples"
             )
-        self.samples = [self._sample(index, listed[index], copies) for index in sorted(listed)]
+        self.samples = [self._sample(index, self._listed[index], copies) for index in sorted(self._listed)]
+        self._files.check_listed(self._listed_files())
         self._views = [(sample, entry) for sample in self.samples for entry in sample._entries]
 
     @property
@@ -384,7 +537,7 @@ class Dataset(Sequence):
         if isinstance(index, slice):
             return [self[i] for i in range(*index.indices(len(self)))]
         sample, (view, copy, stem, files) = self._views[index]
-        return View(self.root, sample.index, view, copy, stem, files)
+        return View(self.root, sample.index, view, copy, stem, files, self._files)
 
     def __iter__(self) -> Iterator[View]:
         for i in range(len(self)):
@@ -401,36 +554,66 @@ class Dataset(Sequence):
         raise KeyError(f"{self.root}: no sample {index} in the manifest")
 
     def _read_manifest(self) -> dict:
+        """Sample index → the files its line lists (the first line of a sample counts), read
+        line by line within ``Limits.manifest_bytes`` and ``manifest_line_bytes``; each
+        line's ``hashes``, if it has them, go to the files' expected sizes and BLAKE3s."""
         path = self.root / "manifest.jsonl"
-        if not path.is_file():
-            raise FileNotFoundError(f"{self.root}: the dataset has no manifest.jsonl (no sample finished yet)")
+        limits = self.limits
         listed = {}
-        with open(path, "rb") as f:
-            lines = f.read().split(b"\n")
-        # The last piece is what follows the final newline: empty, or a line being appended.
-        for number, line in enumerate(lines[:-1], start=1):
-            try:
-                entry = json.loads(line)
-                listed.setdefault(int(entry["sample"]), list(entry["files"]))
-            except (ValueError, KeyError, TypeError):
-                raise ValueError(f"{path}: line {number} does not parse as a manifest line") from None
+        try:
+            manifest = self._files.open("manifest.jsonl", limits.manifest_bytes, "manifest.jsonl (Limits.manifest_bytes)")
+        except FileNotFoundError:
+            raise FileNotFoundError(f"{self.root}: the dataset has no manifest.jsonl (no sample finished yet)") from None
+        with manifest:
+            # What follows the final newline (a line being appended) is left out by lines().
+            for number, line in enumerate(manifest.lines(limits.manifest_line_bytes, "a manifest line (Limits.manifest_line_bytes)"), start=1):
+                where = f"{path}: line {number}"
+                try:
+                    entry = json.loads(line)
+                    index, files = int(entry["sample"]), entry["files"]
+                    if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
+                        raise TypeError("files is not a list of names")
+                except (ValueError, KeyError, TypeError, RecursionError):
+                    raise DatasetError(f"{where} does not parse as a manifest line") from None
+                if index in listed:
+                    continue
+                for relative in files:
+                    check_relative(relative, f"{path}: sample {index}")
+                listed[index] = files
+                if "hashes" in entry:
+                    self._files.hashes.update(parse_hashes(entry["hashes"], files, where))
         return listed
+
+    def _listed_files(self) -> list[str]:
+        """Every file the manifest lists for the samples read, once each, in sample order."""
+        return [relative for sample in self.samples for relative in sorted(set(self._listed[sample.index]))]
+
+    def verify(self) -> Verification:
+        """Compares every file the manifest lists (for the samples read) with its ``hashes``
+        entry: its size, then its BLAKE3 (the whole file is read, in chunks). Returns a
+        :class:`Verification` naming the truncated, altered or missing files, and the files
+        without a hash (a dataset written before shmgen hashed its files)."""
+        result = Verification()
+        for relative in self._listed_files():
+            if relative not in self._files.hashes:
+                result.unhashed.append(relative)
+                continue
+            result.checked += 1
+            problem = self._files.hash_problem(relative)
+            if problem is not None:
+                result.problems[relative] = problem
+        return result
 
     def _sample(self, index: int, files: list, copies: bool) -> Sample:
         views: dict = {}
         own = {}
-        for relative in sorted(set(files)):
-            if ".." in relative.split("/") or relative.startswith("/") or "\\" in relative:
-                raise ValueError(f"{self.root}/manifest.jsonl: sample {index} lists {relative!r}, outside the dataset")
+        where = f"{self.root}/manifest.jsonl: sample {index}"
+        for relative in sorted(set(files)):  # plain relative paths (checked by _read_manifest)
             path = self.root / relative
-            if not path.is_file():
-                raise ValueError(f"{self.root}: {relative} is listed in manifest.jsonl but missing")
             stem, kind = _kind_of(relative)
             match = _STEM.match(stem)
             if match is None or int(match.group(1)) != index:
-                raise ValueError(
-                    f"{self.root}/manifest.jsonl: sample {index} lists {relative}, not a file of sample {index}"
-                )
+                raise DatasetError(f"{where} lists {relative}, not a file of sample {index}")
             if match.group(2) is None:
                 own[kind] = path
                 continue
@@ -438,4 +621,15 @@ class Dataset(Sequence):
             copy = None if match.group(3) is None else int(match.group(3))
             views.setdefault((view, -1 if copy is None else copy), (view, copy, stem, {}))[3][kind] = path
         entries = [views[key] for key in sorted(views) if copies or views[key][1] is None]
-        return Sample(self.root, index, entries, own)
+        return Sample(self.root, index, entries, own, self._files)
+
+
+def _first_missing(listed: dict, total: int) -> int | None:
+    """The first sample index below ``total`` that ``listed`` lacks (without counting up to
+    ``total``, which comes from run.json and could be anything)."""
+    expected = 0
+    for index in sorted(i for i in listed if 0 <= i < total):
+        if index != expected:
+            return expected
+        expected += 1
+    return expected if expected < total else None

@@ -44,7 +44,7 @@ class ViewDataset(_TorchDataset):
         if isinstance(data, (str, os.PathLike)):
             data = Dataset(data, copies=copies)
         elif not copies:
-            data = Dataset(data.root, copies=False)
+            data = Dataset(data.root, copies=False, limits=data.limits)
         self.data = data
         self.layers = tuple(layers)
         self.transform = transform
