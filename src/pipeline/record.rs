@@ -545,7 +545,7 @@ pub fn run_json(recipe: &Recipe, recorded: Option<&Value>) -> Result<Vec<u8>> {
         dataset: &recipe.dataset,
         view_schema: ViewSchema::V1,
         layout: layout(&recipe.dataset),
-        manifest: "manifest.jsonl: one line per finished sample, in sample order once the dataset is complete",
+        manifest: "manifest.jsonl: one line per finished sample, in sample order once the dataset is complete: {sample, views, files, hashes: {file: {bytes, blake3}}}",
     })
 }
 
