@@ -207,7 +207,7 @@ mod tests {
     use std::os::unix::fs::symlink;
 
     fn message(result: Result<File>) -> String {
-        format!("{:#}", result.err().expect("refused"))
+        format!("{:#}", result.expect_err("refused"))
     }
 
     #[test]

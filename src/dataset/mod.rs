@@ -324,6 +324,9 @@ impl Dataset {
     }
 }
 
+/// Sample index → the files its manifest line lists.
+type Listed = BTreeMap<u64, Vec<String>>;
+
 /// All of the dataset's file `relative` (`run.json`, …), as `files` opens it, at most `bound`.
 fn read_inside(root: &Path, relative: &str, bound: Bound) -> Result<Vec<u8>> {
     read_bounded(open_inside(root, relative)?, relative, bound)
@@ -332,7 +335,7 @@ fn read_inside(root: &Path, relative: &str, bound: Bound) -> Result<Vec<u8>> {
 /// Sample index → its files, from every complete line of the manifest, and the size and
 /// hash of every file whose line records them. Each line is read up to `MANIFEST_LINE`
 /// bytes: a manifest without newlines is refused, never read whole.
-fn read_manifest(root: &Path) -> Result<(BTreeMap<u64, Vec<String>>, HashMap<String, Check>)> {
+fn read_manifest(root: &Path) -> Result<(Listed, HashMap<String, Check>)> {
     #[derive(serde::Deserialize)]
     struct Line {
         sample: u64,

@@ -39,7 +39,7 @@ pub struct GreyImage {
 /// software may call depth `Y` or `R`).
 pub fn decode_exr(bytes: &[u8], name: &str, names: &[&str], size: (u32, u32)) -> Result<Layer> {
     use exr::meta::MetaData;
-    use exr::prelude::{ReadChannels, ReadLayers, Text, read};
+    use exr::prelude::{ReadChannels, ReadLayers, read};
     let unreadable = || format!("{name}: not a readable OpenEXR file");
     let meta = MetaData::read_from_buffered(bytes, false).with_context(unreadable)?;
     let header = meta.headers.first().with_context(unreadable)?;
@@ -83,7 +83,7 @@ pub fn decode_exr(bytes: &[u8], name: &str, names: &[&str], size: (u32, u32)) ->
     for wanted in names {
         let found = list
             .iter()
-            .find(|c| c.name == Text::from(*wanted))
+            .find(|c| c.name.eq(wanted))
             .or_else(|| (names.len() == 1 && list.len() == 1).then(|| &list[0]));
         let Some(channel) = found else {
             let have: Vec<String> = list.iter().map(|c| c.name.to_string()).collect();
