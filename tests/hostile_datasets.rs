@@ -187,18 +187,6 @@ fn contains(haystack: &[u8], needle: &[u8]) -> bool {
     haystack.windows(needle.len()).any(|w| w == needle)
 }
 
-/// PNG: IHDR's width and height set to 40000 (its CRC made right again).
-fn inflate_png(bytes: &mut [u8]) -> bool {
-    if bytes.len() < 33 || &bytes[12..16] != b"IHDR" {
-        return false;
-    }
-    bytes[16..20].copy_from_slice(&40000u32.to_be_bytes());
-    bytes[20..24].copy_from_slice(&40000u32.to_be_bytes());
-    let crc = crc32(&bytes[12..29]);
-    bytes[29..33].copy_from_slice(&crc.to_be_bytes());
-    true
-}
-
 /// EXR: the dataWindow attribute (box2i: xMin, yMin, xMax, yMax) made 40000 × 40000.
 fn inflate_exr(bytes: &mut [u8]) -> bool {
     let key = b"dataWindow\0box2i\0";
@@ -209,22 +197,6 @@ fn inflate_exr(bytes: &mut [u8]) -> bool {
     bytes[values + 8..values + 12].copy_from_slice(&39999i32.to_le_bytes());
     bytes[values + 12..values + 16].copy_from_slice(&39999i32.to_le_bytes());
     true
-}
-
-/// CRC-32 as PNG defines it (ISO 3309), bit by bit: no table needed for one chunk.
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
 }
 
 /// Applies `case` to the copy of the dataset at `data`; false if it does not apply to that
@@ -251,7 +223,7 @@ fn harm(data: &Path, secret: &Path, case: &Case) -> bool {
         }
         Harm::Grown => bytes.extend(std::iter::repeat_n(b'A', 17 << 20)),
         Harm::Inflated => {
-            if !(inflate_png(&mut bytes) || inflate_exr(&mut bytes)) {
+            if !(common::inflate_png(&mut bytes, 40000, 40000) || inflate_exr(&mut bytes)) {
                 return false;
             }
         }
