@@ -33,6 +33,56 @@ dataset(#{
 });
 "#;
 
+/// Every module of `stdlib/` imports with no standard-library folder to read
+/// (`SHMGEN_STDLIB` naming none): the binary holds them all. And it holds them as they are:
+/// the recipe hash in run.json, over the name and text of every file the recipe used, is the
+/// one the folder's module gives.
+#[test]
+fn every_stdlib_module_imports_from_the_built_in_library() {
+    let stdlib = Path::new(env!("CARGO_MANIFEST_DIR")).join("stdlib");
+    let mut modules: Vec<String> = std::fs::read_dir(&stdlib)
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|e| e == "rhai"))
+        .map(|path| path.file_stem().unwrap().to_str().unwrap().to_string())
+        .collect();
+    modules.sort();
+    assert!(modules.contains(&"bridge".to_string()), "{modules:?}");
+    let dir = tempfile::tempdir().unwrap();
+    let nowhere = dir.path().join("no stdlib here");
+    for module in &modules {
+        let recipe = write(
+            dir.path(),
+            &format!("{module}_user.rhai"),
+            format!(
+                "import \"{module}\" as m;\ndataset(#{{ name: \"x\", samples: 1, views: 1, camera: #{{ width: 16, height: 16 }}, scene: |rng| beam(#{{ length: 2.0, width: 0.2, height: 0.3 }}) }});\n"
+            ),
+        );
+        let hash = |library: &Path, out: &str| {
+            let out = dir.path().join(format!("{module}_{out}"));
+            let output = Command::new(BIN)
+                .arg("run")
+                .arg(&recipe)
+                .arg("--out")
+                .arg(&out)
+                .arg("--quiet")
+                .env("SHMGEN_STDLIB", library)
+                .output()
+                .unwrap();
+            assert!(
+                output.status.success(),
+                "import \"{module}\" with SHMGEN_STDLIB={}: {}",
+                library.display(),
+                String::from_utf8_lossy(&output.stderr)
+            );
+            read_json(&out.join("run.json"))["recipe"]["hash"].clone()
+        };
+        let built_in = hash(&nowhere, "built_in");
+        assert!(built_in.is_string(), "{built_in}");
+        assert_eq!(built_in, hash(&stdlib, "folder"), "module \"{module}\"");
+    }
+}
+
 #[test]
 fn same_bytes_with_one_or_two_threads() {
     let dir = tempfile::tempdir().unwrap();
