@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{BIN, hashes, off_box, ok, read_exr, read_json, run, write};
+use common::{BIN, bundled_rhai, hashes, off_box, ok, read_exr, read_json, run, write};
 
 /// A small recipe (low resolution so the suite stays fast) importing the stdlib beam module.
 const SMALL: &str = r#"
@@ -40,13 +40,10 @@ dataset(#{
 #[test]
 fn every_stdlib_module_imports_from_the_built_in_library() {
     let stdlib = Path::new(env!("CARGO_MANIFEST_DIR")).join("stdlib");
-    let mut modules: Vec<String> = std::fs::read_dir(&stdlib)
-        .unwrap()
-        .map(|entry| entry.unwrap().path())
-        .filter(|path| path.extension().is_some_and(|e| e == "rhai"))
+    let modules: Vec<String> = bundled_rhai("stdlib")
+        .iter()
         .map(|path| path.file_stem().unwrap().to_str().unwrap().to_string())
         .collect();
-    modules.sort();
     assert!(modules.contains(&"bridge".to_string()), "{modules:?}");
     let dir = tempfile::tempdir().unwrap();
     let nowhere = dir.path().join("no stdlib here");

@@ -9,6 +9,8 @@ use std::process::{Child, Command, Output, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+mod common;
+
 const BIN: &str = env!("CARGO_BIN_EXE_shmgen");
 
 /// Generous for a busy 2-core machine; waits poll often, so passing tests stay fast.
@@ -550,13 +552,7 @@ fn numbers_in(text: &str) -> Vec<f64> {
 /// once panicked here (the ground's triangles were counted as a structure's).
 #[test]
 fn check_succeeds_on_every_bundled_recipe() {
-    let scripts = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts");
-    let mut recipes: Vec<PathBuf> = std::fs::read_dir(&scripts)
-        .unwrap()
-        .map(|entry| entry.unwrap().path())
-        .filter(|path| path.extension().is_some_and(|e| e == "rhai"))
-        .collect();
-    recipes.sort();
+    let recipes = common::bundled_rhai("scripts");
     assert!(recipes.len() >= 8, "{recipes:?}");
     for recipe in &recipes {
         let output = Command::new(BIN)
