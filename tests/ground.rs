@@ -217,6 +217,73 @@ fn a_ground_anywhere_within_the_limit_leaves_every_structure_layer_unchanged() {
     }
 }
 
+/// A ground however far below is a ground out to the horizon, at its height: seen in depth
+/// from cameras just above the horizon, with the ground at the coordinate limit 10⁷ m below,
+/// every pixel that sees no structure and whose centre ray dips more than two pixels below
+/// the horizon sees the ground, each back-projecting onto z = height (to the depth's f32
+/// precision), and no ray that rises sees it. (A square of 2000 scene radii showed there as
+/// a speck straight below, the backdrop everywhere else.)
+#[test]
+fn a_ground_far_below_reaches_the_horizon_at_its_height() {
+    let dir = tempfile::tempdir().unwrap();
+    let height = -1e7;
+    let path = recipe(
+        dir.path(),
+        "beam",
+        &format!(r#"#{{ material: "soil", in_depth: true, height: {height:?} }}"#),
+        r#""depth", "mask", "parts""#,
+    );
+    let text = std::fs::read_to_string(&path).unwrap();
+    let low = text.replace("pitch: [deg(8), deg(40)]", "pitch: [deg(2), deg(8)]");
+    std::fs::write(&path, low).unwrap();
+    let out = dir.path().join("out");
+    ok(run(&path, &out, &[]));
+    for v in 0..4 {
+        let view = load(&out, v, None);
+        let ground_part = part_id(&view, "ground");
+        let (_, _, _, parts) = read_png(&view_path(&out, 0, v, None, "parts.png"));
+        let (k, c2w) = (view.k(), view.c2w());
+        let camera_z = c2w[2][3];
+        let pixel_angle = 1.0 / k[1][1];
+        let (mut ground_pixels, mut sky_pixels) = (0, 0);
+        for row in 0..view.height {
+            for col in 0..view.width {
+                let i = row * view.width + col;
+                if view.mask[i] == 255 {
+                    continue;
+                }
+                let (x, y) = view.ray(row, col);
+                let d: [f64; 3] =
+                    std::array::from_fn(|a| c2w[a][0] * x + c2w[a][1] * y + c2w[a][2]);
+                let dip = -(d[2] / d.iter().map(|c| c * c).sum::<f64>().sqrt()).asin();
+                if parts[i] == ground_part {
+                    ground_pixels += 1;
+                    assert!(
+                        dip > 0.0,
+                        "view {v} ({row}, {col}): ground above the horizon"
+                    );
+                    let z = view.point(row, col).unwrap()[2];
+                    let tolerance = 1e-6 * (camera_z - height);
+                    assert!(
+                        (z - height).abs() < tolerance,
+                        "view {v} ({row}, {col}): ground at z = {z}, declared {height}"
+                    );
+                } else {
+                    sky_pixels += 1;
+                    assert!(
+                        dip < 2.0 * pixel_angle,
+                        "view {v} ({row}, {col}): {dip} rad below the horizon, no ground"
+                    );
+                }
+            }
+        }
+        assert!(
+            ground_pixels > 0 && sky_pixels > 0,
+            "view {v}: the horizon is in view"
+        );
+    }
+}
+
 /// A ground's height beyond the coordinate limit is refused on either side, naming the option
 /// and its value at the recipe's line, as is a light's ground plane there.
 #[test]
