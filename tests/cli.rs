@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{BIN, hashes, off_box, ok, read_exr, read_json, run, write};
+use common::{BIN, bundled_rhai, hashes, off_box, ok, read_exr, read_json, run, write};
 
 /// A small recipe (low resolution so the suite stays fast) importing the stdlib beam module.
 const SMALL: &str = r#"
@@ -32,6 +32,53 @@ dataset(#{
     },
 });
 "#;
+
+/// Every module of `stdlib/` imports with no standard-library folder to read
+/// (`SHMGEN_STDLIB` naming none): the binary holds them all. And it holds them as they are:
+/// the recipe hash in run.json, over the name and text of every file the recipe used, is the
+/// one the folder's module gives.
+#[test]
+fn every_stdlib_module_imports_from_the_built_in_library() {
+    let stdlib = Path::new(env!("CARGO_MANIFEST_DIR")).join("stdlib");
+    let modules: Vec<String> = bundled_rhai("stdlib")
+        .iter()
+        .map(|path| path.file_stem().unwrap().to_str().unwrap().to_string())
+        .collect();
+    assert!(modules.contains(&"bridge".to_string()), "{modules:?}");
+    let dir = tempfile::tempdir().unwrap();
+    let nowhere = dir.path().join("no stdlib here");
+    for module in &modules {
+        let recipe = write(
+            dir.path(),
+            &format!("{module}_user.rhai"),
+            format!(
+                "import \"{module}\" as m;\ndataset(#{{ name: \"x\", samples: 1, views: 1, camera: #{{ width: 16, height: 16 }}, scene: |rng| beam(#{{ length: 2.0, width: 0.2, height: 0.3 }}) }});\n"
+            ),
+        );
+        let hash = |library: &Path, out: &str| {
+            let out = dir.path().join(format!("{module}_{out}"));
+            let output = Command::new(BIN)
+                .arg("run")
+                .arg(&recipe)
+                .arg("--out")
+                .arg(&out)
+                .arg("--quiet")
+                .env("SHMGEN_STDLIB", library)
+                .output()
+                .unwrap();
+            assert!(
+                output.status.success(),
+                "import \"{module}\" with SHMGEN_STDLIB={}: {}",
+                library.display(),
+                String::from_utf8_lossy(&output.stderr)
+            );
+            read_json(&out.join("run.json"))["recipe"]["hash"].clone()
+        };
+        let built_in = hash(&nowhere, "built_in");
+        assert!(built_in.is_string(), "{built_in}");
+        assert_eq!(built_in, hash(&stdlib, "folder"), "module \"{module}\"");
+    }
+}
 
 #[test]
 fn same_bytes_with_one_or_two_threads() {

@@ -14,8 +14,8 @@ use std::time::Duration;
 mod common;
 
 use common::{
-    hashes, manifest_files, ok, quickstart, read_exr, read_json, read_png16, run, run_limited,
-    shmgen, stderr, view_path, write,
+    files_with_extension, hashes, manifest_files, ok, quickstart, read_exr, read_json, read_png16,
+    run, run_limited, shmgen, stderr, view_path, write,
 };
 
 fn export(dataset: &Path, format: &str, out: &Path, extra: &[&str]) -> Output {
@@ -231,12 +231,7 @@ fn check_nerfstudio(data: &Path, scene: &Path) -> (String, Vec<String>) {
 
 /// Every tar member of the shards in `dir`, in order: (name, bytes), with its header checked.
 fn shard_members(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut shards: Vec<_> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "tar"))
-        .collect();
-    shards.sort();
+    let shards = files_with_extension(dir, "tar");
     let mut members = Vec::new();
     for shard in shards {
         let mut archive = tar::Archive::new(std::fs::File::open(&shard).unwrap());

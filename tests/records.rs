@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{ok, read_json, run};
+use common::{bundled_rhai, ok, read_json, run};
 use serde_json::{Value, json};
 use shmgen::pipeline::{run_schema, view_schema};
 use std::collections::{BTreeSet, VecDeque};
@@ -85,12 +85,7 @@ fn smoke_settings(recipe: &str) -> Vec<String> {
 fn every_recipe_in_scripts_writes_records_that_validate() {
     let (views, runs) = (validator("view"), validator("run"));
     let dir = tempfile::tempdir().unwrap();
-    let mut recipes: Vec<PathBuf> = std::fs::read_dir(repo().join("scripts"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "rhai"))
-        .collect();
-    recipes.sort();
+    let recipes = bundled_rhai("scripts");
     assert!(recipes.len() >= 4, "{recipes:?}");
     for recipe in &recipes {
         let out = dir.path().join(recipe.file_stem().unwrap());

@@ -9,6 +9,8 @@ use std::process::{Child, Command, Output, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+mod common;
+
 const BIN: &str = env!("CARGO_BIN_EXE_shmgen");
 
 /// Generous for a busy 2-core machine; waits poll often, so passing tests stay fast.
@@ -536,6 +538,75 @@ fn check_reports_counts_and_errors() {
 }
 
 /// GET `path` from a local server: (status line, body).
+/// The numbers in `text`, in order (digits and points; "0–7" gives 0 and 7).
+fn numbers_in(text: &str) -> Vec<f64> {
+    text.split(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .filter_map(|word| word.trim_matches('.').parse().ok())
+        .collect()
+}
+
+/// `shmgen check` succeeds on every recipe in `scripts/` (a ground, drawn supports,
+/// assemblies, augmentations…) and reports what the recipe declares, consistently: samples ×
+/// views = views, the structures of the first samples with sizes in order (min ≤ median ≤
+/// max, none empty), a timed run and the estimate for all samples. A recipe with a ground
+/// once panicked here (the ground's triangles were counted as a structure's).
+#[test]
+fn check_succeeds_on_every_bundled_recipe() {
+    let recipes = common::bundled_rhai("scripts");
+    assert!(recipes.len() >= 8, "{recipes:?}");
+    for recipe in &recipes {
+        let output = Command::new(BIN)
+            .arg("check")
+            .arg(recipe)
+            .args(["--threads", "1"])
+            .output()
+            .unwrap();
+        let (stdout, stderr) = (
+            String::from_utf8_lossy(&output.stdout),
+            String::from_utf8_lossy(&output.stderr),
+        );
+        let name = recipe.display();
+        assert!(output.status.success(), "{name}: {stderr}");
+        let lines: Vec<&str> = stdout.lines().collect();
+        assert!(
+            lines[0].starts_with(&format!("{name}: dataset ")),
+            "{stdout}"
+        );
+        let counts = numbers_in(lines[1]);
+        let (samples, views) = (counts[0], counts[1]);
+        assert_eq!(samples * views, counts[2], "{name}: {}", lines[1]);
+        let header = numbers_in(lines[2]);
+        assert_eq!(
+            header[..2],
+            [0.0, samples.min(8.0) - 1.0],
+            "{name}: {}",
+            lines[2]
+        );
+        let kinds: Vec<&str> = lines
+            .iter()
+            .copied()
+            .filter(|l| l.contains(", vertices "))
+            .collect();
+        assert!(!kinds.is_empty(), "{name}: no structure in\n{stdout}");
+        for kind in kinds {
+            let sizes = numbers_in(kind.split(", vertices ").nth(1).unwrap());
+            for spread in [&sizes[0..3], &sizes[3..6]] {
+                assert!(
+                    spread[0] > 0.0 && spread[0] <= spread[1] && spread[1] <= spread[2],
+                    "{name}: {kind}"
+                );
+            }
+        }
+        assert!(
+            stdout.contains("  timed run: 1 samples (")
+                && stdout.contains(&format!(
+                    "  estimate for all {samples} samples on 1 threads: "
+                )),
+            "{name}: {stdout}"
+        );
+    }
+}
+
 fn get(port: u16, path: &str) -> (String, Vec<u8>) {
     let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
     write!(

@@ -211,9 +211,10 @@ pub fn build_sample(
     }
     let ground = dataset.ground.as_ref().map(|spec| {
         let lowest = assembled.mesh.bounds().map_or(0.0, |(lo, _)| lo.z);
+        let height = spec.height.unwrap_or(lowest);
         let built = BuiltGround {
-            height: spec.height.unwrap_or(lowest),
-            radius: ground_radius(radius),
+            height,
+            radius: ground_radius(radius, centre.z - height),
             first_triangle: assembled.mesh.triangles.len(),
             first_vertex: assembled.mesh.positions.len(),
         };

@@ -28,6 +28,20 @@ pub const MAX_TRIANGLES: usize = 10_000_000;
 /// it means a magnitude in the recipe is wrong.
 pub const MAX_COORDINATE: f64 = 1e7;
 
+/// `value`, a coordinate a recipe gives itself (a plane's height), if it lies within
+/// [`MAX_COORDINATE`] of the origin on either side; else why not, naming the option `name`
+/// and its value. The same limit as every vertex's, so a plane may lie wherever a structure
+/// may stand and nowhere else.
+pub fn coordinate_in_range(value: f64, name: &str) -> Result<f64, String> {
+    if value.abs() <= MAX_COORDINATE {
+        Ok(value)
+    } else {
+        Err(format!(
+            "{name} = {value} m lies beyond ±{MAX_COORDINATE:e} m, the farthest any scene coordinate may reach"
+        ))
+    }
+}
+
 /// Axis-aligned bounds (min, max) of some points; None for none.
 pub fn bounds(points: &[DVec3]) -> Option<(DVec3, DVec3)> {
     let first = *points.first()?;

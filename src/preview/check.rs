@@ -73,12 +73,15 @@ fn print_structures(samples: &[BuiltSample]) {
     }
 }
 
-/// (kind, (vertices, triangles)) of every structure of a sample.
+/// (kind, (vertices, triangles)) of every structure of a sample (its drawn supports
+/// included). A ground is no structure: its triangles, owned by the id past the last
+/// structure's, come last in the mesh and are left out.
 fn structure_sizes(sample: &BuiltSample) -> Vec<(String, (usize, usize))> {
     let structures = &sample.scene.structures;
     let mut vertices = vec![HashSet::<u32>::new(); structures.len()];
     let mut triangles = vec![0; structures.len()];
-    for (triangle, &owner) in sample.mesh.triangles.iter().zip(&sample.owner) {
+    let structure_triangles = &sample.mesh.triangles[..sample.structure_triangles()];
+    for (triangle, &owner) in structure_triangles.iter().zip(&sample.owner) {
         vertices[owner as usize].extend(triangle);
         triangles[owner as usize] += 1;
     }

@@ -2,11 +2,16 @@
 //! [`GroundSpec`]. `ground: "grass"` is short for `ground: #{ material: "grass" }`.
 
 use super::options::{OptResult, Options, number};
+use crate::geometry::coordinate_in_range;
 use crate::materials::ground::ground_material;
 use crate::scene::GroundSpec;
 use rhai::{Dynamic, Map};
 
-/// The ground a recipe declares, if any.
+/// The option a ground's height is read from.
+const HEIGHT: &str = "dataset.ground.height";
+
+/// The ground a recipe declares, if any. Its height must lie within the coordinate limit on
+/// either side, as every vertex must: beyond it below, nothing else would refuse it.
 pub fn ground(value: Option<Dynamic>) -> OptResult<Option<GroundSpec>> {
     let Some(value) = value else {
         return Ok(None);
@@ -28,7 +33,7 @@ pub fn ground(value: Option<Dynamic>) -> OptResult<Option<GroundSpec>> {
     let material = ground_material(&prompt).map_err(|e| format!("dataset.ground.material: {e}"))?;
     let height = o
         .take("height")
-        .map(|h| number(&h, "dataset.ground.height"))
+        .map(|h| coordinate_in_range(number(&h, HEIGHT)?, HEIGHT))
         .transpose()?;
     let in_depth = o.flag("in_depth", false)?;
     o.finish()?;

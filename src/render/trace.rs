@@ -19,9 +19,11 @@ use std::time::Duration;
 pub const NO_HIT: u32 = u32::MAX;
 
 /// A mesh ready for tracing. Vertices are stored in f32 relative to `anchor` (the centre of
-/// the mesh bounds), so geometry far from the world origin keeps its precision; rays start in
-/// f32 only where they enter the mesh's bounding sphere, so a camera far away (a narrow field
-/// of view) loses nothing either. Depths come from each triangle's plane in f64.
+/// the structures' bounds, a ground left out), so geometry far from the world origin keeps its
+/// precision, and a ground however far below changes neither the anchor nor the structures'
+/// f32 corners; rays start in f32 only where they enter the mesh's bounding sphere, so a
+/// camera far away (a narrow field of view) loses nothing either. Depths come from each
+/// triangle's plane in f64.
 ///
 /// The BVH is built when a ray is first traced: views the rasteriser sees in full (every
 /// pinhole view in front of a mesh, with rasterised sub-pixel rays and no shadows) never walk
@@ -37,6 +39,7 @@ pub struct TraceMesh {
     solid_bounds: Vec<(DVec3, DVec3)>,
     /// The BVH over `corners`, built on first use.
     tree: OnceLock<Tree>,
+    /// Centre of the structures' bounds: the origin of `corners`, `planes` and the rays.
     anchor: DVec3,
     /// Radius about `anchor` of a sphere holding every vertex.
     reach: f64,
@@ -237,9 +240,11 @@ impl TraceMesh {
     }
 
     /// Prepares a mesh whose first `core` triangles are the structures and the rest a
-    /// ground far larger than them: shadow rays leave a surface by a step scaled to the
-    /// structures near the anchor, and to the distance from it far out on the ground, where
-    /// f32 coordinates are coarser.
+    /// ground far larger than them: the anchor is the structures' centre, so their f32
+    /// corners (and every hit on them) are those of the structures traced alone wherever the
+    /// ground lies; shadow rays leave a surface by a step scaled to the structures near the
+    /// anchor, and to the distance from it far out on the ground, where f32 coordinates are
+    /// coarser.
     pub fn build_with_core(mesh: &Mesh, core: usize) -> Self {
         let (lo, hi) = mesh.bounds().expect("scene mesh is non-empty");
         let (core_lo, core_hi) = if core == mesh.triangles.len() {
@@ -250,7 +255,9 @@ impl TraceMesh {
                 .flat_map(|t| t.map(|i| mesh.positions[i as usize]))
                 .fold((hi, lo), |(l, h), p| (l.min(p), h.max(p)))
         };
-        let anchor = 0.5 * (lo + hi);
+        // The centre of the whole bounds would follow a ground 10⁷ m below half way down,
+        // where f32 steps are half a metre: the structures would be quantised to that.
+        let anchor = 0.5 * (core_lo + core_hi);
         let local = |i: u32| (mesh.positions[i as usize] - anchor).as_vec3a();
         let corners: Vec<Triangle> = mesh
             .triangles
@@ -287,7 +294,7 @@ impl TraceMesh {
             solid_bounds,
             tree: OnceLock::new(),
             anchor,
-            reach: 0.5 * (hi - lo).length(),
+            reach: reach_about(anchor, (lo, hi)),
             core_diagonal: (core_hi - core_lo).length(),
             core_bounds: {
                 let margin = DVec3::splat(1e-6 * (core_hi - core_lo).length());
@@ -555,6 +562,12 @@ impl TraceMesh {
             clamp(u0.floor() - margin, k.width)..clamp(u1.ceil() + margin, k.width),
         ))
     }
+}
+
+/// Radius of a sphere about `anchor` holding the box `(lo, hi)`: its half diagonal plus the
+/// anchor's distance from its centre (exactly the half diagonal for an anchor at the centre).
+fn reach_about(anchor: DVec3, (lo, hi): (DVec3, DVec3)) -> f64 {
+    0.5 * (hi - lo).length() + (anchor - 0.5 * (lo + hi)).length()
 }
 
 /// Points along the twelve edges of the box from `lo` to `hi`, each edge cut into `steps`

@@ -26,11 +26,15 @@ pub struct GroundSpec {
     pub in_depth: bool,
 }
 
-/// Half the side of the ground square for a scene whose bounding sphere has `radius`: far
-/// enough that its edge lies within a pixel of the horizon for a camera that frames the scene
-/// (2 radii above the ground, the edge dips at most 0.06° below the horizon: 0.9 px at 960 px
-/// over 60°), and at least 1 km. Depth stays exact that far out: it comes from each
-/// triangle's plane in f64.
-pub fn ground_radius(radius: f64) -> f64 {
-    (2000.0 * radius).max(1000.0)
+/// Half the side of the ground square for a scene whose bounding sphere has `radius` and
+/// whose centre lies `depth` metres above the ground: far enough that its edge lies within a
+/// pixel of the horizon for a camera that frames the scene (from a height h above the
+/// ground, a half side of 1000 h dips the edge 0.06° below the horizon: 0.9 px at 960 px over
+/// 60°), and at least 1 km. The camera is taken a radius above the scene's centre, and at
+/// least 2 radii above the ground (the size for a ground at the structures' feet, unchanged);
+/// a ground far below is as far below the camera, so its square grows with that depth.
+/// Depth stays exact that far out: it comes from each triangle's plane in f64.
+pub fn ground_radius(radius: f64, depth: f64) -> f64 {
+    let camera_height = (2.0 * radius).max(depth + radius);
+    (1000.0 * camera_height).max(1000.0)
 }

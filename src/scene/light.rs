@@ -1,6 +1,7 @@
 //! Light and backdrop of a dataset, as declared (any value may be a range to draw from).
 //! The build stage draws them for each sample or view.
 
+use crate::geometry::coordinate_in_range;
 use crate::materials::Lighting;
 use crate::materials::environment::EnvironmentMap;
 use crate::materials::image::ImageFile;
@@ -175,13 +176,8 @@ impl LightSpec {
                 self.exposure
             ));
         }
-        if let Some(g) = &self.ground
-            && !g.height.is_finite()
-        {
-            return Err(format!(
-                "dataset.light.ground.height = {} must be a finite number of metres",
-                g.height
-            ));
+        if let Some(g) = &self.ground {
+            coordinate_in_range(g.height, "dataset.light.ground.height")?;
         }
         for (name, [lo, _]) in [("ambient", self.ambient)]
             .into_iter()

@@ -10,6 +10,22 @@ use std::time::{Duration, Instant};
 
 pub const BIN: &str = env!("CARGO_BIN_EXE_shmgen");
 
+/// The files of `dir` with extension `extension`, by name.
+pub fn files_with_extension(dir: &Path, extension: &str) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|e| e == extension))
+        .collect();
+    files.sort();
+    files
+}
+
+/// The `*.rhai` files of the repository's folder `folder` (`scripts`, `stdlib`), by name.
+pub fn bundled_rhai(folder: &str) -> Vec<PathBuf> {
+    files_with_extension(&Path::new(env!("CARGO_MANIFEST_DIR")).join(folder), "rhai")
+}
+
 /// Writes `bytes` to `dir/name`, creating folders on the way.
 pub fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
     let path = dir.join(name);
