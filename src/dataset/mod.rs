@@ -381,7 +381,9 @@ fn read_manifest(root: &Path) -> Result<(Listed, HashMap<String, Check>)> {
             );
         };
         if let std::collections::btree_map::Entry::Vacant(entry) = listed.entry(parsed.sample) {
-            checks.extend(parsed.hashes);
+            // A line speaks for its own files only.
+            let own = |(file, _): &(String, Check)| parsed.files.contains(file);
+            checks.extend(parsed.hashes.into_iter().filter(own));
             entry.insert(parsed.files);
         }
     }
