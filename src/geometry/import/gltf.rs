@@ -9,7 +9,7 @@ use std::path::Path;
 
 use glam::{DMat4, DVec3};
 
-use super::validate::{Builder, check_file_size, check_triangle_count, read_all};
+use super::validate::{Builder, check_coordinate, check_file_size, check_triangle_count, read_all};
 
 pub(super) fn read(path: &Path) -> Result<Builder, String> {
     let bytes = read_all(path)?;
@@ -273,12 +273,18 @@ fn gltf_positions(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<
         ));
     }
     let items = accessor_items(accessor, buffers, 12)?;
-    Ok(items
-        .map(|b| {
+    // Checked as stored, before a node's transform smears a NaN over all three coordinates.
+    items
+        .enumerate()
+        .map(|(i, b)| {
             let f = |k: usize| f32::from_le_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]) as f64;
-            DVec3::new(f(0), f(4), f(8))
+            let p = DVec3::new(f(0), f(4), f(8));
+            check_coordinate(p).map_err(|why| {
+                format!("POSITION accessor {}, vertex {i} {why}", accessor.index())
+            })?;
+            Ok(p)
         })
-        .collect())
+        .collect()
 }
 
 fn gltf_indices(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
