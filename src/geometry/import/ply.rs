@@ -35,7 +35,7 @@ fn read_with(path: &Path, points_ok: bool) -> Result<Builder, String> {
     let mut reader = Reader::new(BufReader::new(file));
     let header = Parser::<Skipped>::new()
         .read_header(&mut reader)
-        .map_err(|e| format!("bad PLY header: {e}"))?;
+        .map_err(|e| format!("bad PLY header: {}", ply_rs_summary(&e)))?;
     let faces = header.elements.get("face");
     if faces.is_none() && !points_ok {
         return Err("bad PLY header: no 'face' element".into());
@@ -101,12 +101,19 @@ fn read_elements<E: PropertyAccess, R: std::io::BufRead>(
 ) -> Result<Vec<E>, String> {
     Parser::<E>::new()
         .read_payload_for_element(reader, element, header)
-        // ply-rs' message repeats the line and its grammar's expectations over several lines;
-        // the first says where.
-        .map_err(|e| {
-            let e = e.to_string();
-            format!("bad PLY data: {}", e.lines().next().unwrap_or(&e))
-        })
+        .map_err(|e| format!("bad PLY data: {}", ply_rs_summary(&e)))
+}
+
+/// ply-rs' message on one line: where, and the text it could not read, without the parser's
+/// state and grammar that follow over several lines.
+fn ply_rs_summary(e: &dyn std::fmt::Display) -> String {
+    let text = e.to_string();
+    let mut lines = text.lines().map(str::trim);
+    let place = lines.next().unwrap_or_default();
+    match lines.find(|l| l.starts_with("String:")) {
+        Some(read) => format!("{place} {read}"),
+        None => place.to_string(),
+    }
 }
 
 /// In an ASCII file whose data ply-rs could not read, the first element line holding a word

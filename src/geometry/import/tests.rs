@@ -403,3 +403,18 @@ fn bad_numbers_name_the_file_the_vertex_and_the_value() {
         assert_mentions(&e, &[vertex_2(name), "is too large", "e38", "±1e15"]);
     }
 }
+/// A file cut short says so on one line, in every binary encoding and wherever the cut falls.
+#[test]
+fn truncated_files_say_so_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let ply = export_ply(&cube());
+    let glb = std::fs::read(corpus("tetra.glb")).unwrap();
+    for share in [0.3, 0.7, 0.99] {
+        let cut = |bytes: &[u8]| bytes[..(bytes.len() as f64 * share) as usize].to_vec();
+        let e = err(&write(dir.path(), "cut.ply", &cut(&ply)));
+        assert_mentions(&e, &["cut.ply", "bad PLY"]);
+        assert!(!e.contains('\n') && !e.contains("ParseError"), "{e:?}");
+        let e = err(&write(dir.path(), "cut.glb", &cut(&glb)));
+        assert_mentions(&e, &["cut.glb", "truncated GLB", "declares 560 bytes"]);
+    }
+}
