@@ -1,8 +1,10 @@
 //! The preview as a local web page that refreshes itself, for a browser next to the editor.
 //!
 //! Owns: a tiny HTTP/1.1 server on 127.0.0.1 only (never another interface), serving the
-//! page, the latest good sheet and the latest state (error text of a broken save). Must not
-//! touch: files (it serves what the watcher hands it from memory) or anything but loopback.
+//! page, the latest good sheet and the latest state (error text of a broken save). It is
+//! bounded whatever the clients do: one thread, at most `MAX_CONNECTIONS` connections, a
+//! deadline for each request and each response, a size limit on requests. Must not touch:
+//! files (it serves what the watcher hands it from memory) or anything but loopback.
 
 use anyhow::{Context, Result};
 use serde_json::json;
