@@ -114,7 +114,7 @@ fn farthest(accuracy: &[f64], completeness: &[f64]) -> String {
         .copied()
         .fold(0.0, f64::max);
     if far.is_finite() {
-        format!("up to {} m", crate::words::number(far))
+        format!("up to {far:e} m")
     } else {
         "more than 1e154 m".into()
     }

@@ -161,9 +161,9 @@ pub(super) fn first_bad_number(line: &str) -> Option<(&str, &'static str)> {
         })
 }
 
+/// Every digit: where messages are shown, long numbers are put in short form (`words`).
 fn show(p: DVec3) -> String {
-    let [x, y, z] = p.to_array().map(crate::words::number);
-    format!("({x}, {y}, {z})")
+    format!("({}, {}, {})", p.x, p.y, p.z)
 }
 
 /// Removes triangles with a repeated corner or (relative to their size) zero area, which carry
