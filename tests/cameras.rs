@@ -478,6 +478,10 @@ fn degenerate_rigs_are_clear_errors_at_the_recipe() {
             "line: #{ from: [-3.0, 0.0, 0.0], to: [3.0, 0.0, 0.0] }",
             "dataset.camera.line, view 1, stands at (0, 0, 0)",
         ),
+        (
+            "line: #{ from: [-3.0, 0.0, 2.0], to: [3.0, 0.0, 2.0], target: [1.0, 0.0, 2.0] }",
+            "passes through its target [1.0, 0.0, 2.0]: a view standing there would aim at its own position",
+        ),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let path = write(

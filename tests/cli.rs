@@ -452,7 +452,19 @@ fn bad_sections_and_loads_are_named() {
             "        beam(#{ length: 2.0, width: 0.1, height: 0.2 }).point_load(0.0, 0.01)",
         ),
         &[],
-        &["cannot be reached", "on a support"],
+        &[
+            "target deflection 0.01 m cannot be reached: the loads do not deflect the beam anywhere (is every load on a support?)",
+        ],
+    );
+    // Asked for where the loads leave the beam still: said there, not "nowhere at x = 0 m".
+    rejects(
+        &with_scene(
+            "        beam(#{ length: 2.0, width: 0.1, height: 0.2 }).point_force(1.0, 100.0).target_deflection_at(0.0, 0.01)",
+        ),
+        &[],
+        &[
+            "target deflection 0.01 m at x = 0 m cannot be reached: the loads do not deflect the beam there (is x = 0 m a support",
+        ],
     );
     rejects(
         &with_scene(

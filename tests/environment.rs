@@ -243,7 +243,8 @@ fn a_white_box_is_lit_by_the_maps_irradiance() {
     }
 }
 
-/// A missing map and a map that is not 2:1 are errors naming the file and the recipe's line.
+/// A missing map, a map that is not 2:1 and one cut short are errors naming the file and the
+/// recipe's line.
 #[test]
 fn a_missing_or_misshapen_map_is_an_error_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
@@ -270,6 +271,16 @@ fn a_missing_or_misshapen_map_is_an_error_naming_the_file() {
     std::fs::write(dir.path().join("sky.hdr"), b"not an image").unwrap();
     let message = failure("c");
     assert!(message.contains("sky.hdr"), "{message}");
+
+    // Cut short (a download or copy that stopped): said so, not "failed to fill whole buffer".
+    write_map(&dir.path().join("sky.hdr"), 64, 32, telltale);
+    let whole = std::fs::read(dir.path().join("sky.hdr")).unwrap();
+    std::fs::write(dir.path().join("sky.hdr"), &whole[..whole.len() / 2]).unwrap();
+    let message = failure("d");
+    assert!(
+        message.contains("sky.hdr") && message.contains("truncated"),
+        "{message}"
+    );
 }
 
 /// Light and background from one map, with occlusion on and the map turned: the same bytes on

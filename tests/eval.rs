@@ -416,6 +416,16 @@ fn chamfer_and_fscore_have_their_closed_forms() {
         (f(&s, "precision"), f(&s, "recall"), f(&s, "fscore")),
         (0.0, 0.0, 0.0)
     );
+    // A cloud with a point 1e200 m out (a unit slip): its squared distances overflowed and the
+    // report said "Chamfer-L1 inf m" (null in the JSON). Now refused when read, saying where.
+    let far = "ply\nformat ascii 1.0\nelement vertex 2\nproperty double x\nproperty double y\nproperty double z\nend_header\n0.5 0.5 0\n0.5 0.5 1e200\n";
+    let predictions = dir.path().join("far");
+    write_file(&predictions.join("0000/000000.ply"), far.as_bytes());
+    let e = eval_err(&data, &predictions, &[]);
+    assert!(
+        e.contains("000000.ply: vertex 1 is too large: (0.5, 0.5, 1e200)") && !e.contains("inf"),
+        "{e}"
+    );
 }
 
 fn obj(vertices: &[[f64; 3]], faces: &[[i32; 3]]) -> Vec<u8> {

@@ -537,6 +537,20 @@ fn check_reports_counts_and_errors() {
     assert!(stderr.contains("samples: 3 +,"), "{stderr}");
 }
 
+/// The port of the URL `shmgen watch --serve` printed, which must be on 127.0.0.1.
+fn served_port(watch: &Watch) -> u16 {
+    let stdout = watch.stdout();
+    let url = stdout
+        .split_whitespace()
+        .find(|w| w.starts_with("http://"))
+        .unwrap_or_else(|| panic!("no URL in:\n{stdout}"));
+    url.strip_prefix("http://127.0.0.1:")
+        .and_then(|rest| rest.strip_suffix('/'))
+        .unwrap_or_else(|| panic!("{url} is not on 127.0.0.1"))
+        .parse()
+        .unwrap()
+}
+
 /// GET `path` from a local server: (status line, body).
 /// The numbers in `text`, in order (digits and points; "0–7" gives 0 and 7).
 fn numbers_in(text: &str) -> Vec<f64> {
@@ -609,6 +623,8 @@ fn check_succeeds_on_every_bundled_recipe() {
 
 fn get(port: u16, path: &str) -> (String, Vec<u8>) {
     let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
+    // A server that never answers fails the test instead of hanging it.
+    stream.set_read_timeout(Some(WAIT)).unwrap();
     write!(
         stream,
         "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n"
@@ -629,17 +645,7 @@ fn the_preview_is_served_on_loopback() {
     let sheet = preview_of(&recipe);
     let watch = Watch::start(&recipe, &["--serve", "0"]);
     let png = watch.wait_for_preview(1, &sheet);
-    let stdout = watch.stdout();
-    let url = stdout
-        .split_whitespace()
-        .find(|w| w.starts_with("http://"))
-        .unwrap_or_else(|| panic!("no URL in:\n{stdout}"));
-    let port: u16 = url
-        .strip_prefix("http://127.0.0.1:")
-        .and_then(|rest| rest.strip_suffix('/'))
-        .unwrap_or_else(|| panic!("{url} is not on 127.0.0.1"))
-        .parse()
-        .unwrap();
+    let port = served_port(&watch);
 
     let (status, page) = get(port, "/");
     assert!(status.contains("200"), "{status}");
@@ -657,4 +663,76 @@ fn the_preview_is_served_on_loopback() {
         png,
         "the last good sheet stays"
     );
+}
+
+/// Threads of process `pid`, from Linux's /proc/PID/status (the kernel's own count).
+fn threads(pid: u32) -> usize {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap();
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("Threads:"))
+        .unwrap_or_else(|| panic!("no Threads line in:\n{status}"))
+        .trim()
+        .parse()
+        .unwrap()
+}
+
+#[test]
+fn idle_and_slow_clients_neither_add_threads_nor_keep_a_request_out() {
+    let (_dir, recipe) = project();
+    let sheet = preview_of(&recipe);
+    let watch = Watch::start(&recipe, &["--serve", "0"]);
+    watch.wait_for_preview(1, &sheet);
+    let port = served_port(&watch);
+    let pid = watch.child.id();
+    let before = threads(pid);
+
+    // 300 clients hold connections: half say nothing, half start a request and stall.
+    let clients: Vec<TcpStream> = (0..300)
+        .map(|i| {
+            let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
+            if i % 2 == 1 {
+                stream.write_all(b"GET / HTTP/1.1\r\nHost: 127").unwrap();
+            }
+            stream
+        })
+        .collect();
+    let start = Instant::now();
+    let (status, page) = get(port, "/");
+    assert!(status.contains("200"), "{status}");
+    assert!(String::from_utf8_lossy(&page).contains("<html"));
+    assert!(
+        start.elapsed() < Duration::from_secs(2),
+        "a request waited {:?} behind idle clients",
+        start.elapsed()
+    );
+    let during = threads(pid);
+    assert!(
+        during <= before + 1,
+        "{before} threads before 300 idle clients, {during} with them"
+    );
+
+    // The server let the oldest idle client go rather than hold all 300.
+    let mut first = &clients[0];
+    first
+        .set_read_timeout(Some(Duration::from_secs(2)))
+        .unwrap();
+    match first.read(&mut [0u8; 16]) {
+        Ok(0) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::ConnectionReset => {}
+        other => panic!("the oldest idle client is still held: {other:?}"),
+    }
+    drop(clients);
+
+    // A request head of 16 KiB (the server's limit, sent whole so that nothing unread makes
+    // the close a reset) without its end is refused, not buffered further.
+    let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
+    stream.set_read_timeout(Some(WAIT)).unwrap();
+    let mut long = b"GET / HTTP/1.1\r\nX-Pad: ".to_vec();
+    long.resize(16 * 1024, b'a');
+    stream.write_all(&long).unwrap();
+    let mut response = Vec::new();
+    stream.read_to_end(&mut response).unwrap();
+    let response = String::from_utf8_lossy(&response);
+    assert!(response.starts_with("HTTP/1.1 431"), "{response}");
 }

@@ -374,7 +374,7 @@ impl CameraRig {
                 match target {
                     Some(t) if segment_distance(DVec3::from_array(*t), *from, *to) == 0.0 => {
                         Err(format!(
-                            "dataset.camera.line passes through its target {t:?}: a camera there looks nowhere"
+                            "dataset.camera.line passes through its target {t:?}: a view standing there would aim at its own position; move the target off the line"
                         ))
                     }
                     _ => Ok(()),

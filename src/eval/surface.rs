@@ -15,6 +15,10 @@
 //! 2017; Tatarchenko et al., CVPR 2019): precision = share of P with a < τ, recall = share of
 //! G with c < τ, F = 2PR / (P + R), 0 when both are 0.
 //!
+//! Every metric is finite: a prediction so far from the truth that a distance or its square
+//! overflows f64 is refused with the distance (imported files never get there: coordinates
+//! beyond ±1e15 are refused when read).
+//!
 //! Sampling is by area and deterministic: point i of N picks its triangle by the stratified
 //! value (i + ½)/N of the cumulative area, and its place in the triangle from the i-th point
 //! of the R2 low-discrepancy sequence (Roberts 2018) mapped uniformly by area.
@@ -84,14 +88,36 @@ pub(super) fn score(
     let mean =
         |d: &[f64], f: &dyn Fn(f64) -> f64| d.iter().map(|&x| f(x)).sum::<f64>() / d.len() as f64;
     let within = |d: &[f64]| d.iter().filter(|&&x| x < tau).count() as f64 / d.len() as f64;
-    Ok(SurfaceScore {
+    let score = SurfaceScore {
         accuracy: mean(&accuracy, &|x| x),
         completeness: mean(&completeness, &|x| x),
         accuracy_squared: mean(&accuracy, &|x| x * x),
         completeness_squared: mean(&completeness, &|x| x * x),
         precision: within(&accuracy),
         recall: within(&completeness),
-    })
+    };
+    if !(score.chamfer_l1().is_finite() && score.chamfer_l2().is_finite()) {
+        bail!(
+            "Chamfer distance not defined: prediction and truth lie {} apart, so the distances or their squares overflow f64 (are the coordinates in metres, in the world frame?)",
+            farthest(&accuracy, &completeness)
+        );
+    }
+    Ok(score)
+}
+
+/// The largest distance either way, for a message ("up to 1e154 m"); a distance that itself
+/// overflowed (the search compares squares) is past 1.3e154 m.
+fn farthest(accuracy: &[f64], completeness: &[f64]) -> String {
+    let far = accuracy
+        .iter()
+        .chain(completeness)
+        .copied()
+        .fold(0.0, f64::max);
+    if far.is_finite() {
+        format!("up to {far:e} m")
+    } else {
+        "more than 1e154 m".into()
+    }
 }
 
 /// Distances from each point to the tree's items, in the points' order (so sums over them
@@ -171,5 +197,20 @@ mod tests {
         assert_eq!((s.precision, s.recall, s.fscore()), (1.0, 1.0, 1.0));
         let s = score(&lifted, &plate(0.0), 2000, 0.02).unwrap();
         assert_eq!(s.fscore(), 0.0);
+    }
+
+    /// Points so far away that a distance or its square overflows: a refusal that says why,
+    /// not an infinite Chamfer distance (the import refuses such coordinates first; this holds
+    /// for any surface handed over).
+    #[test]
+    fn a_surface_too_far_away_is_refused_not_infinite() {
+        for (z, apart) in [(1e154, "up to 1e154 m"), (1e300, "more than 1e154 m")] {
+            let far = Surface::Points(vec![DVec3::new(0.5, 0.5, z)]);
+            let e = score(&far, &plate(0.0), 100, 0.01).unwrap_err().to_string();
+            assert!(
+                e.contains("Chamfer distance not defined") && e.contains(apart),
+                "{e}"
+            );
+        }
     }
 }

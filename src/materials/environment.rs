@@ -10,6 +10,7 @@
 //! projection onto nine SH coefficients and the irradiance they give. Must not touch:
 //! reading files (the recipe's `RecipeFiles` hands the bytes over), shading, cameras.
 
+use super::image::decode_failure;
 use glam::DVec3;
 use std::f64::consts::{PI, TAU};
 use std::path::Path;
@@ -35,7 +36,7 @@ impl EnvironmentMap {
     pub fn size(bytes: &[u8], name: &Path) -> Result<(u32, u32), String> {
         if is_exr(name) {
             let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
-                .map_err(|e| cannot_read(name, &e))?;
+                .map_err(|e| cannot_read(name, &exr_failure(&e)))?;
             let header = meta
                 .headers
                 .first()
@@ -48,7 +49,7 @@ impl EnvironmentMap {
         }
         use image::ImageDecoder;
         let decoder = image::codecs::hdr::HdrDecoder::new(std::io::Cursor::new(bytes))
-            .map_err(|e| cannot_read(name, &e))?;
+            .map_err(|e| cannot_read(name, &decode_failure(&e)))?;
         Ok(decoder.dimensions())
     }
 
@@ -73,9 +74,9 @@ impl EnvironmentMap {
             exr_texels(bytes, name)?
         } else {
             let decoder = image::codecs::hdr::HdrDecoder::new(std::io::Cursor::new(bytes))
-                .map_err(|e| cannot_read(name, &e))?;
+                .map_err(|e| cannot_read(name, &decode_failure(&e)))?;
             let image = image::DynamicImage::from_decoder(decoder)
-                .map_err(|e| cannot_read(name, &e))?
+                .map_err(|e| cannot_read(name, &decode_failure(&e)))?
                 .into_rgb32f();
             image.pixels().map(|p| p.0).collect()
         };
@@ -268,8 +269,21 @@ fn exr_texels(bytes: &[u8], name: &Path) -> Result<Vec<[f32; 3]>, String> {
         .all_attributes()
         .non_parallel()
         .from_buffered(std::io::Cursor::new(bytes))
-        .map_err(|e| cannot_read(name, &e))?;
+        .map_err(|e| cannot_read(name, &exr_failure(&e)))?;
     Ok(image.layer_data.channel_data.pixels.1)
+}
+
+/// What the OpenEXR reader's refusal says about the file, as [`decode_failure`] does for the
+/// other formats ("invalid: reference to missing bytes" is a file cut short).
+fn exr_failure(e: &exr::error::Error) -> String {
+    use exr::error::Error;
+    match e {
+        Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "the file is truncated: it ends before the image does".into()
+        }
+        Error::Invalid(_) | Error::Io(_) => format!("the file is truncated or corrupt ({e})"),
+        _ => e.to_string(),
+    }
 }
 
 fn cannot_read(name: &Path, e: &dyn std::fmt::Display) -> String {
@@ -420,5 +434,31 @@ mod tests {
         // Longitude 0 is halfway between the last column (7) and the first (0) of row 1.
         let seam = map.radiance(dir(PI * 1.5 / 4.0, 0.0))[0];
         assert!((seam - (8.0 + 15.0) / 2.0).abs() < 1e-9, "{seam}");
+    }
+
+    /// A map cut short names the file and says it is truncated (the decoders' own words were
+    /// "failed to fill whole buffer" and "invalid: reference to missing bytes").
+    #[test]
+    fn a_truncated_map_says_so() {
+        let dir = tempfile::tempdir().unwrap();
+        let exr_path = dir.path().join("sky.exr");
+        exr::prelude::write_rgb_file(&exr_path, 64, 32, |x, y| (x as f32, y as f32, 1.0)).unwrap();
+        let exr = std::fs::read(&exr_path).unwrap();
+        let mut hdr = Vec::new();
+        let texels = vec![image::Rgb([0.5f32, 1.0, 2.0]); 64 * 32];
+        image::codecs::hdr::HdrEncoder::new(&mut hdr)
+            .encode(&texels, 64, 32)
+            .unwrap();
+        for (path, file) in [(exr_path.as_path(), &exr), (Path::new("sky.hdr"), &hdr)] {
+            assert!(EnvironmentMap::decode(file, path).is_ok());
+            for share in [0.05, 0.5, 0.99] {
+                let cut = &file[..(file.len() as f64 * share) as usize];
+                let e = EnvironmentMap::decode(cut, path).unwrap_err();
+                assert!(
+                    e.contains(&path.display().to_string()) && e.contains("truncated"),
+                    "{share}: {e}"
+                );
+            }
+        }
     }
 }

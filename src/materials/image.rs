@@ -42,7 +42,7 @@ impl TextureImage {
     pub fn size(bytes: &[u8], name: &Path) -> Result<(u32, u32), String> {
         let (w, h) = reader(bytes, name)?
             .into_dimensions()
-            .map_err(|e| cannot_read(name, &e))?;
+            .map_err(|e| cannot_read(name, &decode_failure(&e)))?;
         if w > MAX_IMAGE_SIDE
             || h > MAX_IMAGE_SIDE
             || u64::from(w) * u64::from(h) > MAX_IMAGE_PIXELS
@@ -60,9 +60,16 @@ impl TextureImage {
     /// used in error messages.
     pub fn decode(bytes: &[u8], name: &Path) -> Result<Self, String> {
         Self::size(bytes, name)?;
-        let decoded = reader(bytes, name)?
+        let reader = reader(bytes, name)?;
+        if let Some(missing) = reader.format().and_then(|f| missing_end(f, bytes)) {
+            return Err(cannot_read(
+                name,
+                &format!("the file is truncated: {missing}"),
+            ));
+        }
+        let decoded = reader
             .decode()
-            .map_err(|e| cannot_read(name, &e))?
+            .map_err(|e| cannot_read(name, &decode_failure(&e)))?
             .into_rgb8();
         let (width, height) = (decoded.width() as usize, decoded.height() as usize);
         if width == 0 || height == 0 {
@@ -116,6 +123,55 @@ fn reader<'a>(
 
 fn cannot_read(name: &Path, e: &dyn std::fmt::Display) -> String {
     format!("cannot read image {}: {e}", name.display())
+}
+
+/// What a decoder's refusal says about the file: one that ends early is truncated; one whose
+/// data do not decode is corrupt, or truncated (decoders cannot always tell which); the
+/// decoder's own words follow. Bare, they read like a program's fault ("failed to fill whole
+/// buffer").
+pub(crate) fn decode_failure(e: &::image::ImageError) -> String {
+    use ::image::ImageError;
+    let words = e.to_string();
+    let words = words.trim();
+    match e {
+        ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "the file is truncated: it ends before the image does".into()
+        }
+        ImageError::Decoding(_) | ImageError::IoError(_) => {
+            format!("the file is truncated or corrupt ({words})")
+        }
+        _ => words.into(),
+    }
+}
+
+/// What a file cut short lacks, if it lacks it: the decoders read as far as the pixels go, a
+/// JPEG's filling the missing rows with grey, a PNG's not needing the closing chunk.
+///
+/// A JPEG's end-of-image marker (FF D9) must follow its first scan (FF DA): entropy-coded data
+/// escape every FF byte, so the marker cannot occur inside a scan. A PNG ends with its IEND
+/// chunk, whole. Data appended after either (camera trailers) do not matter.
+fn missing_end(format: ::image::ImageFormat, bytes: &[u8]) -> Option<&'static str> {
+    let find = |from: usize, m: &[u8]| {
+        bytes
+            .get(from..)?
+            .windows(m.len())
+            .position(|w| w == m)
+            .map(|at| from + at)
+    };
+    match format {
+        ::image::ImageFormat::Jpeg => {
+            let ended = find(0, &[0xFF, 0xDA]).and_then(|scan| find(scan, &[0xFF, 0xD9]));
+            ended
+                .is_none()
+                .then_some("the JPEG ends before its end-of-image marker")
+        }
+        ::image::ImageFormat::Png => {
+            // The chunk's type, then its 4-byte CRC.
+            let ended = find(8, b"IEND").is_some_and(|at| at + 8 <= bytes.len());
+            (!ended).then_some("the PNG ends before its IEND chunk does")
+        }
+        _ => None,
+    }
 }
 
 impl Level {
@@ -228,5 +284,42 @@ mod tests {
     fn broken_files_are_errors_naming_the_file() {
         let e = TextureImage::decode(b"not an image", Path::new("textures/rust.png")).unwrap_err();
         assert!(e.contains("textures/rust.png"), "{e}");
+    }
+
+    fn refusal(bytes: &[u8], name: &str, share: f64) -> String {
+        match TextureImage::decode(bytes, Path::new(name)) {
+            Ok(_) => panic!("{name} ({share} of it) decoded"),
+            Err(e) => e,
+        }
+    }
+
+    /// A file cut short, or damaged, says which file and that it is truncated or corrupt,
+    /// whatever the decoder's own words; a JPEG missing only its last bytes is not decoded
+    /// into grey rows.
+    #[test]
+    fn truncated_and_corrupt_images_say_so() {
+        let pixels = ::image::RgbImage::from_fn(64, 32, |x, y| ::image::Rgb([x as u8, y as u8, 7]));
+        for (name, format) in [
+            ("rust.png", ::image::ImageFormat::Png),
+            ("rust.jpg", ::image::ImageFormat::Jpeg),
+        ] {
+            let mut file = Vec::new();
+            pixels
+                .write_to(&mut std::io::Cursor::new(&mut file), format)
+                .unwrap();
+            for share in [0.05, 0.3, 0.6, 0.99] {
+                let cut = &file[..(file.len() as f64 * share) as usize];
+                let e = refusal(cut, name, share);
+                assert!(e.contains(name) && e.contains("truncated"), "{share}: {e}");
+                assert!(!e.contains('\n'), "{e:?}");
+            }
+            let mut damaged = file.clone();
+            let middle = damaged.len() / 2;
+            for b in &mut damaged[middle..middle + 40] {
+                *b ^= 0x5a;
+            }
+            let e = refusal(&damaged, name, 1.0);
+            assert!(e.contains(name) && e.contains("corrupt"), "{e}");
+        }
     }
 }

@@ -403,13 +403,13 @@ impl LinearPair {
                 Target::Physical => Ok(1.0),
                 Target::Peak { deflection } => {
                     let (peak, _) = extreme(xs, p.length, |x| beam.at(x).v);
-                    reach(deflection, peak, beam.natural_deflection(), "anywhere").map(|f| f * ei)
+                    reach(deflection, peak, beam.natural_deflection(), None).map(|f| f * ei)
                 }
                 Target::At { at, deflection } => reach(
                     deflection,
                     beam.at(at).v,
                     beam.natural_deflection(),
-                    &format!("at x = {at} m"),
+                    Some(at),
                 )
                 .map(|f| f * ei),
             }
@@ -670,12 +670,18 @@ pub(super) fn nonlinearity(support: Support) -> f64 {
     }
 }
 
-/// Load factor per unit EI that turns `unit` into `target`.
-pub(super) fn reach(target: f64, unit: f64, natural: f64, place: &str) -> Result<f64, String> {
+/// Load factor per unit EI that turns `unit` (the unit loads' deflection at `at`, or their
+/// peak when None) into `target`.
+pub(super) fn reach(target: f64, unit: f64, natural: f64, at: Option<f64>) -> Result<f64, String> {
     if !(unit.abs() > 1e-14 * natural) {
-        return Err(format!(
-            "target deflection {target} m cannot be reached: the loads deflect the beam nowhere {place} (is a load on a support?)"
-        ));
+        return Err(match at {
+            None => format!(
+                "target deflection {target} m cannot be reached: the loads do not deflect the beam anywhere (is every load on a support?)"
+            ),
+            Some(x) => format!(
+                "target deflection {target} m at x = {x} m cannot be reached: the loads do not deflect the beam there (is x = {x} m a support, or every load on one?)"
+            ),
+        });
     }
     Ok(target / unit)
 }

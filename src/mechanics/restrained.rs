@@ -141,15 +141,11 @@ fn tension_factor(p: &BeamProblem, xs: &[f64], beam: &TensionBeam) -> Result<f64
         Target::Physical => Ok(1.0),
         Target::Peak { deflection } => {
             let peak = peak();
-            reach(deflection, peak, peak.abs(), "anywhere").map(|f| f * ei)
+            reach(deflection, peak, peak.abs(), None).map(|f| f * ei)
         }
-        Target::At { at, deflection } => reach(
-            deflection,
-            beam.at(at).v,
-            peak().abs(),
-            &format!("at x = {at} m"),
-        )
-        .map(|f| f * ei),
+        Target::At { at, deflection } => {
+            reach(deflection, beam.at(at).v, peak().abs(), Some(at)).map(|f| f * ei)
+        }
     }
 }
 

@@ -1,20 +1,31 @@
 //! The preview as a local web page that refreshes itself, for a browser next to the editor.
 //!
 //! Owns: a tiny HTTP/1.1 server on 127.0.0.1 only (never another interface), serving the
-//! page, the latest good sheet and the latest state (error text of a broken save). Must not
-//! touch: files (it serves what the watcher hands it from memory) or anything but loopback.
+//! page, the latest good sheet and the latest state (error text of a broken save). It is
+//! bounded whatever the clients do: one thread, at most `MAX_CONNECTIONS` connections, a
+//! deadline for each request and each response, a size limit on requests. Must not touch:
+//! files (it serves what the watcher hands it from memory) or anything but loopback.
 
 use anyhow::{Context, Result};
 use serde_json::json;
-use std::io::{Read, Write};
+use std::io::{ErrorKind, Read, Write};
 use std::net::{Ipv4Addr, SocketAddr, TcpListener, TcpStream};
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
-/// How long a connection may take to send its request; a silent client must not hold a thread.
+/// How long a connection may take to send its whole request (not per read: a client trickling
+/// one byte at a time must not hold its place forever).
 const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
+/// How long a client may take to read its whole response.
+const RESPONSE_TIMEOUT: Duration = Duration::from_secs(10);
 /// Requests are a line and a few headers; anything longer is not for us.
 const MAX_REQUEST: usize = 16 * 1024;
+/// Connections held at once. One thread serves them all, so silent or slow clients cost a
+/// slot each, never a thread; when the slots are full the oldest unfinished request makes way
+/// for the newcomer, so a flood of idle clients cannot keep a browser's request out.
+const MAX_CONNECTIONS: usize = 64;
+/// Pause of the serving loop when no connection moved (it only polls while some are open).
+const IDLE_PAUSE: Duration = Duration::from_millis(2);
 
 const PAGE: &str = r#"<!doctype html>
 <html><head><meta charset="utf-8"><title>shmgen preview</title>
@@ -75,15 +86,14 @@ impl Server {
         let url = format!("http://{}/", listener.local_addr()?);
         let state = Arc::new(Mutex::new(State::default()));
         let shared = state.clone();
-        std::thread::spawn(move || {
-            for stream in listener.incoming().flatten() {
-                let state = shared.clone();
-                std::thread::spawn(move || {
-                    // A client that hangs up early is its own business.
-                    let _ = respond(stream, &state);
-                });
-            }
-        });
+        std::thread::Builder::new()
+            .name("preview-server".into())
+            .spawn(move || {
+                if let Err(e) = serve(&listener, &shared) {
+                    eprintln!("the preview server stopped: {e}");
+                }
+            })
+            .context("--serve: cannot start the server's thread")?;
         Ok(Server { state, url })
     }
 
@@ -100,31 +110,189 @@ impl Server {
     }
 }
 
-fn respond(mut stream: TcpStream, state: &Mutex<State>) -> std::io::Result<()> {
-    stream.set_read_timeout(Some(REQUEST_TIMEOUT))?;
-    let head = read_head(&mut stream)?;
-    let (status, kind, body) = route(&head, state);
-    let header = format!(
-        "HTTP/1.1 {status}\r\nContent-Type: {kind}\r\nContent-Length: {}\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n",
-        body.len()
-    );
-    stream.write_all(header.as_bytes())?;
-    stream.write_all(&body)?;
-    stream.flush()
+/// One connection between accept and close.
+struct Connection {
+    stream: TcpStream,
+    phase: Phase,
+    /// When it is dropped if not finished: the whole request, then the whole response, each
+    /// has its time, however the bytes trickle.
+    deadline: Instant,
 }
 
-/// The request line and headers (up to the blank line).
-fn read_head(stream: &mut TcpStream) -> std::io::Result<String> {
-    let mut head = Vec::new();
-    let mut buf = [0u8; 1024];
-    while !head.windows(4).any(|w| w == b"\r\n\r\n") && head.len() < MAX_REQUEST {
-        let n = stream.read(&mut buf)?;
-        if n == 0 {
-            break;
+enum Phase {
+    /// Reading the request head; the bytes so far.
+    Request(Vec<u8>),
+    /// Writing the response; its bytes and how many went out.
+    Response { bytes: Vec<u8>, sent: usize },
+}
+
+/// What a round did to a connection.
+#[derive(PartialEq)]
+enum Step {
+    Waiting,
+    Moved,
+    Done,
+}
+
+/// Serves every connection from this one thread: non-blocking sockets polled in rounds, so
+/// the thread count never depends on the clients. Sleeps in `accept` while none is open.
+fn serve(listener: &TcpListener, state: &Mutex<State>) -> std::io::Result<()> {
+    let mut open: Vec<Connection> = Vec::new();
+    loop {
+        let mut moved = open.is_empty() && wait_for_client(listener, &mut open)?;
+        moved |= accept_waiting(listener, &mut open);
+        let now = Instant::now();
+        open.retain_mut(|connection| {
+            let step = connection.advance(state);
+            moved |= step != Step::Waiting;
+            step != Step::Done && now < connection.deadline
+        });
+        if !moved {
+            std::thread::sleep(IDLE_PAUSE);
         }
-        head.extend_from_slice(&buf[..n]);
     }
-    Ok(String::from_utf8_lossy(&head).into_owned())
+}
+
+/// Blocks until a client connects and admits it; false if the accept failed (it is retried).
+fn wait_for_client(listener: &TcpListener, open: &mut Vec<Connection>) -> std::io::Result<bool> {
+    listener.set_nonblocking(false)?;
+    let accepted = listener.accept();
+    listener.set_nonblocking(true)?;
+    Ok(match accepted {
+        Ok((stream, _)) => admit(open, stream),
+        Err(_) => false,
+    })
+}
+
+/// Admits the clients waiting to be accepted, at most half the slots a round so that each
+/// newcomer is read at least once before later ones can push it out.
+fn accept_waiting(listener: &TcpListener, open: &mut Vec<Connection>) -> bool {
+    let mut any = false;
+    for _ in 0..MAX_CONNECTIONS / 2 {
+        // WouldBlock: nobody waiting; any other error (a client gone before its accept, no
+        // file descriptor left) is retried next round.
+        let Ok((stream, _)) = listener.accept() else {
+            break;
+        };
+        any |= admit(open, stream);
+    }
+    any
+}
+
+/// Adds a connection; when every slot is taken, the oldest one still sending its request
+/// (else the oldest being answered) is closed to make room. `open` is in arrival order.
+fn admit(open: &mut Vec<Connection>, stream: TcpStream) -> bool {
+    if stream.set_nonblocking(true).is_err() {
+        return false;
+    }
+    if open.len() >= MAX_CONNECTIONS {
+        let oldest_request = open
+            .iter()
+            .position(|c| matches!(c.phase, Phase::Request(_)));
+        open.remove(oldest_request.unwrap_or(0));
+    }
+    open.push(Connection {
+        stream,
+        phase: Phase::Request(Vec::new()),
+        deadline: Instant::now() + REQUEST_TIMEOUT,
+    });
+    true
+}
+
+impl Connection {
+    /// Reads or writes what the socket takes now, without blocking. A request just completed
+    /// is answered in the same round.
+    fn advance(&mut self, state: &Mutex<State>) -> Step {
+        let head = match &mut self.phase {
+            Phase::Response { bytes, sent } => {
+                return write_available(&mut self.stream, bytes, sent);
+            }
+            Phase::Request(head) => head,
+        };
+        match read_available(&mut self.stream, head) {
+            Err(_) => Step::Done,
+            Ok(None) => Step::Waiting,
+            Ok(Some(false)) => Step::Moved,
+            Ok(Some(true)) => {
+                let bytes = answer(head, state);
+                let mut sent = 0;
+                let step = write_available(&mut self.stream, &bytes, &mut sent);
+                self.phase = Phase::Response { bytes, sent };
+                self.deadline = Instant::now() + RESPONSE_TIMEOUT;
+                if step == Step::Done {
+                    Step::Done
+                } else {
+                    Step::Moved
+                }
+            }
+        }
+    }
+}
+
+/// Appends what the socket holds to `head`: None if nothing came, else whether the head is
+/// complete (blank line seen, or the size limit reached: `answer` refuses it). A client that
+/// hangs up before finishing its request is an error: there is nobody to answer.
+fn read_available(stream: &mut TcpStream, head: &mut Vec<u8>) -> std::io::Result<Option<bool>> {
+    let before = head.len();
+    let mut buf = [0u8; 1024];
+    while !head_complete(head) && head.len() < MAX_REQUEST {
+        match stream.read(&mut buf) {
+            Ok(0) => return Err(ErrorKind::UnexpectedEof.into()),
+            Ok(n) => head.extend_from_slice(&buf[..n.min(MAX_REQUEST - head.len())]),
+            Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    if head.len() == before {
+        return Ok(None);
+    }
+    Ok(Some(head_complete(head) || head.len() >= MAX_REQUEST))
+}
+
+fn head_complete(head: &[u8]) -> bool {
+    head.windows(4).any(|w| w == b"\r\n\r\n")
+}
+
+/// Writes what the socket takes of `bytes[*sent..]`.
+fn write_available(stream: &mut TcpStream, bytes: &[u8], sent: &mut usize) -> Step {
+    let before = *sent;
+    while *sent < bytes.len() {
+        match stream.write(&bytes[*sent..]) {
+            Ok(0) => return Step::Done,
+            Ok(n) => *sent += n,
+            Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(_) => return Step::Done,
+        }
+    }
+    if *sent == bytes.len() {
+        Step::Done
+    } else if *sent > before {
+        Step::Moved
+    } else {
+        Step::Waiting
+    }
+}
+
+/// The whole response (status line, headers, body) to a request head.
+fn answer(head: &[u8], state: &Mutex<State>) -> Vec<u8> {
+    let (status, kind, body) = if head_complete(head) {
+        route(&String::from_utf8_lossy(head), state)
+    } else {
+        (
+            "431 Request Header Fields Too Large",
+            "text/plain; charset=utf-8",
+            format!("requests are limited to {MAX_REQUEST} bytes\n").into_bytes(),
+        )
+    };
+    let mut bytes = format!(
+        "HTTP/1.1 {status}\r\nContent-Type: {kind}\r\nContent-Length: {}\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n",
+        body.len()
+    )
+    .into_bytes();
+    bytes.extend_from_slice(&body);
+    bytes
 }
 
 /// (status, content type, body) for a request.
@@ -217,5 +385,34 @@ mod tests {
         );
         state.lock().unwrap().png = Some(Arc::new(vec![1, 2, 3]));
         assert_eq!(get("/preview.png?n=1", &state).2, vec![1, 2, 3]);
+    }
+
+    #[test]
+    fn a_client_trickling_its_request_is_let_go_when_its_time_is_up() {
+        let server = Server::start(0).unwrap();
+        let address = server
+            .url
+            .trim_start_matches("http://")
+            .trim_end_matches('/');
+        let mut stream = TcpStream::connect(address).unwrap();
+        stream
+            .set_read_timeout(Some(Duration::from_millis(200)))
+            .unwrap();
+        let start = Instant::now();
+        // One byte of a request every 200 ms, never finishing: each read has data, so only a
+        // deadline for the whole request ends it.
+        let closed = loop {
+            assert!(start.elapsed() < REQUEST_TIMEOUT * 2, "still held");
+            if stream.write_all(b"G").is_err() {
+                break start.elapsed();
+            }
+            match stream.read(&mut [0u8; 64]) {
+                Ok(0) => break start.elapsed(),
+                Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::TimedOut => {}
+                Err(_) => break start.elapsed(),
+                Ok(n) => panic!("answered an unfinished request with {n} bytes"),
+            }
+        };
+        assert!(closed >= REQUEST_TIMEOUT, "closed after {closed:?}");
     }
 }

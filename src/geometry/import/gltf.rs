@@ -9,7 +9,7 @@ use std::path::Path;
 
 use glam::{DMat4, DVec3};
 
-use super::validate::{Builder, check_file_size, check_triangle_count, read_all};
+use super::validate::{Builder, check_coordinate, check_file_size, check_triangle_count, read_all};
 
 pub(super) fn read(path: &Path) -> Result<Builder, String> {
     let bytes = read_all(path)?;
@@ -38,12 +38,29 @@ fn gltf_document(
     bytes: &[u8],
     warnings: &mut Vec<String>,
 ) -> Result<(gltf::Document, Option<Vec<u8>>), String> {
+    check_glb_length(bytes)?;
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| format!("invalid glTF: {e}"))?;
     let mut root = document.into_json();
     prepare_for_validation(&mut root, warnings)?;
     let document = gltf::Document::from_json(root).map_err(|e| e.to_string())?;
     Ok((document, blob))
+}
+
+/// A GLB file (magic "glTF") shorter than the length its header declares was cut short; the
+/// gltf crate only says it "could not completely read the object".
+fn check_glb_length(bytes: &[u8]) -> Result<(), String> {
+    let Some(header) = bytes.get(..12).filter(|h| h.starts_with(b"glTF")) else {
+        return Ok(());
+    };
+    let declared = u32::from_le_bytes([header[8], header[9], header[10], header[11]]);
+    if (bytes.len() as u64) < u64::from(declared) {
+        return Err(format!(
+            "truncated GLB: the header declares {declared} bytes but the file has {}",
+            bytes.len()
+        ));
+    }
+    Ok(())
 }
 
 /// gltf-json's validation indexes the POSITION accessor without a bounds check (a panic on a
@@ -273,12 +290,18 @@ fn gltf_positions(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<
         ));
     }
     let items = accessor_items(accessor, buffers, 12)?;
-    Ok(items
-        .map(|b| {
+    // Checked as stored, before a node's transform smears a NaN over all three coordinates.
+    items
+        .enumerate()
+        .map(|(i, b)| {
             let f = |k: usize| f32::from_le_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]) as f64;
-            DVec3::new(f(0), f(4), f(8))
+            let p = DVec3::new(f(0), f(4), f(8));
+            check_coordinate(p).map_err(|why| {
+                format!("POSITION accessor {}, vertex {i} {why}", accessor.index())
+            })?;
+            Ok(p)
         })
-        .collect())
+        .collect()
 }
 
 fn gltf_indices(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
@@ -417,7 +440,10 @@ mod tests {
         assert_mentions(&err(&path), &["buffer 0", "short_bin.bin", "cannot open"]);
         let mut glb = std::fs::read(corpus("tetra.glb")).unwrap();
         glb.truncate(100);
-        assert_mentions(&err(&write(dir.path(), "cut.glb", &glb)), &["invalid glTF"]);
+        assert_mentions(
+            &err(&write(dir.path(), "cut.glb", &glb)),
+            &["truncated GLB: the header declares 560 bytes but the file has 100"],
+        );
         let cycle = r#"[{"mesh":0,"children":[1]},{"children":[0]}]"#;
         let e = err(&write_gltf(dir.path(), "cycle", &cube(), cycle));
         assert_mentions(&e, &["cycle.gltf", "the node hierarchy is not a tree"]);

@@ -1,6 +1,6 @@
 //! Reading triangle meshes from OBJ, PLY, STL and glTF/GLB files, and writing PLY.
 //!
-//! Owns: turning a mesh file into a checked [`Mesh`] (finite vertices, indices in range,
+//! Owns: turning a mesh file into a checked [`Mesh`] (finite vertices within ±1e15, indices in range,
 //! polygons fan-triangulated, degenerate triangles dropped, optional normalisation) and the
 //! exact binary PLY export. Each format's reader has its own module and hands its faces to
 //! `validate`, so the checks, repairs and their messages are the same for every format.
@@ -52,7 +52,8 @@ pub fn import_mesh(path: &std::path::Path, options: ImportOptions) -> Result<Imp
 pub enum Surface {
     /// Triangles (any format, or a PLY with faces), checked as [`import_mesh`] checks them.
     Mesh(Imported),
-    /// Points alone: a PLY without faces (or with none listed). Every point is finite.
+    /// Points alone: a PLY without faces (or with none listed). Every point is finite and within
+    /// ±1e15.
     Points(Vec<glam::DVec3>),
 }
 
@@ -65,7 +66,7 @@ pub fn import_surface(path: &Path) -> Result<Surface, String> {
     check_file_size(path).map_err(named)?;
     let builder = ply::read_points_or_mesh(path).map_err(named)?;
     if builder.mesh.triangles.is_empty() {
-        validate::check_finite(&builder.mesh.positions).map_err(named)?;
+        validate::check_coordinates(&builder.mesh.positions).map_err(named)?;
         return Ok(Surface::Points(builder.mesh.positions));
     }
     finish(builder, ImportOptions::default())

@@ -8,7 +8,9 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::validate::{Builder, check_triangle_count};
+use super::validate::{
+    Builder, check_coordinate, check_coordinates, check_triangle_count, first_bad_number,
+};
 
 pub(super) fn read(bytes: &[u8]) -> Result<Builder, String> {
     let load = tobj::LoadOptions {
@@ -52,14 +54,14 @@ pub(super) fn read(bytes: &[u8]) -> Result<Builder, String> {
         }
         check_triangle_count(builder.mesh.triangles.len() as u64)?;
     }
-    if !builder.mesh.is_finite() {
+    if let Err(e) = check_coordinates(&builder.mesh.positions) {
         // tobj renumbers vertices per object, so find the culprit in the file itself.
-        return Err(locate_obj_error(bytes).unwrap_or_else(|| "a vertex is not finite".into()));
+        return Err(locate_obj_error(bytes).unwrap_or(e));
     }
     Ok(builder)
 }
 
-/// Finds the first unreadable or non-finite vertex or bad face index in OBJ text, for a message
+/// Finds the first unreadable, non-finite or too large vertex or bad face index in OBJ text, for a message
 /// with a line number (tobj's errors carry neither).
 fn locate_obj_error(bytes: &[u8]) -> Option<String> {
     let text = String::from_utf8_lossy(bytes);
@@ -73,16 +75,20 @@ fn locate_obj_error(bytes: &[u8]) -> Option<String> {
         let line_no = n + 1;
         match words.next() {
             Some("v") => {
-                let xyz: Vec<f64> = words.take(3).map_while(|w| w.parse().ok()).collect();
-                if xyz.len() < 3 {
+                let xyz: Vec<&str> = words.take(3).collect();
+                if let Some((word, why)) = first_bad_number(&xyz.join(" ")) {
+                    return Some(format!(
+                        "vertex {seen} (line {line_no}) has '{word}', {why}: '{line}'"
+                    ));
+                }
+                let numbers: Vec<f64> = xyz.iter().filter_map(|w| w.parse().ok()).collect();
+                let [x, y, z] = numbers[..] else {
                     return Some(format!(
                         "vertex {seen} (line {line_no}) is not three numbers: '{line}'"
                     ));
-                }
-                if xyz.iter().any(|c| !c.is_finite()) {
-                    return Some(format!(
-                        "vertex {seen} (line {line_no}) is not finite: '{line}'"
-                    ));
+                };
+                if let Err(why) = check_coordinate(DVec3::new(x, y, z)) {
+                    return Some(format!("vertex {seen} (line {line_no}) {why}"));
                 }
                 seen += 1;
             }
@@ -130,12 +136,18 @@ mod tests {
             ],
         );
         let e = err(&corpus("nan_vertex.obj"));
-        assert_mentions(&e, &["nan_vertex.obj", "vertex 2 (line 3)", "not finite"]);
+        assert_mentions(
+            &e,
+            &[
+                "nan_vertex.obj",
+                "vertex 2 (line 3) has 'nan', not a finite number",
+            ],
+        );
         let dir = tempfile::tempdir().unwrap();
         let e = err(&write(dir.path(), "garbage.obj", b"v 0 0 zero\nf 1 2 3\n"));
         assert_mentions(
             &e,
-            &["vertex 0 (line 1) is not three numbers: 'v 0 0 zero'"],
+            &["vertex 0 (line 1) has 'zero', not a number: 'v 0 0 zero'"],
         );
         let e = err(&write(
             dir.path(),

@@ -19,7 +19,7 @@ use glam::DVec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{ElementDef, PropertyAccess, PropertyAccessResult, PropertyType};
 
-use super::validate::{Builder, check_triangle_count};
+use super::validate::{Builder, check_triangle_count, first_bad_number};
 
 pub(super) fn read(path: &Path) -> Result<Builder, String> {
     read_with(path, false)
@@ -35,7 +35,7 @@ fn read_with(path: &Path, points_ok: bool) -> Result<Builder, String> {
     let mut reader = Reader::new(BufReader::new(file));
     let header = Parser::<Skipped>::new()
         .read_header(&mut reader)
-        .map_err(|e| format!("bad PLY header: {e}"))?;
+        .map_err(|e| format!("bad PLY header: {}", ply_rs_summary(&e)))?;
     let faces = header.elements.get("face");
     if faces.is_none() && !points_ok {
         return Err("bad PLY header: no 'face' element".into());
@@ -68,16 +68,19 @@ fn read_with(path: &Path, points_ok: bool) -> Result<Builder, String> {
     for element in header.elements.values() {
         match element.name.as_str() {
             "vertex" => {
-                for (i, v) in read_elements::<PlyVertex, _>(&mut reader, element, &header)?
-                    .into_iter()
-                    .enumerate()
-                {
+                let vertices = read_elements::<PlyVertex, _>(&mut reader, element, &header)
+                    .map_err(|e| locate_ascii_error(path, &header).unwrap_or(e))?;
+                for (i, v) in vertices.into_iter().enumerate() {
                     builder.mesh.positions.push(v.position(i)?);
                 }
             }
-            "face" => face_lists = read_elements::<PlyFace, _>(&mut reader, element, &header)?,
+            "face" => {
+                face_lists = read_elements::<PlyFace, _>(&mut reader, element, &header)
+                    .map_err(|e| locate_ascii_error(path, &header).unwrap_or(e))?;
+            }
             _ => {
-                read_elements::<Skipped, _>(&mut reader, element, &header)?;
+                read_elements::<Skipped, _>(&mut reader, element, &header)
+                    .map_err(|e| locate_ascii_error(path, &header).unwrap_or(e))?;
             }
         }
     }
@@ -98,7 +101,47 @@ fn read_elements<E: PropertyAccess, R: std::io::BufRead>(
 ) -> Result<Vec<E>, String> {
     Parser::<E>::new()
         .read_payload_for_element(reader, element, header)
-        .map_err(|e| format!("bad PLY data: {e}"))
+        .map_err(|e| format!("bad PLY data: {}", ply_rs_summary(&e)))
+}
+
+/// ply-rs' message on one line: where, and the text it could not read, without the parser's
+/// state and grammar that follow over several lines.
+fn ply_rs_summary(e: &dyn std::fmt::Display) -> String {
+    let text = e.to_string();
+    let mut lines = text.lines().map(str::trim);
+    let place = lines.next().unwrap_or_default();
+    match lines.find(|l| l.starts_with("String:")) {
+        Some(read) => format!("{place} {read}"),
+        None => place.to_string(),
+    }
+}
+
+/// In an ASCII file whose data ply-rs could not read, the first element line holding a word
+/// that is not a finite number, named by element and index ("vertex 2 (line 12) has 'nan',
+/// not a finite number: '0 nan 0'"); None for a binary file or a damage of another kind.
+fn locate_ascii_error(path: &Path, header: &ply_rs_bw::ply::Header) -> Option<String> {
+    if header.encoding != ply_rs_bw::ply::Encoding::Ascii {
+        return None;
+    }
+    let text = std::fs::read_to_string(path).ok()?;
+    let mut lines = text.lines().enumerate();
+    lines
+        .by_ref()
+        .find(|(_, line)| line.trim() == "end_header")?;
+    for element in header.elements.values() {
+        for k in 0..element.count {
+            let (n, line) = lines.next()?;
+            if let Some((word, why)) = first_bad_number(line) {
+                return Some(format!(
+                    "{} {k} (line {}) has '{word}', {why}: '{}'",
+                    element.name,
+                    n + 1,
+                    line.trim()
+                ));
+            }
+        }
+    }
+    None
 }
 
 const AXES: [&str; 3] = ["x", "y", "z"];

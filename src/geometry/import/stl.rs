@@ -10,7 +10,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::validate::{Builder, check_triangle_count, show};
+use super::validate::{Builder, check_coordinate, check_triangle_count, first_bad_number};
 
 const STL_HEADER: usize = 84;
 const STL_RECORD: u64 = 50;
@@ -22,7 +22,7 @@ pub(super) fn read(path: &Path) -> Result<Builder, String> {
         if bytes.get(5) != Some(&b' ') {
             bytes.insert(5, b' ');
         }
-        return stl_triangles(&bytes);
+        return stl_triangles(&bytes).map_err(|e| locate_ascii_error(&bytes).unwrap_or(e));
     }
     let declared = stl_declared_count(&bytes)?;
     let needed = STL_HEADER as u64 + STL_RECORD * declared;
@@ -73,6 +73,34 @@ fn stl_is_ascii(bytes: &[u8]) -> bool {
     bytes.starts_with(b"solid") && binary_size != Ok(bytes.len() as u64)
 }
 
+/// In ASCII STL text stl_io could not read, the first `vertex` line with a word that is not a
+/// finite number, or not one a 32-bit float (what STL stores) can hold; stl_io's own message
+/// ("invalid float literal") names neither the vertex nor the word.
+fn locate_ascii_error(bytes: &[u8]) -> Option<String> {
+    let text = String::from_utf8_lossy(bytes);
+    let vertex_lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, line)| line.split_whitespace().next() == Some("vertex"));
+    for (seen, (n, line)) in vertex_lines.enumerate() {
+        let (t, k) = (seen / 3, seen % 3);
+        let numbers = line.trim_start().trim_start_matches("vertex");
+        let problem = first_bad_number(numbers).or_else(|| {
+            let too_large = |w: &&str| w.parse::<f32>().is_ok_and(|v| v.is_infinite());
+            let word = numbers.split_whitespace().find(too_large)?;
+            Some((word, "beyond the range of the 32-bit floats STL holds"))
+        });
+        if let Some((word, why)) = problem {
+            return Some(format!(
+                "vertex {k} of triangle {t} (line {}) has '{word}', {why}: '{}'",
+                n + 1,
+                line.trim()
+            ));
+        }
+    }
+    None
+}
+
 /// STL stores each triangle's corners separately; equal corners (bit for bit) become one vertex
 /// so that the mesh is connected.
 fn stl_triangles(bytes: &[u8]) -> Result<Builder, String> {
@@ -86,12 +114,7 @@ fn stl_triangles(bytes: &[u8]) -> Result<Builder, String> {
         let mut corners = [0i64; 3];
         for (k, v) in triangle.vertices.iter().enumerate() {
             let p = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
-            if !p.is_finite() {
-                return Err(format!(
-                    "vertex {k} of triangle {t} is not finite: {}",
-                    show(p)
-                ));
-            }
+            check_coordinate(p).map_err(|why| format!("vertex {k} of triangle {t} {why}"))?;
             let positions = &mut builder.mesh.positions;
             corners[k] = *index_of.entry(v.0.map(f32::to_bits)).or_insert_with(|| {
                 positions.push(p);
@@ -121,7 +144,10 @@ mod tests {
         let e = err(&corpus("nan_binary.stl"));
         assert_mentions(&e, &["vertex 1 of triangle 2 is not finite: (NaN, 0, 0)"]);
         let e = err(&corpus("nan_ascii.stl"));
-        assert_mentions(&e, &["invalid STL at triangle 0", "finite"]);
+        assert_mentions(
+            &e,
+            &["vertex 2 of triangle 0 (line 6) has 'nan', not a finite number: 'vertex nan 0 0'"],
+        );
         let dir = tempfile::tempdir().unwrap();
         let e = err(&write(dir.path(), "short.stl", b"not solid, too short"));
         assert_mentions(&e, &["truncated binary STL", "84-byte header"]);

@@ -317,3 +317,105 @@ fn corrupted_files_never_panic() {
         }
     }
 }
+
+/// The tetrahedron with vertex 2's y written as `y`, in each format (text formats write the
+/// word as given; binary ones store the value).
+fn tetrahedron_with_y(dir: &Path, y: &str) -> Vec<PathBuf> {
+    let mut mesh = tetrahedron();
+    mesh.positions[2].y = y.parse().unwrap();
+    let corner = |i: usize| {
+        let p = tetrahedron().positions[i];
+        if i == 2 {
+            format!("{} {y} {}", p.x, p.z)
+        } else {
+            format!("{} {} {}", p.x, p.y, p.z)
+        }
+    };
+    let mut obj = String::new();
+    let mut ply = String::from(
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n\
+         element face 4\nproperty list uchar int vertex_indices\nend_header\n",
+    );
+    for i in 0..4 {
+        obj += &format!("v {}\n", corner(i));
+        ply += &format!("{}\n", corner(i));
+    }
+    let mut stl = String::from("solid t\n");
+    for t in &mesh.triangles {
+        obj += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+        ply += &format!("3 {} {} {}\n", t[0], t[1], t[2]);
+        stl += "facet normal 0 0 0\nouter loop\n";
+        for &i in t {
+            stl += &format!("vertex {}\n", corner(i as usize));
+        }
+        stl += "endloop\nendfacet\n";
+    }
+    stl += "endsolid t\n";
+    let mut glb_mesh = mesh.clone();
+    glb_mesh.positions[2].y = y.parse::<f32>().unwrap() as f64;
+    vec![
+        write(dir, "bad.obj", obj.as_bytes()),
+        write(dir, "bad_ascii.ply", ply.as_bytes()),
+        write(dir, "bad_binary.ply", &export_ply(&mesh)),
+        write(dir, "bad_ascii.stl", stl.as_bytes()),
+        write(dir, "bad_binary.stl", &binary_stl(&glb_mesh)),
+        // A scaling node: the value is checked as stored, not as the transform leaves it.
+        write_gltf(dir, "bad", &glb_mesh, r#"[{"mesh":0,"scale":[2,2,2]}]"#),
+    ]
+}
+
+/// How a reader names the tetrahedron's vertex 2: STL has no shared vertices, only corners
+/// (vertex 2 is the first triangle's second corner).
+fn vertex_2(name: &str) -> &'static str {
+    if name.ends_with(".stl") {
+        "vertex 1 of triangle 0"
+    } else {
+        "vertex 2"
+    }
+}
+
+#[test]
+fn bad_numbers_name_the_file_the_vertex_and_the_value() {
+    let dir = tempfile::tempdir().unwrap();
+    for word in ["nan", "inf", "-inf"] {
+        for path in tetrahedron_with_y(dir.path(), word) {
+            let e = err(&path);
+            let name = path.file_name().unwrap().to_str().unwrap();
+            assert_mentions(&e, &[name, vertex_2(name)]);
+            // The value as the file has it (binary files: as the number it stores).
+            let value = word.replace("nan", "NaN");
+            assert!(
+                e.contains(&format!("'{word}'")) || e.contains(&format!(", {value}, ")),
+                "{name}: {e:?} does not show {word}"
+            );
+            assert!(e.contains("finite"), "{name}: {e:?}");
+            assert!(
+                !e.contains('\n') && !e.contains("expected"),
+                "{name}: {e:?}"
+            );
+        }
+    }
+    // Finite, even in f32, but so large that areas overflow: every triangle looked degenerate.
+    for path in tetrahedron_with_y(dir.path(), "3e38") {
+        let e = err(&path);
+        let name = path.file_name().unwrap().to_str().unwrap();
+        // 3e38 in all its digits (f32 formats widen it to 300000000549775580000…); messages are
+        // put in short form where they are shown.
+        assert_mentions(&e, &[vertex_2(name), "is too large: (0, 3000000", "±1e15"]);
+    }
+}
+/// A file cut short says so on one line, in every binary encoding and wherever the cut falls.
+#[test]
+fn truncated_files_say_so_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let ply = export_ply(&cube());
+    let glb = std::fs::read(corpus("tetra.glb")).unwrap();
+    for share in [0.3, 0.7, 0.99] {
+        let cut = |bytes: &[u8]| bytes[..(bytes.len() as f64 * share) as usize].to_vec();
+        let e = err(&write(dir.path(), "cut.ply", &cut(&ply)));
+        assert_mentions(&e, &["cut.ply", "bad PLY"]);
+        assert!(!e.contains('\n') && !e.contains("ParseError"), "{e:?}");
+        let e = err(&write(dir.path(), "cut.glb", &cut(&glb)));
+        assert_mentions(&e, &["cut.glb", "truncated GLB", "declares 560 bytes"]);
+    }
+}

@@ -1,6 +1,6 @@
 //! The checks and repairs every format shares: the file size and triangle count budgets, the
 //! [`Builder`] that readers fill face by face (index range checks, fan triangulation), and the
-//! finishing steps (finite check, dropping degenerate triangles, optional normalisation). They
+//! finishing steps (finite and in-range coordinates, dropping degenerate triangles, optional normalisation). They
 //! live in one place so that a mesh is held to the same rules, with the same messages, whatever
 //! file it came from.
 
@@ -16,6 +16,12 @@ const MAX_FILE_BYTES: u64 = 1 << 30;
 /// Larger meshes are refused as soon as a header or accessor announces them: the budget of
 /// any mesh (`geometry::MAX_TRIANGLES`).
 const MAX_TRIANGLES: u64 = crate::geometry::MAX_TRIANGLES as u64;
+/// Larger vertex coordinates are refused, in whatever unit the file uses (a scene's own limit
+/// in metres, `geometry::MAX_COORDINATE`, applies after placement). Below it, the squared
+/// lengths and areas computed from vertices stay far inside f64 (a coordinate of 3e38, valid
+/// in f32, made every area overflow and every triangle look degenerate); far above any
+/// sensible scan, even in millimetres.
+const MAX_IMPORTED_COORDINATE: f64 = 1e15;
 /// Below this |cross| / longest edge² a triangle is treated as having zero area: collinear
 /// corners only cancel to rounding error, never to exactly zero.
 const DEGENERATE_RATIO: f64 = 1e-12;
@@ -101,7 +107,7 @@ impl Builder {
 pub(super) fn finish(builder: Builder, options: ImportOptions) -> Result<Imported, String> {
     let mut warnings = builder.repair_warnings();
     let mut mesh = builder.mesh;
-    check_finite(&mesh.positions)?;
+    check_coordinates(&mesh.positions)?;
     let dropped = drop_degenerate(&mut mesh);
     if dropped > 0 {
         warnings.push(format!(
@@ -121,14 +127,42 @@ pub(super) fn finish(builder: Builder, options: ImportOptions) -> Result<Importe
     Ok(Imported { mesh, warnings })
 }
 
-pub(super) fn check_finite(points: &[DVec3]) -> Result<(), String> {
-    match points.iter().position(|p| !p.is_finite()) {
-        Some(i) => Err(format!("vertex {i} is not finite: {}", show(points[i]))),
-        None => Ok(()),
+/// Refuses the first vertex that is not finite or lies beyond [`MAX_IMPORTED_COORDINATE`].
+pub(super) fn check_coordinates(points: &[DVec3]) -> Result<(), String> {
+    for (i, &p) in points.iter().enumerate() {
+        check_coordinate(p).map_err(|why| format!("vertex {i} {why}"))?;
     }
+    Ok(())
 }
 
-pub(super) fn show(p: DVec3) -> String {
+/// Why one point cannot be a vertex ("is not finite: (…)", "is too large: (…) …"), to follow
+/// the reader's name for it.
+pub(super) fn check_coordinate(p: DVec3) -> Result<(), String> {
+    if !p.is_finite() {
+        return Err(format!("is not finite: {}", show(p)));
+    }
+    if p.abs().max_element() > MAX_IMPORTED_COORDINATE {
+        return Err(format!(
+            "is too large: {}; coordinates beyond ±{MAX_IMPORTED_COORDINATE:e} overflow areas and squared distances (is the file in metres?)",
+            show(p)
+        ));
+    }
+    Ok(())
+}
+
+/// The first word of a line of numbers that is not a finite number, and why, for a message
+/// that quotes what the file says rather than what a parser expected.
+pub(super) fn first_bad_number(line: &str) -> Option<(&str, &'static str)> {
+    line.split_whitespace()
+        .find_map(|word| match word.parse::<f64>() {
+            Err(_) => Some((word, "not a number")),
+            Ok(v) if !v.is_finite() => Some((word, "not a finite number")),
+            Ok(_) => None,
+        })
+}
+
+/// Every digit: where messages are shown, long numbers are put in short form (`words`).
+fn show(p: DVec3) -> String {
     format!("({}, {}, {})", p.x, p.y, p.z)
 }
 
