@@ -97,6 +97,7 @@ pub(super) fn score(
     };
     let mut sums = [0.0; 7];
     let mut pixels = 0u64;
+    let limit = f64::MAX / pairs.len() as f64;
     for &(p, t) in &pairs {
         let d = scale * p + shift;
         if !(d > 0.0 && d.is_finite()) {
@@ -115,9 +116,10 @@ pub(super) fn score(
             f64::from(u8::from(ratio < 1.25 * 1.25)),
             f64::from(u8::from(ratio < 1.25 * 1.25 * 1.25)),
         ];
-        // A value so large its square overflows would make every mean infinite: left out
-        // like a non-finite one, so no metric is ever infinite.
-        if values.iter().any(|v| !v.is_finite()) {
+        // A value so large its square overflows, or so large that the image's pixels
+        // together would overflow the sum, would make a mean infinite: left out like a
+        // non-finite one, so no metric is ever infinite.
+        if values.iter().any(|v| !(*v <= limit)) {
             excluded += 1;
             continue;
         }
@@ -243,6 +245,15 @@ mod tests {
             "(1e200)² overflows: left out"
         );
         assert_eq!(r.metrics.unwrap()[0], 0.0);
+        // Each squared error (1e153)² = 1e306 is finite; 2000 of them summed are not.
+        let n = 2000;
+        let mut prediction = vec![1e153; n];
+        prediction[0] = 2.0;
+        let far = score(&vec![1.0; n], &prediction, &vec![true; n], Align::None);
+        let metrics = far.metrics.unwrap();
+        assert!(metrics.iter().all(|m| m.is_finite()), "{metrics:?}");
+        assert_eq!((far.pixels, far.excluded), (1, n as u64 - 1));
+        assert_eq!(metrics[0], 1.0, "|2 - 1| / 1 on the one pixel left");
         assert!(
             score(&[1.0, 2.0], &[3.0, 3.0], &[true; 2], Align::LstsqShift)
                 .metrics
