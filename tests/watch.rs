@@ -612,9 +612,9 @@ fn check_succeeds_on_every_bundled_recipe() {
             }
         }
         assert!(
-            stdout.contains("  timed run: 1 samples (")
+            stdout.contains("  timed run: 1 sample (")
                 && stdout.contains(&format!(
-                    "  estimate for all {samples} samples on 1 threads: "
+                    "  estimate for all {samples} samples on 1 thread: "
                 )),
             "{name}: {stdout}"
         );

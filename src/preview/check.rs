@@ -126,14 +126,16 @@ fn estimate(recipe: &mut Recipe, threads: Option<usize>) -> Result<()> {
         },
     )?;
     let scale = total as f64 / timed as f64;
+    let threads = counted(threads as u64, "thread");
     println!(
-        "  timed run: {timed} samples ({} views) on {threads} threads in {:.2} s, {}",
+        "  timed run: {} ({} views) on {threads} in {:.2} s, {}",
+        counted(timed, "sample"),
         summary.pairs,
         summary.seconds,
         bytes(summary.bytes as f64)
     );
     println!(
-        "  estimate for all {total} samples on {threads} threads: {}, {} on disk",
+        "  estimate for all {total} samples on {threads}: {}, {} on disk",
         duration(summary.seconds * scale),
         bytes(summary.bytes as f64 * scale)
     );
@@ -171,6 +173,11 @@ fn bytes(b: f64) -> String {
     }
 }
 
+/// `1 thread`, `2 threads`.
+fn counted(n: u64, noun: &str) -> String {
+    format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -185,5 +192,7 @@ mod tests {
         assert_eq!(bytes(2.5e6), "2.5 MB");
         assert_eq!(bytes(51_200.0), "51 kB");
         assert_eq!(bytes(3.2e9), "3.20 GB");
+        assert_eq!(counted(1, "thread"), "1 thread");
+        assert_eq!(counted(2, "sample"), "2 samples");
     }
 }
