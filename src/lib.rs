@@ -1,6 +1,8 @@
 #![warn(missing_docs)]
 //! shmgen turns a Rhai recipe into a synthetic dataset of deformed civil structures:
-//! ray-traced RGB, metric planar depth, masks and exact cameras, reproducible from a seed.
+//! RGB, metric planar depth, masks and exact cameras, reproducible from a seed. What each
+//! pixel of a pinhole view sees is rasterised (exactly a ray through its centre); shadows,
+//! distorting lenses and meshes too fine to rasterise are ray-traced through a BVH (`render`).
 //!
 //! Data flows one way, one module per step:
 //!
