@@ -1,10 +1,10 @@
 //! The records of a dataset — `run.json` and every view's JSON — against their published JSON
 //! Schemas, checked by a validator that is not ours (the `jsonschema` crate); the published
-//! schemas against the types they are generated from; and the README's field reference
-//! against the schemas.
+//! schemas against the types they are generated from; and the field reference
+//! (`docs/reference.md`) against the schemas.
 //!
 //! After changing a record type: `SHMGEN_BLESS=1 cargo test --release --test records`
-//! rewrites `docs/schema/*.json` and the README's field reference.
+//! rewrites `docs/schema/*.json` and the field reference in `docs/reference.md`.
 
 mod common;
 
@@ -143,12 +143,12 @@ fn the_validator_rejects_records_that_break_the_schema() {
 }
 
 #[test]
-fn the_readme_field_reference_is_generated_from_the_schemas() {
+fn the_field_reference_is_generated_from_the_schemas() {
     let reference = field_reference(&[
         ("run.json", published("run")),
         ("view JSON", published("view")),
     ]);
-    let path = repo().join("README.md");
+    let path = repo().join("docs/reference.md");
     let readme = std::fs::read_to_string(&path).unwrap();
     let (begin, end) = (
         "<!-- field reference: generated from docs/schema -->\n",
@@ -156,11 +156,11 @@ fn the_readme_field_reference_is_generated_from_the_schemas() {
     );
     let start = readme
         .find(begin)
-        .expect("README has the field reference markers")
+        .expect("docs/reference.md has the field reference markers")
         + begin.len();
     let stop = readme
         .find(end)
-        .expect("README has the field reference end marker");
+        .expect("docs/reference.md has the field reference end marker");
     let expected = format!("{}{reference}{}", &readme[..start], &readme[stop..]);
     check_generated(&path, &expected);
     // Every field is described.
