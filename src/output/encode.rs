@@ -157,9 +157,12 @@ mod tests {
     use exr::prelude::*;
     use std::io::Cursor;
 
+    /// Channels by name with their values, in the order the file lists them.
+    type NamedChannels = Vec<(String, Vec<f32>)>;
+
     /// Reads an EXR back with the exr crate's own reader (a separate code path): its size and
     /// every channel by name, which must be float32.
-    fn read_channels(bytes: &[u8]) -> ((usize, usize), Vec<(String, Vec<f32>)>) {
+    fn read_channels(bytes: &[u8]) -> ((usize, usize), NamedChannels) {
         let image = read()
             .no_deep_data()
             .largest_resolution_level()

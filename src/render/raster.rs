@@ -22,7 +22,7 @@
 //! Owns: projecting triangles, per-band coverage and the depth test. Must not touch: shading,
 //! the BVH or anything after the geometric buffer.
 
-use super::trace::{GBuffer, NO_HIT, PixelSet, PrimaryRays};
+use super::trace::{GBuffer, NO_HIT, PixelSet, PrimaryRays, SampleHits};
 use crate::cameras::Camera;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -184,11 +184,11 @@ pub(super) fn rasterise(
                 // Read only where a triangle is recorded: what it held before does not matter.
                 nearest.resize(depth.len(), 0.0);
                 // The band's pixels from the first covered to the last: the others stay empty.
-                let mut covered = usize::MAX..0;
+                let (mut first, mut end) = (usize::MAX, 0);
                 for t in binned {
                     cover(t, rows.clone(), width, |row, col| {
                         let i = (row - rows.start) * width + col;
-                        covered = covered.start.min(i)..covered.end.max(i + 1);
+                        (first, end) = (first.min(i), end.max(i + 1));
                         let d = t.plane.hit(rays.through(row, col));
                         if replaces(d, t.original, (nearest[i], triangle[i])) {
                             nearest[i] = d;
@@ -196,7 +196,7 @@ pub(super) fn rasterise(
                         }
                     });
                 }
-                let covered = covered.start.min(covered.end)..covered.end;
+                let covered = first.min(end)..end;
                 let depth = &mut depth[covered.clone()];
                 let nearest = &nearest[covered.clone()];
                 for ((out, &d), tri) in depth.iter_mut().zip(nearest).zip(&mut triangle[covered]) {
@@ -227,7 +227,7 @@ pub(super) fn rasterise_samples<const N: usize>(
     near: f64,
     pixels: &PixelSet,
     offsets: &[(f64, f64); N],
-) -> Option<Vec<[Option<(f32, u32)>; N]>> {
+) -> Option<Vec<SampleHits<N>>> {
     let k = camera.intrinsics;
     if !k.distortion.is_none() {
         return None;
