@@ -747,6 +747,52 @@ mod tests {
     }
 
     #[test]
+    fn an_inexact_shared_edge_through_centres_leaves_no_seam() {
+        // Two triangles wound alike share the edge a–b, so each walks it the other way. Its
+        // ends lie a fraction of a step beyond the centres c + m·step (fractions binary cannot
+        // hold), so the line passes within rounding of those centres; evaluated from each
+        // triangle's own end, the edge function rounds differently there and may put a centre
+        // inside both triangles or neither (docs/rendering.md §2, "One order per edge").
+        let (size, c) = (32, at(16.0, 16.0));
+        let mut on_edge = 0;
+        for step in [
+            (1, 1),
+            (1, 2),
+            (2, 1),
+            (1, 3),
+            (3, 1),
+            (2, 3),
+            (3, -1),
+            (1, -2),
+            (-2, 3),
+        ] {
+            let step = DVec2::new(f64::from(step.0), f64::from(step.1));
+            for back in [0.1, 0.3, 0.7, 1.0 / 3.0, 0.9] {
+                let (a, b) = (c - back * step, c + (3.0 + 0.6 * back) * step);
+                let across = 0.5 * step.perp();
+                let mid = 0.5 * (a + b);
+                let (left, right) = (mid + across, mid - across);
+                let quad = [a, right, b, left]; // counter-clockwise: the two triangles' union
+                let count = visits(&[[a, b, left], [b, a, right]], size);
+                for (i, &n) in count.iter().enumerate() {
+                    let p = at((i % size) as f64, (i / size) as f64);
+                    // Clearly inside the union: more than 1e-9 inside each outer edge.
+                    let margin =
+                        |(x, y): (DVec2, DVec2)| (y - x).perp_dot(p - x) / (y - x).length();
+                    let inside = (0..4).all(|k| margin((quad[k], quad[(k + 1) % 4])) > 1e-9);
+                    on_edge += usize::from(inside && (b - a).perp_dot(p - a).abs() < 1e-9);
+                    if inside {
+                        assert_eq!(n, 1, "centre {p} inside, shared edge {a}–{b}");
+                    } else {
+                        assert!(n <= 1, "centre {p} twice, shared edge {a}–{b}");
+                    }
+                }
+            }
+        }
+        assert!(on_edge >= 100, "only {on_edge} centres on a shared edge");
+    }
+
+    #[test]
     fn sample_ranges_round_as_libm_does() {
         // The range as written with libm's ceil and floor: pixels i with i + o in lo..=hi for
         // some offset o between the two.
