@@ -135,6 +135,10 @@ fn main() {
                     let g = trace.trace(cam);
                     times.push(t.elapsed().as_secs_f64() * 1e3);
                     let smooth = smooth_pixels(&reference.depth, reference.width as usize);
+                    #[expect(
+                        clippy::needless_range_loop,
+                        reason = "i indexes five per-pixel arrays alike"
+                    )]
                     for i in 0..g.depth.len() {
                         match (g.triangle[i] == NO_HIT, reference.triangle[i] == NO_HIT) {
                             (false, false) if smooth[i] => err = err.max(f64::from((g.depth[i] - reference.depth[i]).abs())),

@@ -433,7 +433,7 @@ fn stereo_pairs_satisfy_the_epipolar_constraint_and_disparity_is_f_b_over_z() {
                         assert!(((ul - ur) - f * 0.3 / z).abs() < 1e-6 * f);
                         // And the right eye's own depth sees the same point.
                         let (c, rr) = (ur.floor() as usize, vr.floor() as usize);
-                        if ur >= 1.0 && ur < 159.0 && r.inside(rr, c) {
+                        if (1.0..159.0).contains(&ur) && r.inside(rr, c) {
                             let there = f64::from(r.depth[rr * 160 + c]);
                             assert!((there - right_cam[2]).abs() < 0.02 * there);
                         }

@@ -231,6 +231,10 @@ fn written_files_round_trip_through_other_readers() {
             );
         }
         // w2c · c2w = I.
+        #[expect(
+            clippy::needless_range_loop,
+            reason = "r, c and i are the indices of a matrix product, spelled as in its formula"
+        )]
         for r in 0..4 {
             for c in 0..4 {
                 let v: f64 = (0..4).map(|i| w2c[r][i] * c2w[i][c]).sum();

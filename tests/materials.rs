@@ -1598,7 +1598,8 @@ fn colour_stats(px: &[[f64; 3]]) -> ([f64; 3], f64, f64, f64, f64) {
 fn each_prompt_has_the_colour_statistics_of_what_it_names() {
     // Bounds from what the named things look like in daylight photographs (sRGB):
     // (prompt, hue range °, value range, saturation range, luma std range).
-    let cases: [(&str, (f64, f64), (f64, f64), (f64, f64), (f64, f64)); 10] = [
+    type Range = (f64, f64);
+    let cases: [(&str, Range, Range, Range, Range); 10] = [
         // Rust: orange-brown to dark brown (hue 10–40°), never near-white, textured.
         (
             "A photo of rusty steel beam for construction",

@@ -123,7 +123,8 @@ fn the_validator_rejects_records_that_break_the_schema() {
     let views = validator("view");
     let record = read_json(&dir.path().join("samples/0000/000000_00.json"));
     assert!(views.is_valid(&record));
-    let broken: [(&str, fn(&mut Value)); 4] = [
+    type Damage = fn(&mut Value);
+    let broken: [(&str, Damage); 4] = [
         ("a non-finite matrix entry (written as null)", |r| {
             r["camera"]["K"][0][0] = Value::Null
         }),
@@ -239,11 +240,11 @@ fn describe_form(root: &Value, form: &Value, queue: &mut VecDeque<String>) -> St
         let rows = table(root, form, Some(tag.as_str()), queue);
         return format!("- `{tag}: {value}`{text}\n\n{rows}");
     }
-    if let [(key, inner)] = properties.iter().collect::<Vec<_>>()[..] {
-        if inner.get("properties").is_some() {
-            let rows = table(root, inner, None, queue);
-            return format!("- `{key}`{text}\n\n{rows}");
-        }
+    if let [(key, inner)] = properties.iter().collect::<Vec<_>>()[..]
+        && inner.get("properties").is_some()
+    {
+        let rows = table(root, inner, None, queue);
+        return format!("- `{key}`{text}\n\n{rows}");
     }
     let rows = table(root, form, None, queue);
     format!("- {}\n\n{rows}", text.trim_start_matches(": "))

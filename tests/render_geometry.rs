@@ -257,7 +257,7 @@ fn deformed_beams() -> Vec<BeamSpec> {
 }
 
 fn built(beam: &BeamSpec) -> Mesh {
-    mesh_beam(&beam, 2e-3).unwrap().mesh
+    mesh_beam(beam, 2e-3).unwrap().mesh
 }
 
 /// Pixel centres strictly inside a projected triangle (more than 1e-3 px from its edges) must
@@ -995,10 +995,10 @@ fn edge_pixels_show_the_texture_their_centre_sees() {
     for row in 0..k.height {
         for col in 0..k.width {
             let (u, v) = (f64::from(col) + 0.5, f64::from(row) + 0.5);
-            if let Some(f) = whole_face(&cam, row, col) {
-                if stripe(on_face_plane(f, u, v)) == 0.8 {
-                    irradiance[f] = Some(linear(row, col) / 0.8);
-                }
+            if let Some(f) = whole_face(&cam, row, col)
+                && stripe(on_face_plane(f, u, v)) == 0.8
+            {
+                irradiance[f] = Some(linear(row, col) / 0.8);
             }
         }
     }

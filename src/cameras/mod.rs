@@ -114,18 +114,18 @@ impl Intrinsics {
     /// Pixel coordinates (u, v) of a point in camera axes (z > 0), distorted by the lens.
     pub fn project(&self, p: DVec3) -> (f64, f64) {
         let (x, y) = self.distortion.distort(p.x / p.z, p.y / p.z);
-        self.to_pixels(x, y)
+        self.pixels_of(x, y)
     }
 
     /// Pixel coordinates (u, v) of a point in camera axes (z > 0) through an ideal pinhole:
     /// what `project` gives when the lens has no distortion (the distortion polynomial is then
     /// exactly the identity), without evaluating it.
     pub fn project_pinhole(&self, p: DVec3) -> (f64, f64) {
-        self.to_pixels(p.x / p.z, p.y / p.z)
+        self.pixels_of(p.x / p.z, p.y / p.z)
     }
 
     /// Pixel coordinates of normalised (distorted) image coordinates (x, y).
-    fn to_pixels(&self, x: f64, y: f64) -> (f64, f64) {
+    fn pixels_of(&self, x: f64, y: f64) -> (f64, f64) {
         (self.fx * x + self.cx, self.fy * y + self.cy)
     }
 

@@ -211,7 +211,7 @@ impl CameraRig {
     /// name the recipe's option.
     pub fn validate(&self, views: u32) -> Result<(), String> {
         for fov_y in self.fov_y {
-            if !(fov_y >= MIN_FOV && fov_y < std::f64::consts::PI) {
+            if !(MIN_FOV..std::f64::consts::PI).contains(&fov_y) {
                 return Err(format!(
                     "dataset.camera.fov_y = {} must lie in [{MIN_FOV}, π) radians (below \
                      {MIN_FOV} rad a camera framing the structure stands so far off that f64 \

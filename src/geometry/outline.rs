@@ -68,6 +68,10 @@ pub fn rectangle(w: f64, h: f64, n: usize) -> SectionOutline {
         index[i][j] = k as u32;
     }
     let mut interior = Vec::new();
+    #[expect(
+        clippy::needless_range_loop,
+        reason = "i and j are grid coordinates: point(i, j) needs them as much as index does"
+    )]
     for i in 1..n {
         for j in 1..n {
             index[i][j] = (boundary.len() + interior.len()) as u32;

@@ -492,6 +492,10 @@ impl Point<'_> {
         // the albedo stays continuous across it.
         let salt = self.shader.offset.x.to_bits();
         let tone_of = |k: f64| 0.12 * (unit(pair(k as i64 as u64, salt), 11) - 0.5);
+        #[expect(
+            clippy::manual_clamp,
+            reason = "max then min sends a NaN footprint to SEAM_WIDTH, where clamp keeps the NaN"
+        )]
         let blend = self.footprint.max(SEAM_WIDTH).min(0.25 * COURSE_HEIGHT);
         let down = 0.5 * (1.0 - to_lower / blend).clamp(0.0, 1.0);
         let up = 0.5 * (1.0 - to_upper / blend).clamp(0.0, 1.0);
@@ -549,11 +553,11 @@ impl Point<'_> {
         let weathered = self.intensity(ConditionKind::Weathered);
         let stained = self.intensity(ConditionKind::Stained);
         let mut below = self.below_top();
-        if base != Base::Concrete {
-            if let Some(c) = self.courses() {
-                s.albedo = scale(s.albedo, (1.0 + c.tone) * (1.0 - 0.6 * c.seam));
-                below = below.min(c.below_ring);
-            }
+        if base != Base::Concrete
+            && let Some(c) = self.courses()
+        {
+            s.albedo = scale(s.albedo, (1.0 + c.tone) * (1.0 - 0.6 * c.seam));
+            below = below.min(c.below_ring);
         }
         if clean <= 0.0 {
             return;

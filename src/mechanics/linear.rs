@@ -285,10 +285,11 @@ pub(super) fn solve4(mut m: [[f64; 5]; 4]) -> [f64; 4] {
             .max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))
             .unwrap();
         m.swap(col, pivot);
-        for row in col + 1..4 {
-            let f = m[row][col] / m[col][col];
-            for k in col..5 {
-                m[row][k] -= f * m[col][k];
+        let pivot_row = m[col];
+        for row in &mut m[col + 1..] {
+            let f = row[col] / pivot_row[col];
+            for (entry, &p) in row[col..].iter_mut().zip(&pivot_row[col..]) {
+                *entry -= f * p;
             }
         }
     }

@@ -359,7 +359,12 @@ mod tests {
     fn incompressible_blocks_are_stored_raw() {
         // Four samples whose bytes repeat nothing: zlib's header and checksum alone make the
         // compressed block longer than the 16 raw bytes.
-        let values = [1.234_567_8e-3f32, -7.654_321e5, 3.141_592_7, 2.718_281_7e-9];
+        let values = [
+            1.234_567_8e-3f32,
+            -7.654_321e5,
+            std::f32::consts::PI,
+            2.718_281_7e-9,
+        ];
         let channels = [("Z", &values[..])];
         let raw = raw_block(0..1, 4, &channels);
         assert_eq!(ZIPPER.with_borrow_mut(|z| z.zip(0..1, 4, &channels)), raw);

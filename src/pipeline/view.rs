@@ -49,7 +49,11 @@ pub fn view_camera(dataset: &DatasetSpec, sample: &BuiltSample, view: u32) -> Re
     let (pose, eye) = match rig.stereo {
         Some(_) => (
             view / 2,
-            Some(if view % 2 == 0 { Eye::Left } else { Eye::Right }),
+            Some(if view.is_multiple_of(2) {
+                Eye::Left
+            } else {
+                Eye::Right
+            }),
         ),
         None => (view, None),
     };

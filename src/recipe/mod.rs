@@ -278,10 +278,10 @@ fn imports(ast: &AST) -> Vec<(String, String)> {
             let module =
                 x.0.get_literal_value(None)
                     .and_then(|v| v.into_immutable_string().ok());
-            if let (Some(module), alias) = (module, &x.1.name) {
-                if !alias.is_empty() {
-                    found.push((module.to_string(), alias.to_string()));
-                }
+            if let (Some(module), alias) = (module, &x.1.name)
+                && !alias.is_empty()
+            {
+                found.push((module.to_string(), alias.to_string()));
             }
         }
         true

@@ -148,7 +148,13 @@ impl<T: Copy> FoundInPixel<T> {
 /// unshadowed irradiance: consecutive pixels mostly see the same triangle, and it shows the
 /// same light wherever it is met (see `Shading::uniform_side`).
 #[derive(Default)]
-struct LastMatte(Option<((u32, bool), ([f64; 3], [f64; 3]))>);
+struct LastMatte(Option<(TriangleSide, RadianceAndIrradiance)>);
+
+/// A triangle and whether the camera sees its back.
+type TriangleSide = (u32, bool);
+
+/// A surface point's radiance and its unshadowed irradiance, as `hit_radiance` gives them.
+type RadianceAndIrradiance = ([f64; 3], [f64; 3]);
 
 /// The linear colour last encoded and its sRGB bytes: neighbouring pixels often show the
 /// same colour (a matte face under uniform light), and then need no second encoding.
@@ -433,7 +439,7 @@ impl<S: Surfaces> Shading<'_, S> {
         view: DVec3,
         (u, v): (f64, f64),
         last: &mut LastMatte,
-    ) -> ([f64; 3], [f64; 3]) {
+    ) -> RadianceAndIrradiance {
         match hit {
             None => (self.backdrop(view, u, v), [0.0; 3]),
             Some((depth, tri)) => self.matte_radiance(view, depth, tri, (u, v), last),
@@ -450,7 +456,7 @@ impl<S: Surfaces> Shading<'_, S> {
         tri: u32,
         pixel: (f64, f64),
         last: &mut LastMatte,
-    ) -> ([f64; 3], [f64; 3]) {
+    ) -> RadianceAndIrradiance {
         let side = self.uniform_side(tri, view);
         match (side, last.0) {
             (Some(side), Some((seen, light))) if side == seen => light,
@@ -466,7 +472,7 @@ impl<S: Surfaces> Shading<'_, S> {
 
     /// The triangle and the side of it seen along `view`, when it shows one radiance over
     /// that side: a matte, untextured surface under uniform light.
-    fn uniform_side(&self, tri: u32, view: DVec3) -> Option<(u32, bool)> {
+    fn uniform_side(&self, tri: u32, view: DVec3) -> Option<TriangleSide> {
         let uniform = self.uniform_light && self.surfaces.matte(tri);
         uniform.then(|| (tri, sees_back(self.camera, self.mesh, tri, view)))
     }
@@ -494,7 +500,7 @@ impl<S: Surfaces> Shading<'_, S> {
         tri: u32,
         pixel: (f64, f64),
         given: Option<Surface>,
-    ) -> ([f64; 3], [f64; 3]) {
+    ) -> RadianceAndIrradiance {
         let (point, normal, footprint) =
             hit_geometry(self.camera, self.mesh, tri, view, f64::from(depth));
         let surface = given.unwrap_or_else(|| self.surfaces.at(tri, point, footprint));
@@ -532,21 +538,21 @@ impl<S: Surfaces> Shading<'_, S> {
             if cos <= 0.0 {
                 return;
             }
-            for k in 0..3 {
-                light.unshadowed[k] += colour[k] * cos;
+            for (sum, c) in light.unshadowed.iter_mut().zip(colour) {
+                *sum += c * cos;
             }
             if reaches == 0.0 {
                 return;
             }
             // A whole light multiplies by nothing: the same bits as before soft shadows.
             let cos = if reaches == 1.0 { cos } else { cos * reaches };
-            for k in 0..3 {
-                light.diffuse[k] += colour[k] * cos;
+            for (sum, c) in light.diffuse.iter_mut().zip(colour) {
+                *sum += c * cos;
             }
             if let (Some(lobe), Some(to_eye)) = (&gloss, to_eye) {
                 let glint = lobe.glint(n, direction, to_eye) * cos;
-                for k in 0..3 {
-                    light.specular[k] += colour[k] * glint;
+                for (sum, c) in light.specular.iter_mut().zip(colour) {
+                    *sum += c * glint;
                 }
             }
         };
@@ -684,10 +690,10 @@ fn encode(linear: [f64; 3]) -> [u8; 3] {
 }
 
 /// `y.round()` for y ≥ 0 (NaN gives 0, as `round` does): ⌊2y⌋ is exact (doubling is), and
-/// (⌊2y⌋ + 1) / 2 in integers is y rounded half up. Truncation is one instruction on any
-/// x86-64, where `round` is a library call.
+/// ⌈⌊2y⌋ / 2⌉ in integers is y rounded half up. Truncation is one instruction on any x86-64,
+/// where `round` is a library call.
 fn round_half_up(y: f64) -> usize {
-    ((2.0 * y) as usize + 1) / 2
+    ((2.0 * y) as usize).div_ceil(2)
 }
 
 const LUT_SIZE: usize = 4096;
@@ -759,7 +765,7 @@ mod tests {
         let (width, height) = (23usize, 17usize);
         // Scattered hits (a fixed arithmetic pattern), a row without any, hits on the borders.
         let hits = |row: usize, col: usize| {
-            row != 8 && ((row * 7 + col * 13) % 29 == 0 || (row == 0 && col == 22))
+            row != 8 && ((row * 7 + col * 13).is_multiple_of(29) || (row == 0 && col == 22))
         };
         let triangle = (0..height)
             .flat_map(|row| (0..width).map(move |col| if hits(row, col) { 1 } else { NO_HIT }))

@@ -18,6 +18,10 @@ use std::time::Duration;
 /// Triangle id of a pixel that saw no surface.
 pub const NO_HIT: u32 = u32::MAX;
 
+/// What the rays through a pixel's N sample points first meet: planar depth and triangle,
+/// None for a ray that meets nothing.
+pub type SampleHits<const N: usize> = [Option<(f32, u32)>; N];
+
 /// A mesh ready for tracing. Vertices are stored in f32 relative to `anchor` (the centre of
 /// the structures' bounds, a ground left out), so geometry far from the world origin keeps its
 /// precision, and a ground however far below changes neither the anchor nor the structures'
@@ -347,7 +351,7 @@ impl TraceMesh {
         camera: &Camera,
         pixels: &PixelSet,
         offsets: &[(f64, f64); N],
-    ) -> Vec<[Option<(f32, u32)>; N]> {
+    ) -> Vec<SampleHits<N>> {
         if self.corners.len() <= TRIANGLES_PER_RAY * N * pixels.len() {
             let seen = self.seen_by(camera);
             if let Some(hits) = rasterise_samples(camera, seen, self.near(), pixels, offsets) {
