@@ -491,7 +491,7 @@ fn end_point_error_of_a_constant_offset_is_its_norm() {
                         .channel_data
                         .list
                         .iter()
-                        .find(|c| c.name == Text::from(*n))
+                        .find(|c| c.name == **n)
                         .unwrap();
                     c.sample_data.values_as_f32().collect()
                 })

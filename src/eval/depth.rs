@@ -80,7 +80,7 @@ pub(super) fn score(
     let mut excluded = 0;
     for ((&t, &p), &inside) in truth.iter().zip(prediction).zip(inside) {
         let t = f64::from(t);
-        if !inside || !(t > 0.0 && t.is_finite()) {
+        if !(inside && t > 0.0 && t.is_finite()) {
             continue;
         }
         if p.is_finite() {
@@ -119,7 +119,9 @@ pub(super) fn score(
         // A value so large its square overflows, or so large that the image's pixels
         // together would overflow the sum, would make a mean infinite: left out like a
         // non-finite one, so no metric is ever infinite.
-        if values.iter().any(|v| !(*v <= limit)) {
+        // NaN counts as too large (none arises from finite positive d and d*, but a NaN
+        // must never reach a sum): the explicit test keeps what `!(v <= limit)` meant.
+        if values.iter().any(|v| v.is_nan() || *v > limit) {
             excluded += 1;
             continue;
         }
