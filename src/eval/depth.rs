@@ -1,7 +1,8 @@
 //! Depth metrics of one image, after an optional per-image alignment of the prediction.
 //!
 //! Over the evaluated pixels E (truth > 0 and finite, inside the chosen mask, prediction
-//! finite), with d the aligned prediction and d* the truth, pixels where d ≤ 0 left out and
+//! finite: a pixel not predicted arrives as NaN whatever the file, and takes no part in the
+//! fit either), with d the aligned prediction and d* the truth, pixels where d ≤ 0 left out and
 //! counted (a logarithm or a ratio of them means nothing):
 //!
 //! - AbsRel = mean |d − d*| / d*, SqRel = mean (d − d*)² / d*, RMSE = √mean (d − d*)²,
@@ -62,7 +63,7 @@ pub(super) struct ImageDepth {
     pub(super) metrics: Option<Metrics>,
     /// Pixels scored.
     pub(super) pixels: u64,
-    /// Evaluated pixels left out: prediction not finite, or ≤ 0 after alignment.
+    /// Evaluated pixels left out: not predicted (not finite), or ≤ 0 after alignment.
     pub(super) excluded: u64,
     /// The alignment's scale and shift (1 and 0 without alignment).
     pub(super) scale: f64,

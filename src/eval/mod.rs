@@ -131,7 +131,8 @@ pub struct Counts {
     pub skipped: usize,
     /// Pixels scored, over all images.
     pub pixels: u64,
-    /// Pixels left out: prediction not finite or (depth) not positive after alignment.
+    /// Pixels left out: not predicted (NaN or ±inf, 0 in a millimetre PNG) or (depth) not
+    /// positive after alignment.
     pub excluded_pixels: u64,
 }
 
@@ -249,7 +250,7 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
             aggregate: "per image (per sample for surfaces), then the mean over images",
             fscore_threshold: options.fscore_threshold,
             surface_samples: options.surface_samples,
-            excluded: "predicted values that are not finite, or (depth) not positive after alignment, are left out and counted",
+            excluded: "pixels not predicted (NaN or ±inf; 0 in a millimetre PNG), or (depth) not positive after alignment, are left out of the fit and the metrics, and counted",
         },
         abs_rel: pick(0),
         sq_rel: pick(1),
@@ -486,7 +487,7 @@ impl Report {
     /// What a person should know about what was not scored.
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
-        let mut counted = |what: &str, c: &Counts| {
+        let mut counted = |what: &str, c: &Counts, left_out: &str| {
             if c.missing > 0 {
                 out.push(format!("{what}: {} views have no prediction", c.missing));
             }
@@ -498,17 +499,22 @@ impl Report {
             }
             if c.excluded_pixels > 0 {
                 out.push(format!(
-                    "{what}: {} predicted pixels left out (not finite, or not positive after alignment)",
+                    "{what}: {} pixels left out ({left_out})",
                     c.excluded_pixels
                 ));
             }
         };
-        counted("depth", &self.depth_counts);
+        counted(
+            "depth",
+            &self.depth_counts,
+            "not predicted: NaN or ±inf, or 0 in a millimetre PNG; or not positive after alignment",
+        );
+        let vectors = "not predicted: NaN or ±inf";
         if let Some(r) = &self.flow {
-            counted("flow", &r.counts);
+            counted("flow", &r.counts, vectors);
         }
         if let Some(r) = &self.displacement {
-            counted("displacement", &r.counts);
+            counted("displacement", &r.counts, vectors);
         }
         if let Some(s) = &self.surface
             && s.missing > 0

@@ -10,6 +10,12 @@
 //!   `{sample:06}.obj` (a mesh).
 //!
 //! Two files for the same thing are an error (which one was meant is not ours to guess).
+//!
+//! "No prediction" for a pixel is NaN (or ±inf) in an EXR or a `.npy` file, and 0 in a
+//! millimetre PNG, which has no NaN. `read` turns each format's mark into the one value
+//! [`NO_PREDICTION`], so every metric, and every alignment's fit before it, leaves such a pixel
+//! out the same way whatever the file (a 0 taken as a 0 m prediction dragged the median and
+//! the fit with shift toward 0).
 
 use super::npy;
 use crate::dataset::files::{Bound, image_bound, open_regular, read_bounded};
@@ -94,7 +100,21 @@ fn one_of(candidates: impl IntoIterator<Item = PathBuf>) -> Result<Option<PathBu
     }
 }
 
-/// The planes of a prediction file, each `width × height`, as f64. The file is read up to
+/// A pixel the file says it does not predict: not finite, so the metrics leave it out of the
+/// fits and the scores and count it.
+pub(super) const NO_PREDICTION: f64 = f64::NAN;
+
+/// A millimetre PNG's sample in metres; 0 is the format's "no prediction".
+fn millimetres_to_metres(mm: u16) -> f64 {
+    if mm == 0 {
+        NO_PREDICTION
+    } else {
+        f64::from(mm) / 1000.0
+    }
+}
+
+/// The planes of a prediction file, each `width × height`, as f64, with [`NO_PREDICTION`]
+/// wherever the file marks a pixel as not predicted. The file is read up to
 /// the size such an image may have (float64 samples, twice over, plus headers) and its header
 /// is checked against the view's size before anything is decoded.
 pub(super) fn read(
@@ -150,7 +170,7 @@ pub(super) fn read(
         let metres = png
             .values
             .iter()
-            .map(|&mm| f64::from(mm) / 1000.0)
+            .map(|&mm| millimetres_to_metres(mm))
             .collect();
         (png.width, png.height, vec![metres])
     };
