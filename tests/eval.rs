@@ -715,3 +715,78 @@ fn a_pixel_marked_not_predicted_takes_no_part_in_any_alignment() {
         }
     }
 }
+
+#[test]
+fn misnamed_predictions_are_reported_with_the_name_eval_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=1", "views=2"]);
+    let truths = truths(&data);
+    let depth = |t: &Truth| vec![("Z", t.depth.clone())];
+    let t = &truths[0];
+
+    // Flat, without the sample's folder: the message suggested this very path.
+    let flat = dir.path().join("flat");
+    write_exr(&flat.join("000000_00.depth.exr"), t.w, t.h, &depth(t));
+    write_file(&flat.join("README.md"), b"predictions of run 3\n");
+    let e = eval_err(&data, &flat, &[]);
+    let expected = flat.join("0000/000000_00.depth.exr");
+    assert!(
+        e.contains(&format!("eval reads {} (or .depth.npy", expected.display())),
+        "{e}"
+    );
+    assert!(
+        e.contains(&format!("1 file under {} looks like", flat.display()))
+            && e.contains("\n  000000_00.depth.exr → 0000/000000_00.depth.exr")
+            && !e.contains("README"),
+        "{e}"
+    );
+
+    // Beside a prediction read: a wrong stem, a wrong folder, an unknown kind, a format not
+    // read, a view the dataset lacks, a surface of another sample, and one more.
+    let p = dir.path().join("p");
+    let read = p.join(format!("0000/{}.depth.exr", t.stem));
+    write_exr(&read, t.w, t.h, &depth(t));
+    let misnamed = [
+        ("0000/000000_0.depth.exr", "0000/000000_00.depth.exr"),
+        ("0000/000000_00.depth.tiff", "0000/000000_00.depth.exr"),
+        ("0000/000000_00.dpth.exr", "0000/000000_00.depth.exr"),
+        ("0000/000000_01.flow.exr.npy", "0000/000000_01.flow.exr"),
+        ("0000/000001.ply", "0000/000000.ply"),
+    ];
+    for (file, _) in misnamed {
+        write_file(&p.join(file), b"not read");
+    }
+    write_file(&p.join("0001/000000_01.depth.exr"), b"not read");
+    write_file(&p.join("zz/000000_00.depth.npy"), b"not read");
+    // Not predictions: a note, a hidden file, and the dataset's own image at its place.
+    write_file(&p.join("0000/notes.txt"), b"");
+    write_file(&p.join("0000/.000000_00.depth.exr.swp.exr"), b"");
+    let rgb = std::fs::read(data.join("samples/0000/000000_00.rgb.png")).unwrap();
+    write_file(&p.join("0000/000000_00.rgb.png"), &rgb);
+    let (o, r) = eval(&data, &p, &[]);
+    let warned = stderr(&o);
+    assert!(
+        warned.contains(&format!("warning: 7 files under {} look like", p.display())),
+        "{warned}"
+    );
+    for (file, nearest) in misnamed {
+        assert!(
+            warned.contains(&format!("\n  {file} → {nearest}\n")),
+            "{file}: {warned}"
+        );
+    }
+    assert!(warned.contains("\n  … and 2 more"), "{warned}");
+    assert!(
+        !warned.contains("rgb.png") && !warned.contains("notes"),
+        "{warned}"
+    );
+    assert_eq!(r["misnamed_files"]["count"], 7);
+    assert_eq!(
+        r["misnamed_files"]["first"][0]["nearest"],
+        "0000/000000_00.depth.exr"
+    );
+    assert_eq!(
+        r["depth_counts"]["images"], 1,
+        "the well-named file is read"
+    );
+}
