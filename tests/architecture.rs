@@ -14,7 +14,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
         ],
     ),
     ("export", &["dataset", "output"]),
-    ("eval", &["dataset", "geometry", "output"]),
+    ("eval", &["dataset", "geometry", "output", "words"]),
     ("dataset", &["cameras"]),
     (
         "preview",

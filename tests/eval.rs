@@ -11,7 +11,8 @@ use std::process::Output;
 mod common;
 
 use common::{
-    manifest_files, ok, quickstart, read_exr, read_png, read_png16, shmgen, stderr, view_path,
+    blake3_hex, manifest_files, ok, quickstart, read_exr, read_png, read_png16, shmgen, stderr,
+    view_path,
 };
 
 /// `shmgen eval DATA PREDICTIONS --json … EXTRA`: what it printed and the JSON report.
@@ -291,7 +292,7 @@ fn depth_metrics_have_their_closed_forms() {
     assert_eq!(h["depth_counts"]["missing"], 1);
     assert_eq!(h["depth_counts"]["excluded_pixels"], 21);
     assert!(stderr(&o).contains("warning: depth: 1 views have no prediction"));
-    assert!(stderr(&o).contains("warning: depth: 21 predicted pixels left out"));
+    assert!(stderr(&o).contains("warning: depth: 21 pixels left out (not predicted"));
 }
 
 /// A binary little-endian PLY with double x, y, z and `list uchar int` faces.
@@ -491,7 +492,7 @@ fn end_point_error_of_a_constant_offset_is_its_norm() {
                         .channel_data
                         .list
                         .iter()
-                        .find(|c| c.name == Text::from(*n))
+                        .find(|c| c.name == **n)
                         .unwrap();
                     c.sample_data.values_as_f32().collect()
                 })
@@ -598,4 +599,194 @@ fn wrong_predictions_are_clear_errors() {
     let unfinished = dir.path().join("empty");
     std::fs::create_dir(&unfinished).unwrap();
     assert!(eval_err(&unfinished, &p, &[]).contains("not a shmgen dataset"));
+}
+
+/// Replaces the dataset file `relative` with `bytes`, recording its new size and BLAKE3 in
+/// the manifest as the generator would have.
+fn replace_in_dataset(data: &Path, relative: &str, bytes: &[u8]) {
+    write_file(&data.join(relative), bytes);
+    let path = data.join("manifest.jsonl");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = Vec::new();
+    for line in text.lines() {
+        let mut v: Value = serde_json::from_str(line).unwrap();
+        if let Some(check) = v["hashes"].get_mut(relative) {
+            *check = serde_json::json!({"blake3": blake3_hex(bytes), "bytes": bytes.len()});
+        }
+        lines.push(serde_json::to_string(&v).unwrap());
+    }
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+}
+
+/// Every view's true depth replaced, where there is a surface, by 1 m plus a sawtooth of 160
+/// steps of an eighth of a metre: values an f32 EXR, an f64 and a millimetre PNG all hold
+/// exactly (so a prediction equal to the truth is equal in every format), spread evenly so
+/// that a tenth of the pixels predicted as 0 m moves the median by several steps.
+fn eighths_of_a_metre(data: &Path) -> Vec<Truth> {
+    for t in truths(data) {
+        let depth: Vec<f32> = (0..t.depth.len())
+            .map(|i| match t.depth[i] > 0.0 {
+                true => 1.0 + ((i * 7) % 160) as f32 / 8.0,
+                false => 0.0,
+            })
+            .collect();
+        let file = format!("samples/0000/{}.depth.exr", t.stem);
+        let scratch = data.with_extension("scratch.exr");
+        write_exr(&scratch, t.w, t.h, &[("Z", depth)]);
+        replace_in_dataset(data, &file, &std::fs::read(&scratch).unwrap());
+    }
+    truths(data)
+}
+
+/// `prediction` (metres, NaN = not predicted) written for view `t` as `kind`: an EXR or a
+/// float64 `.npy` keep the NaN, a millimetre PNG writes its 0.
+fn write_prediction(predictions: &Path, t: &Truth, kind: &str, prediction: &[f64]) {
+    let path = t.prediction(predictions, kind);
+    match kind {
+        "depth.exr" => {
+            let z = prediction.iter().map(|&p| p as f32).collect();
+            write_exr(&path, t.w, t.h, &[("Z", z)]);
+        }
+        "depth.npy" => {
+            let bytes: Vec<u8> = prediction.iter().flat_map(|p| p.to_le_bytes()).collect();
+            write_npy(&path, "<f8", &[t.h, t.w], &bytes);
+        }
+        _ => {
+            let bytes: Vec<u8> = prediction
+                .iter()
+                .map(|&p| {
+                    if p.is_nan() {
+                        0
+                    } else {
+                        (p * 1000.0).round() as u16
+                    }
+                })
+                .flat_map(u16::to_be_bytes)
+                .collect();
+            write_png(&path, t.w, t.h, png::BitDepth::Sixteen, &bytes);
+        }
+    }
+}
+
+#[test]
+fn a_pixel_marked_not_predicted_takes_no_part_in_any_alignment() {
+    // A millimetre PNG's 0 was fitted as a 0 m prediction by `median` and `lstsq_shift`: the
+    // truth itself with one pixel in ten left unpredicted scored AbsRel 0.0265 and 0.1115.
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=1", "views=2"]);
+    let truths = eighths_of_a_metre(&data);
+    let inside: usize = truths.iter().map(|t| t.inside().count()).sum();
+    let holes: usize = truths.iter().map(|t| t.inside().step_by(10).count()).sum();
+    assert!(holes > 100, "{holes} holes");
+    let predicted = |t: &Truth, f: &dyn Fn(f64) -> f64| -> Vec<f64> {
+        let mut p: Vec<f64> = t.depth.iter().map(|&d| f(f64::from(d))).collect();
+        for i in t.inside().step_by(10) {
+            p[i] = f64::NAN;
+        }
+        p
+    };
+    let affine = |d: f64| 2.0 * d + 0.5;
+    for kind in ["depth.exr", "depth.npy", "depth_mm.png"] {
+        let same = dir.path().join(format!("same-{kind}"));
+        let shifted = dir.path().join(format!("affine-{kind}"));
+        for t in &truths {
+            write_prediction(&same, t, kind, &predicted(t, &|d| d));
+            write_prediction(&shifted, t, kind, &predicted(t, &affine));
+        }
+        let runs = [
+            ("none", &same, 0.0),
+            ("median", &same, 0.0),
+            ("lstsq", &same, 0.0),
+            ("lstsq_shift", &same, 0.0),
+            // A fitted scale and shift carry rounding of the sums: zero to 1e-12.
+            ("lstsq_shift", &shifted, 1e-12),
+        ];
+        for (align, predictions, tolerance) in runs {
+            let (_, r) = eval(&data, predictions, &["--align", align]);
+            let case = format!("{kind}, --align {align}, {}", predictions.display());
+            for key in ["abs_rel", "sq_rel", "rmse", "rmse_log"] {
+                assert!(f(&r, key) <= tolerance, "{case}: {key} = {}", f(&r, key));
+            }
+            for key in ["delta1", "delta2", "delta3"] {
+                assert_eq!(f(&r, key), 1.0, "{case}: {key}");
+            }
+            assert_eq!(r["depth_counts"]["pixels"], inside - holes, "{case}");
+            assert_eq!(r["depth_counts"]["excluded_pixels"], holes, "{case}");
+        }
+    }
+}
+
+#[test]
+fn misnamed_predictions_are_reported_with_the_name_eval_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=1", "views=2"]);
+    let truths = truths(&data);
+    let depth = |t: &Truth| vec![("Z", t.depth.clone())];
+    let t = &truths[0];
+
+    // Flat, without the sample's folder: the message suggested this very path.
+    let flat = dir.path().join("flat");
+    write_exr(&flat.join("000000_00.depth.exr"), t.w, t.h, &depth(t));
+    write_file(&flat.join("README.md"), b"predictions of run 3\n");
+    let e = eval_err(&data, &flat, &[]);
+    let expected = flat.join("0000/000000_00.depth.exr");
+    assert!(
+        e.contains(&format!("eval reads {} (or .depth.npy", expected.display())),
+        "{e}"
+    );
+    assert!(
+        e.contains(&format!("1 file under {} looks like", flat.display()))
+            && e.contains("\n  000000_00.depth.exr → 0000/000000_00.depth.exr")
+            && !e.contains("README"),
+        "{e}"
+    );
+
+    // Beside a prediction read: a wrong stem, a wrong folder, an unknown kind, a format not
+    // read, a view the dataset lacks, a surface of another sample, and one more.
+    let p = dir.path().join("p");
+    let read = p.join(format!("0000/{}.depth.exr", t.stem));
+    write_exr(&read, t.w, t.h, &depth(t));
+    let misnamed = [
+        ("0000/000000_0.depth.exr", "0000/000000_00.depth.exr"),
+        ("0000/000000_00.depth.tiff", "0000/000000_00.depth.exr"),
+        ("0000/000000_00.dpth.exr", "0000/000000_00.depth.exr"),
+        ("0000/000000_01.flow.exr.npy", "0000/000000_01.flow.exr"),
+        ("0000/000001.ply", "0000/000000.ply"),
+    ];
+    for (file, _) in misnamed {
+        write_file(&p.join(file), b"not read");
+    }
+    write_file(&p.join("0001/000000_01.depth.exr"), b"not read");
+    write_file(&p.join("zz/000000_00.depth.npy"), b"not read");
+    // Not predictions: a note, a hidden file, and the dataset's own image at its place.
+    write_file(&p.join("0000/notes.txt"), b"");
+    write_file(&p.join("0000/.000000_00.depth.exr.swp.exr"), b"");
+    let rgb = std::fs::read(data.join("samples/0000/000000_00.rgb.png")).unwrap();
+    write_file(&p.join("0000/000000_00.rgb.png"), &rgb);
+    let (o, r) = eval(&data, &p, &[]);
+    let warned = stderr(&o);
+    assert!(
+        warned.contains(&format!("warning: 7 files under {} look like", p.display())),
+        "{warned}"
+    );
+    for (file, nearest) in misnamed {
+        assert!(
+            warned.contains(&format!("\n  {file} → {nearest}\n")),
+            "{file}: {warned}"
+        );
+    }
+    assert!(warned.contains("\n  … and 2 more"), "{warned}");
+    assert!(
+        !warned.contains("rgb.png") && !warned.contains("notes"),
+        "{warned}"
+    );
+    assert_eq!(r["misnamed_files"]["count"], 7);
+    assert_eq!(
+        r["misnamed_files"]["first"][0]["nearest"],
+        "0000/000000_00.depth.exr"
+    );
+    assert_eq!(
+        r["depth_counts"]["images"], 1,
+        "the well-named file is read"
+    );
 }

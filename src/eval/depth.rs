@@ -1,7 +1,8 @@
 //! Depth metrics of one image, after an optional per-image alignment of the prediction.
 //!
 //! Over the evaluated pixels E (truth > 0 and finite, inside the chosen mask, prediction
-//! finite), with d the aligned prediction and d* the truth, pixels where d ≤ 0 left out and
+//! finite: a pixel not predicted arrives as NaN whatever the file, and takes no part in the
+//! fit either), with d the aligned prediction and d* the truth, pixels where d ≤ 0 left out and
 //! counted (a logarithm or a ratio of them means nothing):
 //!
 //! - AbsRel = mean |d − d*| / d*, SqRel = mean (d − d*)² / d*, RMSE = √mean (d − d*)²,
@@ -62,7 +63,7 @@ pub(super) struct ImageDepth {
     pub(super) metrics: Option<Metrics>,
     /// Pixels scored.
     pub(super) pixels: u64,
-    /// Evaluated pixels left out: prediction not finite, or ≤ 0 after alignment.
+    /// Evaluated pixels left out: not predicted (not finite), or ≤ 0 after alignment.
     pub(super) excluded: u64,
     /// The alignment's scale and shift (1 and 0 without alignment).
     pub(super) scale: f64,
@@ -80,7 +81,7 @@ pub(super) fn score(
     let mut excluded = 0;
     for ((&t, &p), &inside) in truth.iter().zip(prediction).zip(inside) {
         let t = f64::from(t);
-        if !inside || !(t > 0.0 && t.is_finite()) {
+        if !(inside && t > 0.0 && t.is_finite()) {
             continue;
         }
         if p.is_finite() {
@@ -119,7 +120,9 @@ pub(super) fn score(
         // A value so large its square overflows, or so large that the image's pixels
         // together would overflow the sum, would make a mean infinite: left out like a
         // non-finite one, so no metric is ever infinite.
-        if values.iter().any(|v| !(*v <= limit)) {
+        // NaN counts as too large (none arises from finite positive d and d*, but a NaN
+        // must never reach a sum): the explicit test keeps what `!(v <= limit)` meant.
+        if values.iter().any(|v| v.is_nan() || *v > limit) {
             excluded += 1;
             continue;
         }

@@ -2,14 +2,16 @@
 //! 2014, with optional per-image alignment), surfaces (Chamfer distance, F-score), flow and
 //! displacement (end-point error). Every formula, with its source, is in `docs/metrics.md`.
 //!
-//! Owns: finding and reading predictions, the metrics and the report. Must not touch: the
-//! dataset or the predictions (it only reads), rendering, recipes. Aggregation: every metric
-//! is computed per image (per sample for surfaces), then averaged over images with equal
-//! weight, as Marigold and Depth Anything evaluate; images are scored in parallel and summed
-//! in dataset order, so the report has the same bytes on any number of threads.
+//! Owns: finding and reading predictions (and reporting the misnamed ones), the metrics and
+//! the report. Must not touch: the dataset or the predictions (it only reads), rendering,
+//! recipes. Aggregation: every metric is computed per image (per sample for surfaces), then
+//! averaged over images with equal weight, as Marigold and Depth Anything evaluate; images are
+//! scored in parallel and summed in dataset order, so the report has the same bytes on any
+//! number of threads.
 
 mod depth;
 mod epe;
+mod misnamed;
 mod nearest;
 mod npy;
 mod predictions;
@@ -17,6 +19,7 @@ mod stats;
 mod surface;
 
 pub use depth::Align;
+pub use misnamed::{Misnamed, Suggestion};
 
 use crate::dataset::{Dataset, View};
 use crate::geometry::import::{import_mesh, import_surface};
@@ -108,6 +111,8 @@ pub struct Report {
     pub flow: Option<EpeReport>,
     /// Displacement EPE (metres), when displacement was predicted.
     pub displacement: Option<EpeReport>,
+    /// Files under PREDICTIONS that look like predictions but that no view or sample reads.
+    pub misnamed_files: Misnamed,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -131,7 +136,8 @@ pub struct Counts {
     pub skipped: usize,
     /// Pixels scored, over all images.
     pub pixels: u64,
-    /// Pixels left out: prediction not finite or (depth) not positive after alignment.
+    /// Pixels left out: not predicted (NaN or ±inf, 0 in a millimetre PNG) or (depth) not
+    /// positive after alignment.
     pub excluded_pixels: u64,
 }
 
@@ -199,6 +205,7 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
         .map(|view| score_view(&dataset, &samples, view, options))
         .collect::<Result<Vec<_>>>()?;
     let surfaces = surfaces(&dataset, &samples, options)?;
+    let misnamed_files = misnamed::misnamed(predictions, &samples, &dataset)?;
 
     let mut depth_mean = Mean::<9>::default();
     let mut counts = Counts::default();
@@ -228,14 +235,18 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
         && flow.is_none()
         && displacement.is_none()
     {
+        let expected = views.first().map_or(String::new(), |v| {
+            format!(
+                "; eval reads {}",
+                predictions::example_names(&samples, v, v.sample)
+            )
+        });
+        let misnamed = misnamed_files
+            .describe()
+            .map_or(String::new(), |m| format!("\n{m}"));
         bail!(
-            "{}: no prediction found; expected files such as {}/{}.depth.exr (or .npy, .png), {}.flow.exr, {}.displacement.exr, or {:06}.ply for a surface",
-            predictions.display(),
-            samples.display(),
-            views.first().map_or("000000_00", |v| v.stem.as_str()),
-            views.first().map_or("000000_00", |v| v.stem.as_str()),
-            views.first().map_or("000000_00", |v| v.stem.as_str()),
-            0
+            "{}: no prediction found{expected}{misnamed}",
+            predictions.display()
         );
     }
     let m = depth_mean.get();
@@ -249,7 +260,7 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
             aggregate: "per image (per sample for surfaces), then the mean over images",
             fscore_threshold: options.fscore_threshold,
             surface_samples: options.surface_samples,
-            excluded: "predicted values that are not finite, or (depth) not positive after alignment, are left out and counted",
+            excluded: "pixels not predicted (NaN or ±inf; 0 in a millimetre PNG), or (depth) not positive after alignment, are left out of the fit and the metrics, and counted",
         },
         abs_rel: pick(0),
         sq_rel: pick(1),
@@ -264,6 +275,7 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
         surface: surfaces,
         flow,
         displacement,
+        misnamed_files,
     })
 }
 
@@ -486,7 +498,7 @@ impl Report {
     /// What a person should know about what was not scored.
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
-        let mut counted = |what: &str, c: &Counts| {
+        let mut counted = |what: &str, c: &Counts, left_out: &str| {
             if c.missing > 0 {
                 out.push(format!("{what}: {} views have no prediction", c.missing));
             }
@@ -498,23 +510,29 @@ impl Report {
             }
             if c.excluded_pixels > 0 {
                 out.push(format!(
-                    "{what}: {} predicted pixels left out (not finite, or not positive after alignment)",
+                    "{what}: {} pixels left out ({left_out})",
                     c.excluded_pixels
                 ));
             }
         };
-        counted("depth", &self.depth_counts);
+        counted(
+            "depth",
+            &self.depth_counts,
+            "not predicted: NaN or ±inf, or 0 in a millimetre PNG; or not positive after alignment",
+        );
+        let vectors = "not predicted: NaN or ±inf";
         if let Some(r) = &self.flow {
-            counted("flow", &r.counts);
+            counted("flow", &r.counts, vectors);
         }
         if let Some(r) = &self.displacement {
-            counted("displacement", &r.counts);
+            counted("displacement", &r.counts, vectors);
         }
         if let Some(s) = &self.surface
             && s.missing > 0
         {
             out.push(format!("surface: {} samples have no prediction", s.missing));
         }
+        out.extend(self.misnamed_files.describe());
         out
     }
 }

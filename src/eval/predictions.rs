@@ -9,7 +9,14 @@
 //! - surfaces: `{sample:06}.ply` (a mesh, or a point cloud when it has no faces) or
 //!   `{sample:06}.obj` (a mesh).
 //!
-//! Two files for the same thing are an error (which one was meant is not ours to guess).
+//! Two files for the same thing are an error (which one was meant is not ours to guess). The
+//! names listed here are the only ones read; `misnamed` reports the files that miss them.
+//!
+//! "No prediction" for a pixel is NaN (or ±inf) in an EXR or a `.npy` file, and 0 in a
+//! millimetre PNG, which has no NaN. `read` turns each format's mark into the one value
+//! [`NO_PREDICTION`], so every metric, and every alignment's fit before it, leaves such a pixel
+//! out the same way whatever the file (a 0 taken as a 0 m prediction dragged the median and
+//! the fit with shift toward 0).
 
 use super::npy;
 use crate::dataset::files::{Bound, image_bound, open_regular, read_bounded};
@@ -39,6 +46,9 @@ pub(super) enum Quantity {
 }
 
 impl Quantity {
+    /// Every quantity predicted per view.
+    pub(super) const ALL: [Quantity; 3] = [Quantity::Depth, Quantity::Flow, Quantity::Displacement];
+
     /// The EXR channels, which are also the .npy's last axis.
     pub(super) fn channels(self) -> &'static [&'static str] {
         match self {
@@ -58,27 +68,58 @@ impl Quantity {
     }
 }
 
+/// Every file that may predict `quantity` for `view`, in the order of its kinds.
+pub(super) fn candidates(samples: &Path, view: &View, quantity: Quantity) -> Vec<PathBuf> {
+    let folder = mirrored(samples, view.folder());
+    quantity
+        .kinds()
+        .iter()
+        .map(|kind| folder.join(format!("{}.{kind}", view.stem)))
+        .collect()
+}
+
 /// The one file predicting `quantity` for `view`, if any.
 pub(super) fn find(samples: &Path, view: &View, quantity: Quantity) -> Result<Option<PathBuf>> {
-    let folder = mirrored(samples, view.folder());
-    one_of(
-        quantity
-            .kinds()
-            .iter()
-            .map(|kind| folder.join(format!("{}.{kind}", view.stem))),
+    one_of(candidates(samples, view, quantity))
+}
+
+/// Every file that may predict the surface of `sample`, whose files are in the dataset's
+/// folder `folder` (`samples/NNNN`).
+pub(super) fn surface_candidates(samples: &Path, folder: &str, sample: u64) -> [PathBuf; 2] {
+    let folder = mirrored(samples, folder);
+    ["ply", "obj"].map(|ext| folder.join(format!("{sample:06}.{ext}")))
+}
+
+/// The one prediction of the surface of `sample` (see [`surface_candidates`]).
+pub(super) fn find_surface(samples: &Path, folder: &str, sample: u64) -> Result<Option<PathBuf>> {
+    one_of(surface_candidates(samples, folder, sample))
+}
+
+/// The predictions' counterpart of the dataset's folder or file `samples/…`.
+pub(super) fn mirrored(samples: &Path, relative: &str) -> PathBuf {
+    samples.join(relative.strip_prefix("samples/").unwrap_or(relative))
+}
+
+/// The files eval reads for the dataset's first view and sample, for a message when it found
+/// none: the first of each set in full, the others by their kind, e.g.
+/// `P/0000/000000_00.depth.exr (or .depth.npy, …)`.
+pub(super) fn example_names(samples: &Path, view: &View, sample: u64) -> String {
+    let per_view = Quantity::ALL.map(|q| alternatives(&candidates(samples, view, q)));
+    let surface = alternatives(&surface_candidates(samples, view.folder(), sample));
+    format!(
+        "{} for a view, {surface} for a sample's surface",
+        per_view.join(", ")
     )
 }
 
-/// The one prediction of the surface of `sample`, whose files are in the dataset's folder
-/// `folder` (`samples/NNNN`).
-pub(super) fn find_surface(samples: &Path, folder: &str, sample: u64) -> Result<Option<PathBuf>> {
-    let folder = mirrored(samples, folder);
-    one_of(["ply", "obj"].map(|ext| folder.join(format!("{sample:06}.{ext}"))))
-}
-
-/// The predictions' counterpart of the dataset's folder `samples/NNNN`.
-fn mirrored(samples: &Path, folder: &str) -> PathBuf {
-    samples.join(folder.strip_prefix("samples/").unwrap_or(folder))
+/// `first (or .kind, .kind)` of a set of files one of which predicts one thing.
+fn alternatives(paths: &[PathBuf]) -> String {
+    let kinds: Vec<String> = paths[1..]
+        .iter()
+        .filter_map(|p| p.file_name()?.to_str()?.split_once('.'))
+        .map(|(_, kind)| format!(".{kind}"))
+        .collect();
+    format!("{} (or {})", paths[0].display(), kinds.join(", "))
 }
 
 fn one_of(candidates: impl IntoIterator<Item = PathBuf>) -> Result<Option<PathBuf>> {
@@ -94,7 +135,21 @@ fn one_of(candidates: impl IntoIterator<Item = PathBuf>) -> Result<Option<PathBu
     }
 }
 
-/// The planes of a prediction file, each `width × height`, as f64. The file is read up to
+/// A pixel the file says it does not predict: not finite, so the metrics leave it out of the
+/// fits and the scores and count it.
+pub(super) const NO_PREDICTION: f64 = f64::NAN;
+
+/// A millimetre PNG's sample in metres; 0 is the format's "no prediction".
+fn millimetres_to_metres(mm: u16) -> f64 {
+    if mm == 0 {
+        NO_PREDICTION
+    } else {
+        f64::from(mm) / 1000.0
+    }
+}
+
+/// The planes of a prediction file, each `width × height`, as f64, with [`NO_PREDICTION`]
+/// wherever the file marks a pixel as not predicted. The file is read up to
 /// the size such an image may have (float64 samples, twice over, plus headers) and its header
 /// is checked against the view's size before anything is decoded.
 pub(super) fn read(
@@ -150,7 +205,7 @@ pub(super) fn read(
         let metres = png
             .values
             .iter()
-            .map(|&mm| f64::from(mm) / 1000.0)
+            .map(|&mm| millimetres_to_metres(mm))
             .collect();
         (png.width, png.height, vec![metres])
     };

@@ -135,7 +135,9 @@ pub(super) fn sample(mesh: &Mesh, n: usize) -> Result<Vec<DVec3>> {
         total += 0.5 * (b - a).cross(c - a).length();
         cumulative.push(total);
     }
-    if !(total > 0.0) {
+    // A NaN area (a vertex not finite) has nothing to sample either: spelt out, as the
+    // negated `!(total > 0.0)` it replaces meant.
+    if total.is_nan() || total <= 0.0 {
         bail!("the mesh has no area to sample");
     }
     // R2 sequence: the plastic number's inverse powers (Roberts 2018).
