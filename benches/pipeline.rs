@@ -1,6 +1,6 @@
 //! Pipeline benchmark: image/depth pairs per second of whole runs (every default output of the
 //! recipe written to disk: RGB, depth, masks, JSON, manifest), on one thread and on every
-//! core, for each row of the README's table, then a per-stage breakdown of single views.
+//! core, for each row of the table in docs/benchmarks.md, then a per-stage breakdown of single views.
 //! Prints medians; asserts nothing (speed is measured, never tested).
 //!
 //!     cargo bench --bench pipeline                        (about a quarter of an hour on 2 cores)

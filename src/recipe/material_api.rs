@@ -6,8 +6,8 @@
 //! replaces the procedural albedo, so textures made elsewhere drop in without editing the
 //! recipe; `texture: "file.png"` names one explicitly. `plain: true` keeps only the colour of
 //! the prompt's substance or paint, flat and matte (no conditions, texture or gloss): a run
-//! that needs the geometry more than the look is several times faster (see the README's
-//! benchmarks).
+//! that needs the geometry more than the look is several times faster (see
+//! docs/benchmarks.md).
 
 use super::diagnostics::Warnings;
 use super::files::RecipeFiles;
