@@ -522,8 +522,8 @@ impl Drop for DatasetFolder {
     }
 }
 
-/// The most of a run.json read (ours are a few kB).
-const RUN_JSON_BYTES: u64 = 16 << 20;
+/// The most of a run.json or export.json read (ours are a few kB).
+const RECORD_BYTES: u64 = 16 << 20;
 
 /// Refuses a dataset folder with a link where shmgen reads or writes (run.json, the manifest,
 /// `samples/` and its folders, `.partial/` and its locks): a dataset received from someone
@@ -551,9 +551,9 @@ fn refuse_links(root: &Path) -> Result<()> {
     Ok(())
 }
 
-/// run.json's bytes, None if there is none; refused if it is not a regular file or larger
-/// than any run.json shmgen writes.
-fn read_run_json(path: &Path) -> Result<Option<Vec<u8>>> {
+/// The bytes of a record shmgen writes (`run.json`, `export.json`), None if there is none;
+/// refused if it is not a regular file or larger than any record shmgen writes.
+pub(super) fn read_record(path: &Path) -> Result<Option<Vec<u8>>> {
     let mut options = OpenOptions::new();
     options.read(true);
     // A FIFO opens without waiting for a writer, and is then refused as not a regular file.
@@ -566,14 +566,14 @@ fn read_run_json(path: &Path) -> Result<Option<Vec<u8>>> {
     };
     let meta = file.metadata()?;
     let len = meta.len();
-    if !meta.is_file() || len > RUN_JSON_BYTES {
+    if !meta.is_file() || len > RECORD_BYTES {
         bail!(
-            "{}: not a run.json shmgen wrote (not a regular file, or {len} bytes)",
+            "{}: not a record shmgen wrote (not a regular file, or {len} bytes)",
             path.display()
         );
     }
     let mut bytes = Vec::new();
-    file.take(RUN_JSON_BYTES)
+    file.take(RECORD_BYTES)
         .read_to_end(&mut bytes)
         .with_context(|| format!("reading {}", path.display()))?;
     Ok(Some(bytes))
@@ -584,7 +584,7 @@ fn survey(root: &Path, identity: Identity) -> Result<(Holds, Vec<u8>)> {
     refuse_links(root)?;
     let run_json = root.join(RUN_JSON);
     let recorded = loop {
-        if let Some(bytes) = read_run_json(&run_json)? {
+        if let Some(bytes) = read_record(&run_json)? {
             break bytes;
         }
         let ours = identity(None)?;

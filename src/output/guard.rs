@@ -9,13 +9,10 @@
 //! `D` and a bind mount of `D` are all seen as inside `D`. When the command reads a dataset
 //! too, a folder that is the same inode as that dataset counts as well.
 
+use super::folder::read_record;
 use anyhow::{Result, bail};
 use serde_json::Value;
-use std::io::Read;
 use std::path::{Path, PathBuf};
-
-/// The most of a `run.json` or `export.json` read to find its schema (ours are a few kB).
-const RECORD_BYTES: u64 = 16 << 20;
 
 /// What a folder is, for a writer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -101,14 +98,9 @@ fn holder(folder: &Path) -> Option<Holder> {
 }
 
 /// The shmgen schema a record declares (`shmgen.run/1`, …), if it is a regular file that
-/// declares one.
+/// declares one (read as `run` reads its own run.json: a FIFO never blocks the check).
 fn schema_of(path: &Path) -> Option<String> {
-    let file = std::fs::File::open(path).ok()?;
-    if !file.metadata().ok()?.is_file() {
-        return None;
-    }
-    let mut bytes = Vec::new();
-    file.take(RECORD_BYTES).read_to_end(&mut bytes).ok()?;
+    let bytes = read_record(path).ok().flatten()?;
     let record: Value = serde_json::from_slice(&bytes).ok()?;
     let schema = record.get("schema")?.as_str()?;
     schema.starts_with("shmgen.").then(|| schema.to_string())
@@ -178,6 +170,13 @@ mod tests {
             fs::remove_file(d.join("run.json")).unwrap();
             assert!(refused(&d.join("report.json"), None, false).is_none());
             assert!(refused(&link.join("report.json"), Some(&d), false).is_some());
+            // A FIFO where a record would be is not one, and is never opened for a blocking
+            // read (the check would wait forever for a writer).
+            let fifo = plain.join("export.json");
+            let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+            // SAFETY: a valid NUL-terminated path.
+            assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+            assert!(refused(&plain.join("report.json"), None, false).is_none());
         }
     }
 }
