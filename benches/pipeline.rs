@@ -253,11 +253,14 @@ fn view_stages(
     dir: &Path,
     stages: &mut Stages,
 ) -> GBuffer {
-    let g = stages.time("trace", || mesh.trace(camera));
+    let g = stages.time("visibility as run", || mesh.trace(camera));
+    // Like with like: the same centre rays walked through the BVH (built per sample, below),
+    // whichever path the run took; the hits are the same.
+    stages.time("centre rays traced", || mesh.trace_rays(camera));
     let surfaces = surfaces_of(sample);
     let black = Backdrop::Colour([0, 0, 0]);
     let rgb = stages.time("shade (anti-aliased)", || {
-        shade(&g, mesh, camera, &sample.lighting, &surfaces, &black, true)
+        shade(&g, mesh, camera, &sample.lighting, &surfaces, &black, true).rgb
     });
     let png = stages.time("RGB PNG", || rgb_png(g.width, g.height, &rgb));
     let exr = stages.time("depth EXR", || depth_exr(g.width, g.height, &g.depth));
@@ -294,13 +297,16 @@ fn breakdown(name: &str, recipe: &Recipe, samples: u64) {
     let dir = tempfile::tempdir().unwrap();
     let mut stages = Stages::default();
     let mut coverage = Vec::new();
+    let mut paths = std::collections::BTreeMap::new();
     pool.install(|| {
         for s in 0..recipe.dataset.samples.min(samples) {
             let sample = stages.time("prepare (per sample)", || prepare(recipe, s).unwrap());
             let mesh = stages.time("scene mesh (per sample)", || TraceMesh::build(&sample.mesh));
+            stages.time("BVH (per sample)", || mesh.build_bvh());
             for view in 0..recipe.dataset.views {
                 let camera = view_camera(&recipe.dataset, &sample, view).unwrap().camera;
                 let g = view_stages(&sample, &mesh, &camera, dir.path(), &mut stages);
+                *paths.entry(g.visibility).or_insert(0) += 1;
                 let hits = g.triangle.iter().filter(|&&t| t != NO_HIT).count();
                 coverage.push(hits as f64 / g.triangle.len() as f64);
             }
@@ -313,7 +319,7 @@ fn breakdown(name: &str, recipe: &Recipe, samples: u64) {
         .map(|(n, t)| format!("{n} {:.2}", median(t)))
         .collect();
     println!(
-        "  {name} (coverage {:.1} %): {} ms",
+        "  {name} (coverage {:.1} %; views as run: {paths:?}): {} ms",
         100.0 * median(coverage),
         cells.join(", ")
     );
@@ -453,7 +459,7 @@ fn daylight_costs(views: u32) {
             let mut rgb = Vec::new();
             for (k, (_, lighting, backdrop)) in lightings.iter().enumerate() {
                 let start = Instant::now();
-                rgb = shade(&g, &mesh, &camera, lighting, &surfaces, backdrop, true);
+                rgb = shade(&g, &mesh, &camera, lighting, &surfaces, backdrop, true).rgb;
                 shade_ms[k].push(1e3 * start.elapsed().as_secs_f64());
             }
             let (w, h) = (g.width as usize, g.height as usize);

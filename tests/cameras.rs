@@ -757,3 +757,53 @@ fn the_a1_recipe_writes_the_masks_its_augmented_copies_need() {
         }
     }
 }
+
+/// Each view's record says how its images were found, and says it truly: a pinhole view of
+/// the box is rasterised (centre and edge rays), a lens's curved rays are traced; the unloaded
+/// image and the flow's occlusion rays appear exactly when flow is written, shadow rays only
+/// under a sun that casts shadows, and no edge rays without anti-aliasing. In every case the
+/// depth written lies on the analytic box.
+///
+/// Flow (which adds the unloaded image and its occlusion rays) needs a loaded beam: see
+/// `a_flow_record_lists_the_unloaded_image_and_its_occlusion_rays`.
+#[test]
+fn each_record_says_which_visibility_path_found_its_pixels() {
+    let lens = "distortion: #{ k1: -0.25, k2: 0.06, p1: 0.0012, p2: -0.0008, k3: -0.004 }";
+    let pinhole = "width: 96, height: 72, distance: 6.0";
+    let cases = [
+        (
+            pinhole.to_string(),
+            "",
+            r#"{"primary":"rasterised","edge_rays":"rasterised","unloaded":null,"secondary":[]}"#,
+        ),
+        (
+            format!("{pinhole}, {lens}"),
+            "",
+            r#"{"primary":"traced","edge_rays":"traced","unloaded":null,"secondary":[]}"#,
+        ),
+        (
+            pinhole.to_string(),
+            "antialias: false,",
+            r#"{"primary":"rasterised","edge_rays":null,"unloaded":null,"secondary":[]}"#,
+        ),
+        (
+            pinhole.to_string(),
+            r#"light: #{ sun: #{ elevation: deg(50) }, shadows: true },"#,
+            r#"{"primary":"rasterised","edge_rays":"rasterised","unloaded":null,"secondary":["shadow"]}"#,
+        ),
+    ];
+    for (camera, extra, expected) in cases {
+        let (_dir, out) = render(&box_recipe(&camera, extra), &[]);
+        for view in 0..3 {
+            let record = read_json(&view_path(&out, 0, view, None, "json"));
+            let expected: Value = serde_json::from_str(expected).unwrap();
+            assert_eq!(
+                record["visibility"], expected,
+                "{camera} {extra} view {view}"
+            );
+            // A pinhole's lens is all zeros: its rays are the pinhole's.
+            let on_box = assert_depth_is_the_box_through_the_written_lens(&load(&out, view, None));
+            assert!(on_box > 100, "{camera}: {on_box} pixels on the box");
+        }
+    }
+}

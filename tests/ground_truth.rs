@@ -372,6 +372,21 @@ fn displacement_and_flow_follow_the_closed_form_deflection() {
                 ["X", "Y", "Z"],
             );
             assert_eq!(v.json["displacement"]["axes"], "world");
+            // Flow needs the unloaded image, and its validity the occlusion rays; a lens's
+            // curved rays are traced, a pinhole's rasterised.
+            let path = if camera.contains("distortion") {
+                "traced"
+            } else {
+                "rasterised"
+            };
+            let image = serde_json::json!({ "primary": path, "edge_rays": path });
+            assert_eq!(
+                v.json["visibility"],
+                serde_json::json!({
+                    "primary": path, "edge_rays": path,
+                    "unloaded": image, "secondary": ["flow_occlusion"],
+                })
+            );
             for row in 0..v.height {
                 for col in 0..v.width {
                     let i = row * v.width + col;

@@ -557,6 +557,7 @@ fn shaded_on_black(
         &black,
         antialias,
     )
+    .rgb
 }
 
 #[test]
@@ -890,7 +891,7 @@ fn sub_pixel_hits_match_one_ray_each() {
                     })
                     .collect();
                 let pixels = PixelSet::from_rows(&rows);
-                let hits = trace.sample_hits(cam, &pixels, &SUB_PIXEL_POINTS);
+                let (hits, _) = trace.sample_hits(cam, &pixels, &SUB_PIXEL_POINTS);
                 assert_eq!(hits.len(), pixels.len());
                 let mut grazes = 0;
                 for (i, samples) in hits.iter().enumerate() {

@@ -8,13 +8,14 @@
 //! which the moved picture is exact, lens included. Flow is not defined on a warped image:
 //! the recipe refuses that combination.
 
-use super::view::ViewCamera;
+use super::view::{RenderedLayers, ViewCamera};
 use crate::augment::{
     self, Blur, ColourJitter, Erasing, Exposure, Frame, Gamma, Jpeg, Noise, Pinhole, Similarity,
     Vignette,
 };
 use crate::cameras::Camera;
 use crate::output::{Flow, ViewLayers};
+use crate::render::ViewVisibility;
 use crate::scene::{AugmentSpec, DatasetSpec, GeometryMode, NormalsFrame, Operation};
 use crate::seeds::{Scope, Stream};
 use anyhow::{Result, anyhow};
@@ -217,7 +218,7 @@ fn optical_axis_turn(sim: &Similarity) -> DMat3 {
 /// copy's camera), the image-space warp when the geometry is warped, and the photometric
 /// operations.
 pub struct AugmentedView<'a> {
-    base: &'a dyn ViewLayers,
+    base: &'a dyn RenderedLayers,
     warp: Option<Similarity>,
     operations: &'a [Applied],
     /// The turn applied to normals: the warp's, when normals are in camera axes.
@@ -233,7 +234,7 @@ impl<'a> AugmentedView<'a> {
     /// The copy of `base` made by `operations`; `warp` moves pixels (image mode only);
     /// normals are written in `normals` axes.
     pub fn new(
-        base: &'a dyn ViewLayers,
+        base: &'a dyn RenderedLayers,
         warp: Option<Similarity>,
         operations: &'a [Applied],
         normals: NormalsFrame,
@@ -419,6 +420,13 @@ impl ViewLayers for AugmentedView<'_> {
     fn rest_depth(&self) -> &[f32] {
         self.rest_depth
             .get_or_init(|| self.moved(self.base.rest_depth().to_vec()))
+    }
+}
+
+/// A copy's layers come from its base's (warped or not), found as the base's were.
+impl RenderedLayers for AugmentedView<'_> {
+    fn visibility(&self) -> ViewVisibility {
+        self.base.visibility()
     }
 }
 

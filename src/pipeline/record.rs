@@ -13,6 +13,7 @@ use crate::materials::{Material, MaterialDraw};
 use crate::mechanics::{Labels, SectionProperties};
 use crate::output::{DEPTH_CHANNEL, SAMPLE_WRITERS, WRITERS};
 use crate::recipe::Recipe;
+use crate::render::ViewVisibility;
 use crate::scene::{DatasetSpec, GeometryMode, NormalsFrame, Structure};
 use crate::seeds;
 use anyhow::Result;
@@ -134,6 +135,10 @@ pub struct ViewRecord<'a> {
     pub mesh: MeshRecord,
     /// Share of the pixels that see a structure, 0–1.
     pub coverage: f64,
+    /// How the images were found: each pixel's first surface rasterised (projecting the
+    /// triangles; the default for pinhole views) or traced through the BVH (lenses, meshes
+    /// finer than the pixels), the same hits either way; and what else was traced.
+    pub visibility: ViewVisibility,
     /// For an augmented copy, what was done to it (null for a clean view).
     pub augmentation: Option<AugmentationRecord<'a>>,
     /// What the sensor did to the RGB images (`dataset.sensor`), in order, with every value
@@ -651,6 +656,7 @@ impl<'a> SampleRecord<'a> {
         recipe: &'a Recipe,
         sample: &'a BuiltSample,
         facts: ViewFacts<'a>,
+        visibility: ViewVisibility,
         files: BTreeMap<&'static str, String>,
     ) -> ViewRecord<'a> {
         let camera = &facts.camera;
@@ -743,6 +749,7 @@ impl<'a> SampleRecord<'a> {
                 bounding_radius: sample.radius,
             },
             coverage: facts.coverage,
+            visibility,
             augmentation: facts.augmentation,
             sensor: facts.sensor,
         }

@@ -6,7 +6,7 @@ use super::augmented::{Applied, AugmentedView, copy_camera};
 use super::finite::check_finite;
 use super::geometry::SampleGeometry;
 use super::record::{AugmentationRecord, SampleRecord, ViewFacts, json_bytes};
-use super::view::{SampleRenderer, view_camera};
+use super::view::{RenderedLayers, SampleRenderer, view_camera};
 use crate::build::{BuiltSample, build_sample};
 use crate::output::{
     MAX_SEGMENTATION_ID, SAMPLE_WRITERS, SampleStage, ViewLayers, WRITERS, sample_file, view_file,
@@ -115,7 +115,7 @@ type StagedFile = (String, Vec<u8>);
 pub fn for_each_image(
     renderer: &SampleRenderer,
     view: u32,
-    mut each: impl FnMut(&dyn ViewLayers, Option<u32>, ViewFacts) -> Result<()>,
+    mut each: impl FnMut(&dyn RenderedLayers, Option<u32>, ViewFacts) -> Result<()>,
 ) -> Result<()> {
     let (dataset, sample) = (renderer.dataset(), renderer.sample());
     let augment = &dataset.augment;
@@ -190,7 +190,7 @@ fn write_sample_files(
 fn encode_view(
     recipe: &Recipe,
     (sample, record): (&BuiltSample, &SampleRecord),
-    (layers, copy): (&dyn ViewLayers, Option<u32>),
+    (layers, copy): (&dyn RenderedLayers, Option<u32>),
     facts: ViewFacts,
 ) -> Result<Vec<StagedFile>> {
     let view = facts.view;
@@ -200,14 +200,15 @@ fn encode_view(
         .iter()
         .filter(|w| recipe.dataset.outputs.wants(w.output))
     {
-        let encoded = (writer.write)(layers)?;
+        let encoded = (writer.write)(layers as &dyn ViewLayers)?;
         for ((name, key), bytes) in writer.files.iter().zip(writer.keys()).zip(encoded) {
             let path = view_file(sample.index, view, copy, name);
             files.insert(key, path.clone());
             staged.push((path, bytes));
         }
     }
-    let json = json_bytes(&record.view(recipe, sample, facts, files))?;
+    let found = layers.visibility();
+    let json = json_bytes(&record.view(recipe, sample, facts, found, files))?;
     staged.push((view_file(sample.index, view, copy, "json"), json));
     Ok(staged)
 }

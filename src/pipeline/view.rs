@@ -10,13 +10,14 @@ use crate::cameras::{Camera, ViewDraw};
 use crate::materials::Backdrop;
 use crate::output::{Flow, ViewLayers};
 use crate::render::{
-    Deformed, GBuffer, NO_HIT, SampleSurfaces, TraceMesh, Traced, displacement, flow, normals,
-    ray_distance, shade,
+    Deformed, GBuffer, ImageVisibility, NO_HIT, SampleSurfaces, SecondaryRays, Shaded, TraceMesh,
+    Traced, ViewVisibility, displacement, flow, normals, ray_distance, shade,
 };
 use crate::scene::{DatasetSpec, NormalsFrame};
 use crate::seeds::{self, Scope, Stream};
 use anyhow::{Result, anyhow};
 use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
 /// Which eye of a stereo pair a view is.
@@ -136,11 +137,25 @@ pub struct RenderedView<'a> {
     pub backdrop_drawn: BackdropDraw,
     /// What the sensor does to the view's RGB images, as drawn.
     pub sensor: Vec<Applied>,
-    rgb: OnceLock<Vec<u8>>,
+    rgb: OnceLock<Shaded>,
     cracks: OnceLock<Vec<u8>>,
     /// The unloaded structure through the same camera.
     rest_gbuffer: OnceLock<GBuffer>,
-    rest_rgb: OnceLock<Vec<u8>>,
+    rest_rgb: OnceLock<Shaded>,
+    /// Whether the flow's occlusion rays were traced.
+    flow_traced: AtomicBool,
+}
+
+/// A view's layers, and how the ones asked for so far were found: rasterised or traced, and
+/// what else walked the BVH (for the view's record).
+pub trait RenderedLayers: ViewLayers {
+    fn visibility(&self) -> ViewVisibility;
+}
+
+impl RenderedLayers for RenderedView<'_> {
+    fn visibility(&self) -> ViewVisibility {
+        self.found()
+    }
 }
 
 impl<'a> SampleRenderer<'a> {
@@ -236,6 +251,7 @@ impl<'a> SampleRenderer<'a> {
             cracks: OnceLock::new(),
             rest_gbuffer: OnceLock::new(),
             rest_rgb: OnceLock::new(),
+            flow_traced: AtomicBool::new(false),
         }
     }
 }
@@ -260,6 +276,7 @@ fn without_ground(g: &GBuffer, first_ground: usize) -> GBuffer {
         height: g.height,
         depth,
         triangle,
+        visibility: g.visibility,
     }
 }
 
@@ -318,9 +335,9 @@ impl RenderedView<'_> {
 
     /// RGB of what `g` saw through this view's camera in `mesh`, with the sample's
     /// light and this view's backdrop, through the sensor.
-    fn shaded(&self, g: &GBuffer, mesh: &TraceMesh, surfaces: &SampleSurfaces) -> Vec<u8> {
+    fn shaded(&self, g: &GBuffer, mesh: &TraceMesh, surfaces: &SampleSurfaces) -> Shaded {
         let r = self.renderer;
-        let mut rgb = shade(
+        let mut shaded = shade(
             g,
             mesh,
             &self.camera,
@@ -329,15 +346,39 @@ impl RenderedView<'_> {
             &self.backdrop,
             r.dataset.antialias,
         );
+        let rgb = &mut shaded.rgb;
         let size = (g.width as usize, g.height as usize);
         if let Some(lens) = &r.dataset.camera.depth_of_field {
             // Circles from the exact planar depth; the backdrop lies at infinity.
             let (radius, distance) = lens.circles(&self.camera.intrinsics, &g.depth);
-            defocus_by_depth(&mut rgb, size.0, size.1, &radius, &distance);
+            defocus_by_depth(rgb, size.0, size.1, &radius, &distance);
         }
         // The operations are validated; an encoder failing in memory is a bug.
-        photometric(&mut rgb, size, &self.sensor, None).expect("sensor effects on a valid image");
-        rgb
+        photometric(rgb, size, &self.sensor, None).expect("sensor effects on a valid image");
+        shaded
+    }
+
+    /// How the images asked for so far were found (call it once every layer is encoded).
+    fn found(&self) -> ViewVisibility {
+        let image = |g: &GBuffer, shaded: &OnceLock<Shaded>| ImageVisibility {
+            primary: g.visibility,
+            edge_rays: shaded.get().and_then(|s| s.edge_rays),
+        };
+        let mut secondary: Vec<SecondaryRays> = [&self.rgb, &self.rest_rgb]
+            .into_iter()
+            .filter_map(OnceLock::get)
+            .flat_map(|s| s.secondary.iter().copied())
+            .collect();
+        if self.flow_traced.load(Ordering::Relaxed) {
+            secondary.push(SecondaryRays::FlowOcclusion);
+        }
+        secondary.sort();
+        secondary.dedup();
+        ViewVisibility {
+            loaded: image(&self.gbuffer, &self.rgb),
+            unloaded: self.rest_gbuffer.get().map(|g| image(g, &self.rest_rgb)),
+            secondary,
+        }
     }
 
     fn rest_gbuffer(&self) -> &GBuffer {
@@ -352,10 +393,13 @@ impl ViewLayers for RenderedView<'_> {
     }
 
     fn rgb(&self) -> &[u8] {
-        self.rgb.get_or_init(|| {
-            let r = self.renderer;
-            self.shaded(&self.gbuffer, &r.trace_mesh, &r.surfaces)
-        })
+        &self
+            .rgb
+            .get_or_init(|| {
+                let r = self.renderer;
+                self.shaded(&self.gbuffer, &r.trace_mesh, &r.surfaces)
+            })
+            .rgb
     }
 
     fn depth(&self) -> &[f32] {
@@ -416,6 +460,7 @@ impl ViewLayers for RenderedView<'_> {
     }
 
     fn flow(&self) -> Flow {
+        self.flow_traced.store(true, Ordering::Relaxed);
         let field = flow(
             self.rest_geometric(),
             &self.camera,
@@ -432,16 +477,19 @@ impl ViewLayers for RenderedView<'_> {
     }
 
     fn rest_rgb(&self) -> &[u8] {
-        self.rest_rgb.get_or_init(|| {
-            let r = self.renderer;
-            let rest = r.rest();
-            // The same materials, read at the same undeformed points: only the shape differs.
-            let surfaces = SampleSurfaces {
-                mesh: &rest.mesh,
-                ..r.surfaces
-            };
-            self.shaded(self.rest_gbuffer(), &rest.trace_mesh, &surfaces)
-        })
+        &self
+            .rest_rgb
+            .get_or_init(|| {
+                let r = self.renderer;
+                let rest = r.rest();
+                // The same materials, read at the same undeformed points: only the shape differs.
+                let surfaces = SampleSurfaces {
+                    mesh: &rest.mesh,
+                    ..r.surfaces
+                };
+                self.shaded(self.rest_gbuffer(), &rest.trace_mesh, &surfaces)
+            })
+            .rgb
     }
 
     fn rest_depth(&self) -> &[f32] {

@@ -18,6 +18,11 @@ use glam::DVec3;
 pub(super) struct DiskPattern(Vec<(f64, f64)>);
 
 impl DiskPattern {
+    /// Whether the pattern has no point (no ray is cast).
+    pub(super) fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
     /// `n` points (none for 0).
     pub(super) fn new(n: u32) -> Self {
         if n == 1 {

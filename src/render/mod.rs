@@ -23,10 +23,12 @@ mod shared_meshes;
 mod surfaces;
 mod tiles;
 mod trace;
+mod visibility;
 mod watertight;
 
 pub use fields::{Deformed, displacement, flow, normals, ray_distance};
-pub use shade::{Surfaces, shade};
+pub use shade::{Shaded, Surfaces, shade};
 pub use shared_meshes::SharedTraceMeshes;
 pub use surfaces::SampleSurfaces;
 pub use trace::{GBuffer, NO_HIT, PixelSet, TraceMesh, Traced};
+pub use visibility::{ImageVisibility, SecondaryRays, ViewVisibility, Visibility};

@@ -23,6 +23,7 @@
 //! the BVH or anything after the geometric buffer.
 
 use super::trace::{GBuffer, NO_HIT, PixelSet, PrimaryRays, SampleHits};
+use super::visibility::Visibility;
 use crate::cameras::Camera;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -213,6 +214,7 @@ pub(super) fn rasterise(
         height: k.height,
         depth,
         triangle,
+        visibility: Visibility::Rasterised,
     })
 }
 

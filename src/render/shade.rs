@@ -16,6 +16,7 @@
 use super::daylight::{DiskPattern, environment_light, pixel_turn, sky_light, sun_visibility};
 use super::gloss::Lobe;
 use super::trace::{GBuffer, NO_HIT, PixelSet, TraceMesh};
+use super::visibility::{SecondaryRays, Visibility};
 use crate::cameras::Camera;
 use crate::materials::light::turn_about_z;
 use crate::materials::{Backdrop, Film, Lighting, Surface, srgb_to_linear};
@@ -176,6 +177,17 @@ impl LastEncoded {
     }
 }
 
+/// A shaded image and the rays it cast beyond each pixel's centre ray.
+pub struct Shaded {
+    /// sRGB, three bytes a pixel.
+    pub rgb: Vec<u8>,
+    /// How the anti-aliasing rays (four per edge pixel) found their surfaces; None when none
+    /// were cast.
+    pub edge_rays: Option<Visibility>,
+    /// The rays traced through the BVH from the surfaces seen, towards the lights.
+    pub secondary: Vec<SecondaryRays>,
+}
+
 /// RGB8 image (sRGB) of the G-buffer.
 pub fn shade(
     g: &GBuffer,
@@ -185,7 +197,7 @@ pub fn shade(
     surfaces: &impl Surfaces,
     backdrop: &Backdrop,
     antialias: bool,
-) -> Vec<u8> {
+) -> Shaded {
     let s = Shading {
         mesh,
         camera,
@@ -228,19 +240,32 @@ pub fn shade(
         Some(_) => spans[row].clone(),
         None => 0..width,
     };
+    let secondary = if spans.iter().all(|span| span.is_empty()) {
+        Vec::new()
+    } else {
+        s.secondary()
+    };
     if !antialias {
         rgb.par_chunks_mut(width * 3)
             .enumerate()
             .for_each(|(row, out)| s.centre_row(g, row, span(row), out, None));
-        return rgb;
+        return Shaded {
+            rgb,
+            edge_rays: None,
+            secondary,
+        };
     }
     let mut edge_keys = vec![NO_SURFACE; g.triangle.len()];
     rgb.par_chunks_mut(width * 3)
         .zip(edge_keys.par_chunks_mut(width))
         .enumerate()
         .for_each(|(row, (out, keys))| s.centre_row(g, row, span(row), out, Some(keys)));
-    s.antialias_edges(g, &edge_keys, &spans, &mut rgb);
-    rgb
+    let edge_rays = s.antialias_edges(g, &edge_keys, &spans, &mut rgb);
+    Shaded {
+        rgb,
+        edge_rays,
+        secondary,
+    }
 }
 
 /// What a pixel shows, as far as finding edges goes: a surface's colour (see `centre_row`)
@@ -346,14 +371,14 @@ impl<S: Surfaces> Shading<'_, S> {
     /// Re-shades from four fixed sub-pixel rays every pixel (near the hits of `spans`, see
     /// `hit_spans`) whose `edge_keys` entry (its deciding colour, or that it sees no surface)
     /// differs visibly from a neighbour's. The sub-rays' first hits are found for all those
-    /// pixels at once (`TraceMesh::sample_hits`).
+    /// pixels at once (`TraceMesh::sample_hits`); returns how, None when no pixel needed it.
     fn antialias_edges(
         &self,
         g: &GBuffer,
         edge_keys: &[u32],
         spans: &[std::ops::Range<usize>],
         rgb: &mut [u8],
-    ) {
+    ) -> Option<Visibility> {
         let width = g.width as usize;
         let differs = |i: usize, j: usize| visibly_different(edge_keys[i], edge_keys[j]);
         let edges: Vec<Vec<u32>> = (0..g.height as usize)
@@ -372,7 +397,10 @@ impl<S: Surfaces> Shading<'_, S> {
             })
             .collect();
         let edges = PixelSet::from_rows(&edges);
-        let hits = self.mesh.sample_hits(self.camera, &edges, &EDGE_SAMPLES);
+        if edges.is_empty() {
+            return None;
+        }
+        let (hits, found) = self.mesh.sample_hits(self.camera, &edges, &EDGE_SAMPLES);
         rgb.par_chunks_mut(width * 3)
             .enumerate()
             .for_each(|(row, out)| {
@@ -383,6 +411,22 @@ impl<S: Surfaces> Shading<'_, S> {
                     out[3 * col..3 * col + 3].copy_from_slice(&encode(mean));
                 }
             });
+        Some(found)
+    }
+
+    /// The kinds of ray the lighting traces from a surface point (see `light`).
+    fn secondary(&self) -> Vec<SecondaryRays> {
+        let l = self.lighting;
+        let shadows = l.sun.is_some() && l.shadows;
+        let surrounding = l.environment.is_some() || l.sky.is_some() || l.ground.is_some();
+        let occlusion = surrounding && !self.hemisphere.is_empty();
+        [
+            (shadows, SecondaryRays::Shadow),
+            (occlusion, SecondaryRays::Occlusion),
+        ]
+        .into_iter()
+        .filter_map(|(cast, kind)| cast.then_some(kind))
+        .collect()
     }
 
     /// Mean linear radiance of the four sub-rays of pixel (`col`, `row`), which first meet
@@ -775,6 +819,7 @@ mod tests {
             height: height as u32,
             depth: vec![1.0; width * height],
             triangle,
+            visibility: crate::render::Visibility::Rasterised,
         };
         let spans = hit_spans(&g);
         for row in 0..height {

@@ -3,6 +3,7 @@
 
 use super::raster::{Plane, SceneTriangle, rasterise, rasterise_samples};
 use super::tiles::{PixelRect, TILE, visible_tiles};
+use super::visibility::Visibility;
 use super::watertight::ShearedRay;
 use crate::cameras::Camera;
 use crate::geometry::Mesh;
@@ -154,6 +155,8 @@ pub struct GBuffer {
     pub depth: Vec<f32>,
     /// Index of the triangle each pixel sees, in the scene mesh (`NO_HIT` = none).
     pub triangle: Vec<u32>,
+    /// How the first surfaces were found.
+    pub visibility: Visibility,
 }
 
 /// Some pixels of an image, row by row, each row's columns ascending.
@@ -307,6 +310,12 @@ impl TraceMesh {
         }
     }
 
+    /// Builds the BVH now rather than when the first ray is traced, so that its cost can be
+    /// timed apart (the benchmarks do).
+    pub fn build_bvh(&self) {
+        self.tree();
+    }
+
     /// The BVH, built on first use.
     fn tree(&self) -> &Tree {
         self.tree.get_or_init(|| Tree::build(&self.corners))
@@ -345,27 +354,28 @@ impl TraceMesh {
     /// Planar depth and triangle first met by the ray through each point at `offsets` within
     /// each of `pixels` (image coordinates from the pixel's corner), in the order of
     /// `pixels`: rasterised where that is exact and costs less than the rays (see `raster`),
-    /// else traced, giving the hits `first_hit` gives.
+    /// else traced, giving the hits `first_hit` gives; and which of the two ran.
     pub fn sample_hits<const N: usize>(
         &self,
         camera: &Camera,
         pixels: &PixelSet,
         offsets: &[(f64, f64); N],
-    ) -> Vec<SampleHits<N>> {
+    ) -> (Vec<SampleHits<N>>, Visibility) {
         if self.corners.len() <= TRIANGLES_PER_RAY * N * pixels.len() {
             let seen = self.seen_by(camera);
             if let Some(hits) = rasterise_samples(camera, seen, self.near(), pixels, offsets) {
-                return hits;
+                return (hits, Visibility::Rasterised);
             }
         }
         let k = camera.intrinsics;
-        (0..pixels.len())
+        let hits = (0..pixels.len())
             .into_par_iter()
             .map(|i| {
                 let (row, col) = pixels.at(i);
                 offsets.map(|(du, dv)| self.first_hit(camera, k.ray_through(col + du, row + dv)))
             })
-            .collect()
+            .collect();
+        (hits, Visibility::Traced)
     }
 
     /// The triangles as the rasteriser takes them from `camera`, in the mesh's order, but
@@ -443,6 +453,7 @@ impl TraceMesh {
             height: k.height,
             depth,
             triangle,
+            visibility: Visibility::Traced,
         }
     }
 
@@ -692,8 +703,12 @@ mod tests {
         let g = trace.trace(&camera);
         let rows: Vec<Vec<u32>> = (0..48).map(|_| (0..64).collect()).collect();
         let pixels = PixelSet::from_rows(&rows);
-        let centres = trace.sample_hits(&camera, &pixels, &[(0.5, 0.5)]);
+        let (centres, found) = trace.sample_hits(&camera, &pixels, &[(0.5, 0.5)]);
         assert!(trace.tree.get().is_none(), "a BVH was built");
+        assert_eq!(
+            (g.visibility, found),
+            (Visibility::Rasterised, Visibility::Rasterised)
+        );
         let mut seen = 0;
         for (i, [hit]) in centres.into_iter().enumerate() {
             let (row, col) = pixels.at(i);
@@ -711,5 +726,27 @@ mod tests {
             trace.tree.get().is_some() && seen > 500,
             "{seen} pixels meet the cube"
         );
+    }
+
+    /// A lens's curved rays cannot be rasterised: the same cube seen through barrel
+    /// distortion is traced, centres and sub-pixel rays alike, and says so.
+    #[test]
+    fn views_through_a_distorting_lens_say_they_were_traced() {
+        let trace = TraceMesh::build(&crate::geometry::import::tests::cube());
+        let mut k = crate::cameras::Intrinsics::from_fov_y(64, 48, 1.0);
+        k.distortion = crate::cameras::Distortion {
+            k1: -0.2,
+            ..Default::default()
+        };
+        let camera = Camera::look_at(k, DVec3::new(1.6, -0.9, 1.3), DVec3::splat(0.5), DVec3::Z);
+        let g = trace.trace(&camera);
+        let pixels = PixelSet::from_rows(&[vec![10, 11], vec![20]]);
+        let (hits, found) = trace.sample_hits(&camera, &pixels, &[(0.25, 0.25), (0.75, 0.75)]);
+        assert_eq!(
+            (g.visibility, found),
+            (Visibility::Traced, Visibility::Traced)
+        );
+        assert_eq!(hits.len(), 3);
+        assert!(g.triangle.iter().any(|&t| t != NO_HIT));
     }
 }
