@@ -234,6 +234,29 @@ class _Output:
         return self if view is None else view.load(self.name)
 
 
+class _CameraMatrix:
+    """One of the camera's arrays declared on :class:`View` as a typed, read-only attribute:
+    ``view.K`` is ``view.camera.K``."""
+
+    def __init__(self, doc: str) -> None:
+        self.name = ""
+        self.__doc__ = doc
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    @overload
+    def __get__(self, view: None, owner: type) -> _CameraMatrix: ...
+
+    @overload
+    def __get__(self, view: View, owner: type) -> NDArray[np.float64]: ...
+
+    def __get__(self, view: View | None, owner: type) -> _CameraMatrix | NDArray[np.float64]:
+        if view is None:
+            return self
+        return np.asarray(getattr(view.camera, self.name), dtype=np.float64)
+
+
 class View:
     """One view of a sample, clean or an augmented copy of it, and everything it has.
 
@@ -258,6 +281,12 @@ class View:
     ``ray_distance``. Asking for one the view does not have raises :class:`MissingFileError`
     naming the view and the output; :meth:`has` and :attr:`layers` tell which it has.
     """
+
+    K = _CameraMatrix("Intrinsics, 3 × 3, pixels.")
+    c2w = _CameraMatrix("Camera → world, OpenCV axes, 4 × 4.")
+    c2w_opengl = _CameraMatrix("Camera → world, OpenGL axes, 4 × 4.")
+    w2c = _CameraMatrix("World → camera, OpenCV axes, 4 × 4.")
+    distortion = _CameraMatrix("The lens: (k1, k2, p1, p2, k3).")
 
     rgb = _Output()
     depth = _Output()
@@ -337,31 +366,6 @@ class View:
             except (KeyError, ValueError, TypeError) as error:
                 raise DatasetError(f"{self.files['json']}: {error}") from None
         return self._camera
-
-    @property
-    def K(self) -> NDArray[np.float64]:
-        """Intrinsics, 3 × 3, pixels."""
-        return self.camera.K
-
-    @property
-    def c2w(self) -> NDArray[np.float64]:
-        """Camera → world, OpenCV axes, 4 × 4."""
-        return self.camera.c2w
-
-    @property
-    def c2w_opengl(self) -> NDArray[np.float64]:
-        """Camera → world, OpenGL axes, 4 × 4."""
-        return self.camera.c2w_opengl
-
-    @property
-    def w2c(self) -> NDArray[np.float64]:
-        """World → camera, OpenCV axes, 4 × 4."""
-        return self.camera.w2c
-
-    @property
-    def distortion(self) -> NDArray[np.float64]:
-        """The lens: ``(k1, k2, p1, p2, k3)``."""
-        return self.camera.distortion
 
     @property
     def is_copy(self) -> bool:

@@ -114,16 +114,3 @@ def test_structures_by_name_are_their_pixels_in_the_world(tmp_path):
         with pytest.raises(KeyError, match="no structure named 'box'.*'box#0', 'box#1', 'pier'"):
             structures["box"]
 
-
-def test_beam_labels_are_reached_by_the_beams_name(deformation):
-    data = Dataset(deformation)
-    beams = [sample for sample in data.samples if "beam" in sample.structures]
-    assert beams, "the deformation recipe's seed draws beams"
-    for sample in beams:
-        beam = sample.structures["beam"]
-        assert (beam.kind, beam.index, beam.instance_id) == ("beam", 0, 1)
-        assert beam.labels is not None and sample.labels == {"beam": beam.labels}
-        for view in sample.views:
-            assert view.labels["beam"] == beam.labels
-            # The beam's part ids are where the view sees the beam (its only structure).
-            assert np.array_equal(np.isin(view.parts, beam.part_ids), view.mask), view.stem
