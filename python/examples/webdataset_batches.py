@@ -2,7 +2,7 @@
 decoders: depth as float32 metres, masks as bool, part ids as int32; nothing of ours decodes.
 docs/using-the-data.md shows this code; python/tests/test_webdataset.py runs it.
 
-    python python/examples/webdataset_batches.py out/qs-wds     # pip install torch webdataset
+    python python/examples/webdataset_batches.py out/qs-wds     # pip install -e "python/[torch,webdataset]"
 """
 
 from __future__ import annotations
