@@ -116,9 +116,10 @@ enum Command {
         /// The folder to create (it must not exist; it appears only when complete).
         #[arg(long)]
         out: PathBuf,
-        /// webdataset: views per tar shard.
-        #[arg(long, value_name = "N", default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..))]
-        shard_size: u64,
+        /// webdataset: views per tar shard (default: near-equal shards, at least 16 or one
+        /// per view, at most 1000 views each, so every DataLoader worker gets shards).
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+        shard_size: Option<u64>,
         /// Copy images instead of hard-linking them to the dataset's.
         #[arg(long)]
         copy: bool,
@@ -285,7 +286,7 @@ fn execute(command: Command) -> Result<()> {
                 &ExportOptions {
                     format,
                     out: out.clone(),
-                    shard_size: usize::try_from(shard_size).unwrap_or(usize::MAX),
+                    shard_size: shard_size.map(|n| usize::try_from(n).unwrap_or(usize::MAX)),
                     copy,
                     with_copies,
                 },

@@ -56,7 +56,7 @@ def draw(data: Dataset, index: int, out: Path) -> None:
     rest = trimesh.load(sample.path("rest.ply"), process=False)
     _, distance, _ = trimesh.proximity.closest_point(mesh, cloud.points)
     micrometres = distance * 1e6
-    labels = sample.labels[0]
+    labels = sample.labels["beam"]
     views = len(sample.clean_views())
 
     rng = np.random.default_rng(0)

@@ -4,14 +4,18 @@
 >>> data = Dataset("out/quickstart")
 >>> view = data[0]
 >>> view.rgb.shape, view.depth.shape, view.mask.dtype, view.K
+>>> view.is_copy, view.clean_stem, view.augmentation   # clean view or augmented copy, and of which
+>>> view.labels["beam"]["max_deflection"], view.structures["beam"].instance_id
 >>> cloud = fuse(data.samples[0])        # every view's depth back to world points
 
-Submodules: :mod:`shmgen_data.dataset` (datasets, samples, views), :mod:`shmgen_data.camera`
+Submodules: :mod:`shmgen_data.dataset` (datasets, samples, views), :mod:`shmgen_data.structures`
+(structures by name, augmentation records), :mod:`shmgen_data.camera`
 (cameras and OpenCV's lens model), :mod:`shmgen_data.geometry` (back-projection, fusion),
 :mod:`shmgen_data.io` (EXR, PNG and binary PLY readers), :mod:`shmgen_data.files` (a dataset's
 files opened as untrusted input: no links, bounded reads, :class:`Limits`),
-:mod:`shmgen_data.arrays` (a view as training arrays) and :mod:`shmgen_data.torch` (a PyTorch
-``Dataset``, if torch is installed).
+:mod:`shmgen_data.arrays` (a view as training arrays), :mod:`shmgen_data.webdataset` (shards
+of ``shmgen export --format webdataset`` in WebDataset pipelines) and :mod:`shmgen_data.torch`
+(a PyTorch ``Dataset``, if torch is installed). The package is typed (``py.typed``).
 """
 
 from .arrays import view_arrays
@@ -20,11 +24,12 @@ from .dataset import LAYERS, Dataset, Mesh, MissingFileError, Points, Sample, Ve
 from .files import DatasetError, Limits
 from .geometry import Cloud, backproject, fuse
 from .io import read_exr, read_ply, read_png
+from .structures import Augmentation, Structure, Structures
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "Camera", "Cloud", "Dataset", "DatasetError", "LAYERS", "Limits", "Mesh", "MissingFileError",
+    "Augmentation", "Structure", "Structures", "Camera", "Cloud", "Dataset", "DatasetError", "LAYERS", "Limits", "Mesh", "MissingFileError",
     "Points", "Sample", "Verification", "View", "backproject", "distort", "fuse", "read_exr",
     "read_ply", "read_png", "undistort", "view_arrays",
 ]

@@ -6,7 +6,10 @@ turns its arrays into tensors), so it is usable, and tested, without PyTorch.
 
 from __future__ import annotations
 
+from typing import Any, Sequence, Union
+
 import numpy as np
+from numpy.typing import NDArray
 
 from .dataset import LAYERS, View
 
@@ -14,6 +17,9 @@ __all__ = ["view_arrays", "CAMERA_KEYS"]
 
 #: The camera arrays :func:`view_arrays` adds, float32.
 CAMERA_KEYS = ("K", "c2w", "w2c", "c2w_opengl", "distortion")
+
+#: What :func:`view_arrays` gives: arrays, and the view's indices, stem and whether it is a copy.
+Item = dict[str, Union[NDArray[Any], int, str, bool]]
 
 _MASKS = {"mask", "cracks", "erased", "valid", "flow_valid"}
 _IDS = {"parts", "instances"}
@@ -31,7 +37,8 @@ def layer_array(view: View, name: str) -> np.ndarray:
     """
     values = view.load(name)
     if name in _COLOURS:
-        return np.ascontiguousarray(values.transpose(2, 0, 1), dtype=np.float32) / np.float32(255)
+        colours = np.ascontiguousarray(values.transpose(2, 0, 1), dtype=np.float32)
+        return np.asarray(colours / np.float32(255), dtype=np.float32)
     if name in _IDS:
         return values.astype(np.int64)
     if values.ndim == 2:
@@ -39,16 +46,17 @@ def layer_array(view: View, name: str) -> np.ndarray:
     return np.ascontiguousarray(values.transpose(2, 0, 1))
 
 
-def view_arrays(view: View, layers=("rgb", "depth", "mask"), *, camera: bool = True) -> dict:
+def view_arrays(view: View, layers: Sequence[str] = ("rgb", "depth", "mask"), *,
+                camera: bool = True) -> Item:
     """``view``'s ``layers`` (see :func:`layer_array`) by name, plus, with ``camera``, its
     ``K`` (3 × 3), ``c2w`` and ``w2c`` (OpenCV axes) and ``c2w_opengl`` (4 × 4) and
     ``distortion`` (``k1, k2, p1, p2, k3``), all float32, and its ``sample``, ``view`` and
-    ``copy`` (−1 for a clean view) indices and ``stem``.
+    ``copy`` (−1 for a clean view) indices, ``is_copy`` and ``stem``.
 
     Raises :class:`shmgen_data.MissingFileError` naming the view and the output if the view
     lacks one of ``layers``, and ``KeyError`` for an unknown output name.
     """
-    out = {}
+    out: Item = {}
     for name in layers:
         if name not in LAYERS:
             raise KeyError(f"unknown output {name!r} (known: {', '.join(LAYERS)})")
@@ -60,5 +68,6 @@ def view_arrays(view: View, layers=("rgb", "depth", "mask"), *, camera: bool = T
     out["sample"] = view.sample
     out["view"] = view.view
     out["copy"] = -1 if view.copy is None else view.copy
+    out["is_copy"] = view.is_copy
     out["stem"] = view.stem
     return out

@@ -19,13 +19,18 @@ and then at pixel ``K · (x_d, y_d, 1)``. :meth:`Camera.undistort` inverts it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, Sequence
 
 import numpy as np
+from numpy.typing import NDArray
+
+#: Lens coefficients ``(k1, k2, p1, p2, k3)``, OpenCV's order.
+Coefficients = Sequence[float] | NDArray[np.float64]
 
 __all__ = ["Camera", "distort", "undistort"]
 
 
-def distort(x: np.ndarray, y: np.ndarray, coefficients) -> tuple[np.ndarray, np.ndarray]:
+def distort(x: np.ndarray, y: np.ndarray, coefficients: Coefficients) -> tuple[np.ndarray, np.ndarray]:
     """OpenCV's Brown–Conrady distortion of normalised coordinates ``(x, y)``.
 
     ``coefficients`` are ``(k1, k2, p1, p2, k3)`` in OpenCV's order; returns ``(x_d, y_d)``.
@@ -41,7 +46,7 @@ def distort(x: np.ndarray, y: np.ndarray, coefficients) -> tuple[np.ndarray, np.
 def undistort(
     xd: np.ndarray,
     yd: np.ndarray,
-    coefficients,
+    coefficients: Coefficients,
     *,
     tolerance: float = 1e-13,
     max_iterations: int = 50,
@@ -92,7 +97,7 @@ def undistort(
     )
 
 
-def _matrix(camera: dict, name: str, shape: tuple[int, int]) -> np.ndarray:
+def _matrix(camera: dict[str, Any], name: str, shape: tuple[int, int]) -> np.ndarray:
     try:
         value = np.array(camera[name], dtype=np.float64)
     except KeyError:
@@ -102,7 +107,7 @@ def _matrix(camera: dict, name: str, shape: tuple[int, int]) -> np.ndarray:
     return value
 
 
-def _side(camera: dict, name: str) -> int:
+def _side(camera: dict[str, Any], name: str) -> int:
     try:
         value = camera[name]
     except KeyError:
@@ -133,7 +138,7 @@ class Camera:
     pixel_center: float = 0.5
 
     @classmethod
-    def from_record(cls, record: dict) -> "Camera":
+    def from_record(cls, record: dict[str, Any]) -> "Camera":
         """The camera of a view's JSON record (its ``camera`` object)."""
         try:
             camera = record["camera"]
@@ -167,7 +172,7 @@ class Camera:
     @property
     def position(self) -> np.ndarray:
         """The centre of projection, world metres."""
-        return self.c2w[:3, 3].copy()
+        return np.array(self.c2w[:3, 3])
 
     @property
     def distorted(self) -> bool:

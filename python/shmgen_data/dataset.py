@@ -29,16 +29,18 @@ import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Iterator, Sequence
+from typing import Any, Callable, Iterator, Sequence, overload
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .camera import Camera
 from .files import DatasetError, DatasetFiles, Limits, check_relative, parse_hashes
-from .io import PNG_FORMATS, decode_exr, decode_png, parse_ply
+from .io import PNG_FORMATS, Ply, decode_exr, decode_png, parse_ply
+from .structures import Augmentation, Record, Structure, Structures
 
 __all__ = ["Dataset", "Sample", "View", "Mesh", "Points", "LAYERS", "MissingFileError",
-           "DatasetError", "Limits", "Verification"]
+           "DatasetError", "Limits", "Verification", "Structure", "Structures", "Augmentation"]
 
 RUN_SCHEMA = "shmgen.run/1"
 VIEW_SCHEMA = "shmgen.view/1"
@@ -55,12 +57,12 @@ class _Layer:
     kind: str  # the file name after the stem: "depth.exr"
     read: str  # "rgb", "binary", "ids" or "exr"
     convention: str | None = None  # the record's object naming its EXR channels
-    channels: tuple = ()  # default EXR channels, if the record does not name them
+    channels: tuple[str, ...] = ()  # default EXR channels, if the record does not name them
     values: str = ""  # what the values must be: "depth", "unit", "finite", "ids" (see _VALUE_CHECKS)
     ids_table: str | None = None  # the record's segmentation table an id indexes
 
     @property
-    def png_formats(self) -> dict:
+    def png_formats(self) -> dict[tuple[int, int], tuple[int, int]]:
         """The PNG ``(bit depth, colour type)`` the layer is written in (see PNG_FORMATS)."""
         allowed = {"rgb": [(8, 2)], "binary": [(8, 0)], "ids": [(8, 0), (16, 0)]}[self.read]
         return {fmt: PNG_FORMATS[fmt] for fmt in allowed}
@@ -92,6 +94,9 @@ LAYERS = {
 
 #: How far a normal's length may be from 1 (float32 rounding of a unit vector is ~1e-7).
 UNIT_TOLERANCE = 1e-3
+
+#: A view as a sample lists it: (view index, copy index or None, stem, absolute paths by kind).
+_Entry = tuple[int, int | None, str, dict[str, Path]]
 
 _STEM = re.compile(r"^(\d+)(?:_(\d+)(?:a(\d+))?)?$")
 
@@ -128,7 +133,7 @@ class Points:
     normals: np.ndarray
 
 
-def _first_bad(bad: np.ndarray, values: np.ndarray, shown: str, rule: str) -> None:
+def _first_bad(bad: NDArray[np.bool_], values: NDArray[Any], shown: str, rule: str) -> None:
     """:class:`DatasetError` naming the first pixel (row, column) where ``bad`` holds, its
     value and the ``rule`` it breaks; nothing if ``bad`` holds nowhere."""
     if not bad.any():
@@ -146,30 +151,31 @@ def _first_bad(bad: np.ndarray, values: np.ndarray, shown: str, rule: str) -> No
 # looks for the first bad pixel only when something is wrong.
 
 
-def _check_depth(values, shown, record, layer):
+def _check_depth(values: NDArray[Any], shown: str, record: Record, layer: _Layer) -> None:
     if not (values.min() >= 0 and values.max() < np.inf):
         _first_bad(~((values >= 0) & (values < np.inf)), values, shown,
                    "a distance must be finite and ≥ 0 (0 = no surface)")
 
 
-def _unit_or_zero(squared: np.ndarray) -> np.ndarray:
+def _unit_or_zero(squared: NDArray[np.floating[Any]]) -> NDArray[np.bool_]:
     """Where a squared length is 0, or that of a unit vector within UNIT_TOLERANCE (False
     for NaN and inf)."""
-    return (squared == 0) | ((squared >= (1 - UNIT_TOLERANCE) ** 2) & (squared <= (1 + UNIT_TOLERANCE) ** 2))
+    within = (squared >= (1 - UNIT_TOLERANCE) ** 2) & (squared <= (1 + UNIT_TOLERANCE) ** 2)
+    return np.asarray((squared == 0) | within, dtype=np.bool_)
 
 
-def _check_unit(values, shown, record, layer):
+def _check_unit(values: NDArray[Any], shown: str, record: Record, layer: _Layer) -> None:
     squared = np.einsum("...i,...i->...", values, values)
     _first_bad(~_unit_or_zero(squared), values, shown,
                f"a normal must be finite with length 1 (within {UNIT_TOLERANCE}) or be 0 (no surface)")
 
 
-def _check_finite(values, shown, record, layer):
+def _check_finite(values: NDArray[Any], shown: str, record: Record, layer: _Layer) -> None:
     if not np.isfinite(values).all():
         _first_bad(~np.all(np.isfinite(values), axis=-1), values, shown, "values must be finite")
 
 
-def _check_ids(values, shown, record, layer):
+def _check_ids(values: NDArray[Any], shown: str, record: Record, layer: _Layer) -> None:
     table = (record.get("segmentation") or {}).get(layer.ids_table)
     if isinstance(table, list):
         _first_bad(values >= len(table), values, shown,
@@ -177,7 +183,7 @@ def _check_ids(values, shown, record, layer):
 
 
 #: The value checks of :attr:`_Layer.values`: (values, file shown, record, layer) → None.
-_VALUE_CHECKS = {"depth": _check_depth, "unit": _check_unit, "finite": _check_finite, "ids": _check_ids}
+_VALUE_CHECKS: dict[str, Callable[[NDArray[Any], str, Record, _Layer], None]] = {"depth": _check_depth, "unit": _check_unit, "finite": _check_finite, "ids": _check_ids}
 
 
 @dataclass
@@ -191,8 +197,8 @@ class Verification:
     """
 
     checked: int = 0
-    problems: dict = field(default_factory=dict)
-    unhashed: list = field(default_factory=list)
+    problems: dict[str, str] = field(default_factory=dict)
+    unhashed: list[str] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -205,16 +211,69 @@ class Verification:
         return "\n".join(lines)
 
 
+class _Output:
+    """A per-view output declared on :class:`View` as a typed, read-only attribute:
+    ``view.depth`` is ``view.load("depth")`` (see :data:`LAYERS`)."""
+
+    def __init__(self) -> None:
+        self.name = ""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        if name not in LAYERS:
+            raise TypeError(f"View.{name}: no such output in LAYERS")
+        self.name = name
+        self.__doc__ = f"The view's {name!r} output (see LAYERS)."
+
+    @overload
+    def __get__(self, view: None, owner: type) -> _Output: ...
+
+    @overload
+    def __get__(self, view: View, owner: type) -> NDArray[Any]: ...
+
+    def __get__(self, view: View | None, owner: type) -> _Output | NDArray[Any]:
+        return self if view is None else view.load(self.name)
+
+
+class _CameraMatrix:
+    """One of the camera's arrays declared on :class:`View` as a typed, read-only attribute:
+    ``view.K`` is ``view.camera.K``."""
+
+    def __init__(self, doc: str) -> None:
+        self.name = ""
+        self.__doc__ = doc
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    @overload
+    def __get__(self, view: None, owner: type) -> _CameraMatrix: ...
+
+    @overload
+    def __get__(self, view: View, owner: type) -> NDArray[np.float64]: ...
+
+    def __get__(self, view: View | None, owner: type) -> _CameraMatrix | NDArray[np.float64]:
+        if view is None:
+            return self
+        return np.asarray(getattr(view.camera, self.name), dtype=np.float64)
+
+
 class View:
-    """One view of a sample (or one augmented copy of it) and everything it has.
+    """One view of a sample, clean or an augmented copy of it, and everything it has.
 
     Metadata: ``sample``, ``view``, ``copy`` (None for the clean view), ``stem``
     (``000003_01`` or ``000003_01a0``), ``files`` (absolute paths by kind: ``"rgb.png"``,
     ``"depth.exr"``, ``"json"``…), ``record`` (the view's JSON), ``camera`` (:class:`Camera`),
     and from it ``K``, ``c2w`` (OpenCV axes), ``c2w_opengl``, ``w2c`` and ``distortion``
-    (``k1, k2, p1, p2, k3``). ``structures`` and ``labels``: the sample's structures as
-    recorded, and the mechanics' labels of each (``max_deflection``, ``loads``, ``theory``…;
-    None for a structure without labels).
+    (``k1, k2, p1, p2, k3``).
+
+    Clean or copy: ``is_copy`` (False for a clean view), ``clean_stem`` (the stem of the clean
+    view a copy was made from: same sample, same view index, same scene) and
+    ``augmentation`` (an :class:`Augmentation`: copy index, ``"exact"`` or ``"image"`` mode,
+    the operations with their drawn values; None for a clean view).
+
+    Structures by name: ``structures`` (a :class:`Structures` mapping: ``view.structures["silo"]``
+    gives its ``instance_id``, ``part_ids``, ``labels``…) and ``labels`` (each structure's
+    mechanics labels by name: ``view.labels["beam"]["max_deflection"]``; None for an assembly).
 
     Images (see :data:`LAYERS` for shapes and dtypes), read on first access and kept:
     ``rgb``, ``depth``, ``mask``, ``parts``, ``instances``, ``cracks``, ``erased``, ``valid``,
@@ -223,8 +282,30 @@ class View:
     naming the view and the output; :meth:`has` and :attr:`layers` tell which it has.
     """
 
+    K = _CameraMatrix("Intrinsics, 3 × 3, pixels.")
+    c2w = _CameraMatrix("Camera → world, OpenCV axes, 4 × 4.")
+    c2w_opengl = _CameraMatrix("Camera → world, OpenGL axes, 4 × 4.")
+    w2c = _CameraMatrix("World → camera, OpenCV axes, 4 × 4.")
+    distortion = _CameraMatrix("The lens: (k1, k2, p1, p2, k3).")
+
+    rgb = _Output()
+    depth = _Output()
+    mask = _Output()
+    parts = _Output()
+    instances = _Output()
+    cracks = _Output()
+    erased = _Output()
+    valid = _Output()
+    normals = _Output()
+    displacement = _Output()
+    flow = _Output()
+    flow_valid = _Output()
+    rest_rgb = _Output()
+    rest_depth = _Output()
+    ray_distance = _Output()
+
     def __init__(self, root: Path, sample: int, view: int, copy: int | None, stem: str,
-                 files: dict, source: DatasetFiles | None = None):
+                 files: dict[str, Path], source: DatasetFiles | None = None):
         self.root = root
         self.sample = sample
         self.view = view
@@ -232,7 +313,10 @@ class View:
         self.stem = stem
         self.files = files
         self._source = source or DatasetFiles(root)
-        self._cache: dict = {}
+        self._images: dict[str, NDArray[Any]] = {}
+        self._record: Record | None = None
+        self._camera: Camera | None = None
+        self._structures: Structures | None = None
 
     def __repr__(self) -> str:
         return f"View({self.stem!r}, layers={self.layers})"
@@ -260,9 +344,9 @@ class View:
             ) from None
 
     @property
-    def record(self) -> dict:
+    def record(self) -> Record:
         """The view's JSON record (``shmgen.view/1``)."""
-        if "record" not in self._cache:
+        if self._record is None:
             try:
                 path = self.files["json"]
             except KeyError:
@@ -270,50 +354,78 @@ class View:
             record = self._source.read_json(_relative(self.root, path))
             if record.get("schema") != VIEW_SCHEMA:
                 raise DatasetError(f"{path}: schema {record.get('schema')!r}; this reader reads {VIEW_SCHEMA!r}")
-            self._cache["record"] = record
-        return self._cache["record"]
+            self._record = record
+        return self._record
 
     @property
     def camera(self) -> Camera:
         """The camera the view's files agree with."""
-        if "camera" not in self._cache:
+        if self._camera is None:
             try:
-                self._cache["camera"] = Camera.from_record(self.record)
+                self._camera = Camera.from_record(self.record)
             except (KeyError, ValueError, TypeError) as error:
                 raise DatasetError(f"{self.files['json']}: {error}") from None
-        return self._cache["camera"]
-
-    K = property(lambda self: self.camera.K, doc="Intrinsics, 3 × 3, pixels.")
-    c2w = property(lambda self: self.camera.c2w, doc="Camera → world, OpenCV axes, 4 × 4.")
-    c2w_opengl = property(lambda self: self.camera.c2w_opengl, doc="Camera → world, OpenGL axes.")
-    w2c = property(lambda self: self.camera.w2c, doc="World → camera, OpenCV axes, 4 × 4.")
-    distortion = property(lambda self: self.camera.distortion, doc="(k1, k2, p1, p2, k3).")
+        return self._camera
 
     @property
-    def structures(self) -> list[dict]:
-        """The sample's structures as recorded (``scene.structures``)."""
-        return self.record["scene"]["structures"]
+    def is_copy(self) -> bool:
+        """Whether the view is an augmented copy (its stem ends in ``a{copy}``)."""
+        return self.copy is not None
 
     @property
-    def labels(self) -> list[dict | None]:
-        """Per structure, the mechanics' labels (``max_deflection``, ``loads``, ``theory``…),
-        None for a structure without them (an assembly)."""
-        return [s.get("labels") for s in self.structures]
+    def clean_stem(self) -> str:
+        """The stem of the clean view this view is, or was copied from: ``000003_01`` for
+        ``000003_01`` and for its copies ``000003_01a0``, ``000003_01a1``… The clean view
+        exists unless the recipe's augment had ``keep_clean: false``."""
+        return f"{self.sample:06}_{self.view:02}"
 
-    def load(self, name: str) -> np.ndarray:
+    @property
+    def augmentation(self) -> Augmentation | None:
+        """How the copy was made (None for a clean view), checked against the file name."""
+        value = self.record.get("augmentation")
+        shown = str(self.files["json"])
+        if value is None:
+            if self.copy is not None:
+                raise DatasetError(f"{shown}: a copy's record (a{self.copy}) without augmentation")
+            return None
+        augmentation = Augmentation.from_record(value, shown)
+        if augmentation.copy != self.copy:
+            raise DatasetError(f"{shown}: augmentation.copy is {augmentation.copy}, the file name says {self.copy}")
+        return augmentation
+
+    @property
+    def structures(self) -> Structures:
+        """The sample's structures by name, from ``scene.structures`` and ``segmentation``."""
+        if self._structures is None:
+            self._structures = Structures.from_record(self.record, str(self.files.get("json", self.stem)))
+        return self._structures
+
+    @property
+    def labels(self) -> dict[str, Record | None]:
+        """Each structure's mechanics labels by name (``max_deflection``, ``loads``,
+        ``theory``…), None for a structure without them (an assembly)."""
+        return self.structures.labels
+
+    def structure_mask(self, name: str) -> NDArray[np.bool_]:
+        """Where the view's ``instances`` image shows the structure ``name``."""
+        structure: Structure = self.structures[name]
+        return structure.mask(self.instances)
+
+    def load(self, name: str) -> NDArray[Any]:
         """The per-pixel output ``name`` as an array (read once, then kept)."""
-        if name not in self._cache:
-            self._cache[name] = self._read(name)
-        return self._cache[name]
+        if name not in self._images:
+            self._images[name] = self._read(name)
+        return self._images[name]
 
-    def _read(self, name: str) -> np.ndarray:
+    def _read(self, name: str) -> NDArray[Any]:
         path = self.path(name)  # raises for unknown and missing outputs
         layer = LAYERS[name]
         limits = self._source.limits
         size = self._size(limits)
         relative, shown = _relative(self.root, path), str(path)
+        values: NDArray[Any]
         if layer.read == "exr":
-            convention = self.record.get(layer.convention) or {}
+            convention = self.record.get(layer.convention or "") or {}
             channels = convention.get("channels") or (
                 [convention["channel"]] if "channel" in convention else list(layer.channels)
             )
@@ -354,14 +466,6 @@ def _relative(root: Path, path: Path) -> str:
     return path.relative_to(root).as_posix()
 
 
-def _layer_property(name: str):
-    return property(lambda self: self.load(name), doc=f"The view's {name!r} output (see LAYERS).")
-
-
-for _name in LAYERS:
-    setattr(View, _name, _layer_property(_name))
-
-
 class Sample:
     """One sample: its views (clean and augmented copies, in file-name order) and its own
     files: ``mesh()`` and ``rest_mesh()`` (loaded and unloaded meshes, the same faces over
@@ -369,7 +473,7 @@ class Sample:
     surface). ``record`` is its first view's JSON (the scene, labels and light are the
     sample's); ``structures`` and ``labels`` as for :class:`View`."""
 
-    def __init__(self, root: Path, index: int, entries: list, files: dict,
+    def __init__(self, root: Path, index: int, entries: list[_Entry], files: dict[str, Path],
                  source: DatasetFiles | None = None):
         self.root = root
         self.index = index
@@ -388,21 +492,39 @@ class Sample:
 
     def clean_views(self) -> list[View]:
         """The sample's clean (not augmented) views."""
-        return [v for v in self.views if v.copy is None]
+        return [v for v in self.views if not v.is_copy]
+
+    def copies(self) -> list[View]:
+        """The sample's augmented copies."""
+        return [v for v in self.views if v.is_copy]
+
+    def clean_view(self, view: View) -> View:
+        """The clean view ``view`` is a copy of (``view`` itself if it is clean):
+        :class:`MissingFileError` if the dataset kept no clean views (``keep_clean: false``)."""
+        for candidate in self.clean_views():
+            if candidate.stem == view.clean_stem:
+                return candidate
+        raise MissingFileError(
+            f"sample {self.index} of {self.root} has no clean view {view.clean_stem} "
+            f"(the recipe's augment has keep_clean: false); {view.stem} is all there is"
+        )
 
     @cached_property
-    def record(self) -> dict:
+    def record(self) -> Record:
+        """Its first view's JSON record (the scene, labels and light are the sample's)."""
         if not self._entries:
             raise MissingFileError(f"sample {self.index} of {self.root} has no views")
         return self.views[0].record
 
-    @property
-    def structures(self) -> list[dict]:
-        return self.record["scene"]["structures"]
+    @cached_property
+    def structures(self) -> Structures:
+        """The sample's structures by name (see :class:`View`)."""
+        return self.views[0].structures if self._entries else Structures([])
 
     @property
-    def labels(self) -> list[dict | None]:
-        return [s.get("labels") for s in self.structures]
+    def labels(self) -> dict[str, Record | None]:
+        """Each structure's mechanics labels by name (None for an assembly)."""
+        return self.structures.labels
 
     def path(self, kind: str) -> Path:
         """The sample's file of ``kind`` (``"mesh.ply"``, ``"rest.ply"``, ``"mesh.glb"``,
@@ -417,7 +539,7 @@ class Sample:
                 f"(it has {', '.join(sorted(self.files)) or 'none'}); add \"{output}\" to the recipe's outputs"
             ) from None
 
-    def _ply(self, kind: str):
+    def _ply(self, kind: str) -> tuple[Ply, NDArray[np.float64]]:
         """The sample's PLY file of ``kind``, read within ``Limits.mesh_bytes``, its
         vertices checked finite."""
         path = self.path(kind)
@@ -463,14 +585,14 @@ class Sample:
         return Points(xyz, normals)
 
 
-def _first_vertex(bad: np.ndarray, values: np.ndarray, path, rule: str) -> None:
+def _first_vertex(bad: NDArray[np.bool_], values: NDArray[Any], path: Path, rule: str) -> None:
     """:class:`DatasetError` naming the first vertex where ``bad`` holds, and its values."""
     if bad.any():
         k = int(np.argmax(bad))
         raise DatasetError(f"{path}: vertex {k} holds {values[k].tolist()}; {rule} ({int(bad.sum())} such vertices)")
 
 
-class Dataset(Sequence):
+class Dataset(Sequence[View]):
     """A shmgen dataset: a sequence of its views (clean views and augmented copies, as the
     manifest lists them, in sample order), with its samples.
 
@@ -488,7 +610,7 @@ class Dataset(Sequence):
     size. :meth:`verify` checks every file's BLAKE3 against the manifest's ``hashes``.
     """
 
-    def __init__(self, root: str | os.PathLike, *, complete: bool = True, copies: bool = True,
+    def __init__(self, root: str | os.PathLike[str], *, complete: bool = True, copies: bool = True,
                  limits: Limits | None = None):
         self.root = Path(root)
         self.limits = limits or Limits()
@@ -523,7 +645,7 @@ class Dataset(Sequence):
     @property
     def name(self) -> str:
         """The dataset's name, as the recipe gave it."""
-        return self.run["dataset"]["name"]
+        return str(self.run["dataset"]["name"])
 
     @property
     def outputs(self) -> list[str]:
@@ -533,7 +655,13 @@ class Dataset(Sequence):
     def __len__(self) -> int:
         return len(self._views)
 
-    def __getitem__(self, index):
+    @overload
+    def __getitem__(self, index: int) -> View: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> list[View]: ...
+
+    def __getitem__(self, index: int | slice) -> View | list[View]:
         if isinstance(index, slice):
             return [self[i] for i in range(*index.indices(len(self)))]
         sample, (view, copy, stem, files) = self._views[index]
@@ -553,7 +681,7 @@ class Dataset(Sequence):
                 return sample
         raise KeyError(f"{self.root}: no sample {index} in the manifest")
 
-    def _read_manifest(self) -> dict:
+    def _read_manifest(self) -> dict[int, list[str]]:
         """Sample index → the files its line lists (the first line of a sample counts), read
         line by line within ``Limits.manifest_bytes`` and ``manifest_line_bytes``; each
         line's ``hashes``, if it has them, go to the files' expected sizes and BLAKE3s."""
@@ -604,9 +732,9 @@ class Dataset(Sequence):
                 result.problems[relative] = problem
         return result
 
-    def _sample(self, index: int, files: list, copies: bool) -> Sample:
-        views: dict = {}
-        own = {}
+    def _sample(self, index: int, files: list[str], copies: bool) -> Sample:
+        views: dict[tuple[int, int], _Entry] = {}
+        own: dict[str, Path] = {}
         where = f"{self.root}/manifest.jsonl: sample {index}"
         for relative in sorted(set(files)):  # plain relative paths (checked by _read_manifest)
             path = self.root / relative
@@ -624,7 +752,7 @@ class Dataset(Sequence):
         return Sample(self.root, index, entries, own, self._files)
 
 
-def _first_missing(listed: dict, total: int) -> int | None:
+def _first_missing(listed: dict[int, list[str]], total: int) -> int | None:
     """The first sample index below ``total`` that ``listed`` lacks (without counting up to
     ``total``, which comes from run.json and could be anything)."""
     expected = 0

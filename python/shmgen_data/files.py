@@ -32,7 +32,7 @@ import re
 import stat
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
+from typing import Any, Iterable, Iterator, NoReturn
 
 __all__ = ["DatasetError", "Limits", "FileHash", "DatasetFiles", "check_relative", "read_named"]
 
@@ -86,7 +86,7 @@ class FileHash:
 _HEX64 = re.compile(r"[0-9a-f]{64}")
 
 
-def check_relative(relative, where: str) -> tuple[str, ...]:
+def check_relative(relative: object, where: str) -> tuple[str, ...]:
     """The components of ``relative``, a path from a manifest; :class:`DatasetError` (saying
     ``where`` it was found) if it could name something outside the dataset or is not plain."""
     if not isinstance(relative, str):
@@ -102,7 +102,7 @@ def check_relative(relative, where: str) -> tuple[str, ...]:
     return parts
 
 
-def parse_hashes(value, files: list, where: str) -> dict[str, FileHash]:
+def parse_hashes(value: object, files: list[str], where: str) -> dict[str, FileHash]:
     """The entries of ``files`` in a manifest line's ``hashes`` object, checked: one for each,
     with a non-negative integer ``bytes`` and 64 lowercase hex digits (entries for files the
     line does not list are never used, so they are left out)."""
@@ -124,11 +124,11 @@ def parse_hashes(value, files: list, where: str) -> dict[str, FileHash]:
     return hashes
 
 
-def _refuse_constant(name: str):
+def _refuse_constant(name: str) -> NoReturn:
     raise ValueError(f"{name} is not a JSON number")
 
 
-def parse_json(data: bytes, shown: str) -> dict:
+def parse_json(data: bytes, shown: str) -> dict[str, Any]:
     """``data`` parsed as a JSON object (NaN and Infinity refused: shmgen never writes them)."""
     try:
         value = json.loads(data, parse_constant=_refuse_constant)
@@ -165,11 +165,11 @@ def _what_is(mode: int) -> str:
     return "not a regular file"
 
 
-def _refuse(shown: str, mode: int, expected: str = "a regular file"):
+def _refuse(shown: str, mode: int, expected: str = "a regular file") -> NoReturn:
     raise DatasetError(f"{shown}: is {_what_is(mode)}, {expected} is expected")
 
 
-def _failed_open(error: OSError, name: str, dir_fd: int, shown: str, expected: str):
+def _failed_open(error: OSError, name: str, dir_fd: int, shown: str, expected: str) -> OSError | DatasetError:
     """The clear error for an ``open`` of ``name`` in the folder ``dir_fd`` that failed: what
     is there instead, or that nothing is."""
     if error.errno == errno.ENOENT:
@@ -188,7 +188,7 @@ class DatasetFiles:
     them; a file with one must have that size before it is read.
     """
 
-    def __init__(self, root: str | os.PathLike, limits: Limits | None = None):
+    def __init__(self, root: str | os.PathLike[str], limits: Limits | None = None):
         self.root = Path(root)
         self.limits = limits or Limits()
         self.hashes: dict[str, FileHash] = {}
@@ -269,7 +269,7 @@ class DatasetFiles:
         with self.open(relative, limit, what) as opened:
             return opened.read_all()
 
-    def read_json(self, relative: str) -> dict:
+    def read_json(self, relative: str) -> dict[str, Any]:
         """``relative`` as a JSON object, within ``Limits.record_bytes``."""
         data = self.read(relative, self.limits.record_bytes, "a JSON record (Limits.record_bytes)")
         return parse_json(data, self.shown(relative))
@@ -292,7 +292,7 @@ class DatasetFiles:
             return f"{self.shown(relative)}: BLAKE3 {digest}, the manifest's hashes say {expected.blake3} (altered)"
         return None
 
-    def check_listed(self, relatives) -> None:
+    def check_listed(self, relatives: Iterable[str]) -> None:
         """Each of ``relatives`` is a plain path to a regular file (not a link, nor below one)
         of its hashed size: the cheap check of a whole manifest, by ``lstat`` through folders
         opened once each."""
@@ -315,7 +315,7 @@ class DatasetFiles:
             for fd in folders.values():
                 os.close(fd)
 
-    def _cached_folder(self, parts: tuple[str, ...], folders: dict) -> int:
+    def _cached_folder(self, parts: tuple[str, ...], folders: dict[tuple[str, ...], int]) -> int:
         """The folder at ``parts`` below the root, opened without links and kept in ``folders``."""
         if parts not in folders:
             if parts:
@@ -348,7 +348,7 @@ class OpenFile:
     def __enter__(self) -> "OpenFile":
         return self
 
-    def __exit__(self, *_) -> None:
+    def __exit__(self, *_: object) -> None:
         self.close()
 
     def close(self) -> None:
@@ -393,7 +393,7 @@ class OpenFile:
         # `pending` is a torn append, or empty.
 
 
-def read_named(path: str | os.PathLike, limit: int, what: str) -> tuple[bytes, str]:
+def read_named(path: str | os.PathLike[str], limit: int, what: str) -> tuple[bytes, str]:
     """The bytes of a file the user names (links followed: the user chose it), a regular
     file of at most ``limit`` bytes; and how errors name it."""
     shown = str(path)

@@ -32,7 +32,7 @@ import struct
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import BinaryIO, Sequence
+from typing import Any, BinaryIO, Sequence, TypeVar, Union
 
 import numpy as np
 
@@ -43,8 +43,14 @@ __all__ = ["read_exr", "read_png", "read_ply", "decode_exr", "decode_png", "pars
 
 _ON_ITS_OWN = "an image read on its own (Limits.image_file_bytes)"
 
+#: A PLY property's type: a numpy dtype name (``"f4"``), or a list's (count, item) dtypes.
+PlyKind = Union[str, tuple[str, str]]
+#: A PLY property's values: an array, or a list of arrays for lists of varying lengths.
+PlyValues = Union[np.ndarray, list[np.ndarray]]
+_Value = TypeVar("_Value")
 
-def _check_size(shown: str, width: int, height: int, size: tuple[int, int] | None, limits: Limits):
+
+def _check_size(shown: str, width: int, height: int, size: tuple[int, int] | None, limits: Limits) -> None:
     """An image header's ``width × height``: ``size`` if one is expected, else positive and
     within ``limits.max_side``."""
     if size is not None:
@@ -63,7 +69,7 @@ def _check_length(shown: str, length: int, bound: int) -> None:
 # EXR
 
 
-def read_exr(path: str | os.PathLike, channels: Sequence[str], *, limits: Limits | None = None) -> np.ndarray:
+def read_exr(path: str | os.PathLike[str], channels: Sequence[str], *, limits: Limits | None = None) -> np.ndarray:
     """The named channels of the OpenEXR file at ``path`` as float32.
 
     One channel gives an ``(H, W)`` array, several an ``(H, W, C)`` array in the order asked
@@ -77,7 +83,7 @@ def read_exr(path: str | os.PathLike, channels: Sequence[str], *, limits: Limits
     return decode_exr(data, shown, channels, None, limits)
 
 
-def _exr_file(data: bytes, header_only: bool):
+def _exr_file(data: bytes, header_only: bool) -> Any:
     """``OpenEXR.File`` over the bytes ``data``: from memory where the package reads streams
     (OpenEXR 3.5), else from a private temporary copy of the same bytes."""
     import OpenEXR
@@ -92,7 +98,7 @@ def _exr_file(data: bytes, header_only: bool):
             return OpenEXR.File(path, separate_channels=True, header_only=header_only)
 
 
-def _exr_open(data: bytes, shown: str, header_only: bool):
+def _exr_open(data: bytes, shown: str, header_only: bool) -> Any:
     try:
         return _exr_file(data, header_only)
     except Exception as error:  # OpenEXR raises bare exceptions for unreadable files
@@ -100,7 +106,8 @@ def _exr_open(data: bytes, shown: str, header_only: bool):
         raise DatasetError(f"{shown}: not a readable OpenEXR file: {what} ({error})") from None
 
 
-def _exr_header(data: bytes, shown: str, channels: Sequence[str], size, limits: Limits):
+def _exr_header(data: bytes, shown: str, channels: Sequence[str], size: tuple[int, int] | None,
+                limits: Limits) -> tuple[int, int]:
     """The EXR's ``(width, height)`` from its header, checked with its channels before any
     pixel is decoded: one part, a data window from (0, 0), the channels asked for present,
     every channel sampled at every pixel, all channels decoded within the image bound."""
@@ -186,7 +193,7 @@ def png_header(data: bytes, shown: str) -> PngHeader:
     return PngHeader(width, height, depth, colour, interlace)
 
 
-def read_png(path: str | os.PathLike, *, limits: Limits | None = None) -> np.ndarray:
+def read_png(path: str | os.PathLike[str], *, limits: Limits | None = None) -> np.ndarray:
     """The PNG at ``path`` as a numpy array.
 
     RGB gives ``(H, W, 3)`` uint8, RGBA ``(H, W, 4)`` uint8; 8-bit grey ``(H, W)`` uint8;
@@ -197,7 +204,7 @@ def read_png(path: str | os.PathLike, *, limits: Limits | None = None) -> np.nda
     return decode_png(data, shown, PNG_FORMATS, None, limits)
 
 
-def decode_png(data: bytes, shown: str, formats: dict, size: tuple[int, int] | None,
+def decode_png(data: bytes, shown: str, formats: dict[tuple[int, int], tuple[int, int]], size: tuple[int, int] | None,
                limits: Limits) -> np.ndarray:
     """The PNG ``data`` decoded (see :func:`read_png`) once its IHDR is checked: a format of
     ``formats`` (as :data:`PNG_FORMATS`), the ``size`` = ``(width, height)`` expected (or any
@@ -237,7 +244,7 @@ _PLY_TYPES = {
 }
 
 
-def _lookup(table: dict, name: str, missing: str):
+def _lookup(table: dict[str, _Value], name: str, missing: str) -> _Value:
     """``table[name]``, or a ``KeyError`` saying ``missing`` and what the table has."""
     try:
         return table[name]
@@ -255,9 +262,9 @@ class PlyElement:
 
     name: str
     count: int
-    properties: dict = field(default_factory=dict)
+    properties: dict[str, PlyValues] = field(default_factory=dict)
 
-    def __getitem__(self, name: str):
+    def __getitem__(self, name: str) -> Any:
         return _lookup(self.properties, name, f"PLY element {self.name!r} has no property {name!r}")
 
     def __contains__(self, name: str) -> bool:
@@ -269,8 +276,8 @@ class Ply:
     """A PLY file read: its elements by name, in file order, and its comments."""
 
     path: Path
-    elements: dict
-    comments: list
+    elements: dict[str, PlyElement]
+    comments: list[str]
 
     def __getitem__(self, name: str) -> PlyElement:
         return _lookup(self.elements, name, f"{self.path}: no PLY element {name!r}")
@@ -288,12 +295,16 @@ class Ply:
 PLY_HEADER_BYTES = 1 << 20
 
 
-def _parse_header(stream: BinaryIO, path: Path):
+#: A PLY element as its header declares it: (name, count, [(property, kind)]).
+_Declared = tuple[str, int, list[tuple[str, PlyKind]]]
+
+
+def _parse_header(stream: BinaryIO, path: Path) -> tuple[str, list[_Declared], list[str]]:
     if stream.readline(8).rstrip(b"\r\n") != b"ply":
         raise DatasetError(f"{path}: not a PLY file (it does not start with 'ply')")
     fmt = None
-    elements = []  # (name, count, [(prop, dtype) or (prop, (count_dtype, item_dtype))])
-    comments = []
+    elements: list[_Declared] = []
+    comments: list[str] = []
     while True:
         line = stream.readline(max(0, PLY_HEADER_BYTES + 1 - stream.tell()))
         if not line.endswith(b"\n"):
@@ -315,6 +326,7 @@ def _parse_header(stream: BinaryIO, path: Path):
         elif key == "property":
             if not elements:
                 raise DatasetError(f"{path}: PLY property before any element")
+            kind: PlyKind
             try:
                 if words[1] == "list":
                     kind = (_PLY_TYPES[words[2]], _PLY_TYPES[words[3]])
@@ -332,7 +344,8 @@ def _parse_header(stream: BinaryIO, path: Path):
     return ("<" if fmt == "binary_little_endian" else ">"), elements, comments
 
 
-def _take(data: memoryview, offset: int, dtype: str, count: int, path, name: str):
+def _take(data: memoryview, offset: int, dtype: str, count: int, path: Path,
+          name: str) -> tuple[np.ndarray, int]:
     """``count`` values of ``dtype`` at ``offset`` (a copy, native byte order) and the offset
     after them; ``ValueError`` naming the file if the data ends first."""
     end = offset + np.dtype(dtype).itemsize * count
@@ -342,13 +355,15 @@ def _take(data: memoryview, offset: int, dtype: str, count: int, path, name: str
     return values.astype(values.dtype.newbyteorder("=")), end
 
 
-def _read_element(data: memoryview, offset: int, order: str, name: str, count: int, props, path):
+def _read_element(data: memoryview, offset: int, order: str, name: str, count: int,
+                  props: list[tuple[str, PlyKind]], path: Path) -> tuple[PlyElement, int]:
     """Reads one element's ``count`` records from ``data`` at ``offset``; returns (element,
     new offset). Records are read in one go, taking every list to have the length of the
     first record's (checked); record by record when lists vary in length."""
     element = PlyElement(name, count)
     # A structured dtype with the list lengths of the first record.
-    fields, probe = [], offset
+    fields: list[Any] = []
+    probe = offset
     for prop, kind in props:
         if isinstance(kind, str):
             fields.append((prop, order + kind))
@@ -370,15 +385,15 @@ def _read_element(data: memoryview, offset: int, order: str, name: str, count: i
                 element.properties[prop] = column.astype(column.dtype.newbyteorder("="))
             return element, end
     # Lists of varying lengths: record by record.
-    columns = {prop: [] for prop, _ in props}
+    columns: dict[str, list[Any]] = {prop: [] for prop, _ in props}
     for _ in range(count):
         for prop, kind in props:
             if isinstance(kind, str):
                 value, offset = _take(data, offset, order + kind, 1, path, name)
                 columns[prop].append(value[0])
             else:
-                length, offset = _take(data, offset, order + kind[0], 1, path, name)
-                items, offset = _take(data, offset, order + kind[1], int(length[0]), path, name)
+                size, offset = _take(data, offset, order + kind[0], 1, path, name)
+                items, offset = _take(data, offset, order + kind[1], int(size[0]), path, name)
                 columns[prop].append(items)
     for prop, kind in props:
         if isinstance(kind, str):
@@ -388,7 +403,7 @@ def _read_element(data: memoryview, offset: int, order: str, name: str, count: i
     return element, offset
 
 
-def _check_count(path, name: str, count: int, props, left: int) -> None:
+def _check_count(path: Path, name: str, count: int, props: list[tuple[str, PlyKind]], left: int) -> None:
     """An element's declared ``count`` fits in the ``left`` bytes that follow, each record
     taking at least its scalars and list lengths: checked before anything is allocated."""
     least = sum(np.dtype(kind if isinstance(kind, str) else kind[0]).itemsize for _, kind in props)
@@ -406,7 +421,7 @@ def parse_ply(data: bytes, shown: str) -> Ply:
     order, elements, comments = _parse_header(stream, path)
     body = memoryview(data)[stream.tell():]
     offset = 0
-    read = {}
+    read: dict[str, PlyElement] = {}
     for name, count, props in elements:
         _check_count(path, name, count, props, len(body) - offset)
         read[name], offset = _read_element(body, offset, order, name, count, props, path)
@@ -415,7 +430,7 @@ def parse_ply(data: bytes, shown: str) -> Ply:
     return Ply(path, read, comments)
 
 
-def read_ply(path: str | os.PathLike, *, limits: Limits | None = None) -> Ply:
+def read_ply(path: str | os.PathLike[str], *, limits: Limits | None = None) -> Ply:
     """Reads the binary PLY file at ``path`` (little or big endian), of at most
     ``Limits.mesh_bytes``.
 

@@ -13,6 +13,7 @@ is there.
 from __future__ import annotations
 
 import os
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -39,8 +40,9 @@ class ViewDataset(_TorchDataset):
     copies out.
     """
 
-    def __init__(self, data, layers=("rgb", "depth", "mask"), *, copies: bool = True,
-                 transform=None):
+    def __init__(self, data: str | os.PathLike[str] | Dataset,
+                 layers: Sequence[str] = ("rgb", "depth", "mask"), *, copies: bool = True,
+                 transform: Callable[[dict[str, Any]], Any] | None = None):
         if isinstance(data, (str, os.PathLike)):
             data = Dataset(data, copies=copies)
         elif not copies:
@@ -52,7 +54,7 @@ class ViewDataset(_TorchDataset):
     def __len__(self) -> int:
         return len(self.data)
 
-    def __getitem__(self, index: int) -> dict:
+    def __getitem__(self, index: int) -> Any:
         arrays = view_arrays(self.data[index], self.layers)
         item = {k: torch.from_numpy(v) if isinstance(v, np.ndarray) else v for k, v in arrays.items()}
         return self.transform(item) if self.transform is not None else item

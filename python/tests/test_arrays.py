@@ -28,6 +28,7 @@ def test_view_arrays_are_channels_first_with_the_camera(deformation):
         assert arrays[key].shape == shape and arrays[key].dtype == np.float32
     assert np.allclose(arrays["K"], view.record["camera"]["K"], rtol=1e-7)
     assert (arrays["sample"], arrays["view"], arrays["copy"], arrays["stem"]) == (1, 1, -1, "000001_01")
+    assert arrays["is_copy"] is False
     with pytest.raises(KeyError, match="unknown output"):
         view_arrays(view, ("rgb", "colour"))
 

@@ -56,6 +56,7 @@ def test_every_view_loads_with_its_shape_and_dtype(name, request):
         height, width = record["camera"]["height"], record["camera"]["width"]
         for layer in view.layers:
             values = view.load(layer)
+            assert getattr(view, layer) is values, "each output is a declared attribute of View"
             tail, dtype = EXPECTED[layer]
             assert values.shape == (height, width, *tail), (view.stem, layer)
             assert values.dtype == dtype, (view.stem, layer)
@@ -103,15 +104,21 @@ def test_views_of_the_box_see_its_segmentation(box):
 
 def test_beam_labels_come_with_the_views(deformation):
     data = Dataset(deformation)
-    beams = [s for s in data.samples if s.structures[0]["kind"] == "beam"]
+    beams = [s for s in data.samples if "beam" in s.structures]
     assert beams, "the deformation recipe's seed draws beams"
     for sample in beams:
-        labels = sample.labels[0]
-        assert labels["max_deflection"] > 0
+        labels = sample.labels["beam"]
+        assert labels is not None and labels["max_deflection"] > 0
         assert labels["theory"] in ("euler_bernoulli", "timoshenko", "elastica")
         assert labels["loads"]
+        # Reached by the beam's name, with its ids in the segmentation images.
+        beam = sample.structures["beam"]
+        assert (beam.kind, beam.index, beam.instance_id) == ("beam", 0, 1)
+        assert beam.labels == labels and list(sample.labels) == ["beam"]
         for view in sample.views:
             assert view.labels == sample.labels  # shared by every view of the sample
+            # The beam's part ids are where the view sees the beam (its only structure).
+            assert np.array_equal(np.isin(view.parts, beam.part_ids), view.mask), view.stem
 
 
 @pytest.mark.parametrize("name", ["box", "deformation"])

@@ -134,8 +134,15 @@ def test_colmap_models_carry_the_views_cameras_and_images(name, request, tmp_pat
             assert np.array_equal(png(folder / "images" / image_name), view.rgb)
 
 
+#: What the WebDataset export writes each per-view output as: the dataset's PNG, or an array.
+WDS_DTYPES = {"rgb": None, "rest_rgb": None, "depth": np.float32, "rest_depth": np.float32,
+              "ray_distance": np.float32, "normals": np.float32, "displacement": np.float32,
+              "flow": np.float32, "mask": np.bool_, "cracks": np.bool_, "erased": np.bool_,
+              "valid": np.bool_, "flow_valid": np.bool_, "parts": np.int32, "instances": np.int32}
+
+
 @pytest.mark.parametrize("name", ["box_lens", "deformation"])
-def test_webdataset_shards_hold_every_file_of_every_view(name, request, tmp_path):
+def test_webdataset_shards_hold_every_layer_of_every_view(name, request, tmp_path):
     data = Dataset(request.getfixturevalue(name))
     out = export(data.root, "webdataset", tmp_path / "wds", "--shard-size", "5")
     shards = sorted(str(p) for p in out.glob("shard-*.tar"))
@@ -144,9 +151,19 @@ def test_webdataset_shards_hold_every_file_of_every_view(name, request, tmp_path
     assert [item["__key__"] for item in items] == [view.stem for view in data]
     for item, view in zip(items, data):
         kinds = {k for k in item if not k.startswith("__")}
-        assert kinds == set(view.files), view.stem
-        for kind, path in view.files.items():
-            assert item[kind] == path.read_bytes(), (view.stem, kind)
+        expected = {"json"} | {f"{layer}.png" if WDS_DTYPES[layer] is None else f"{layer}.npy"
+                               for layer in view.layers}
+        assert kinds == expected, view.stem
+        for layer in view.layers:
+            if WDS_DTYPES[layer] is None:  # colour images: the dataset's bytes
+                assert item[f"{layer}.png"] == view.path(layer).read_bytes(), (view.stem, layer)
+                continue
+            # Arrays, read by numpy itself: the loader's values, dtype and shape, to the bit.
+            array = np.load(io.BytesIO(item[f"{layer}.npy"]), allow_pickle=False)
+            assert array.dtype == WDS_DTYPES[layer], (view.stem, layer)
+            assert array.shape == view.load(layer).shape, (view.stem, layer)
+            assert np.array_equal(array, view.load(layer)), (view.stem, layer)
+        assert item["json"] == view.files["json"].read_bytes()
         record = json.loads(item["json"])
         assert record == view.record
         K = np.array(record["camera"]["K"])

@@ -303,12 +303,18 @@ impl Dataset {
 
     /// The camera of a view, from its record.
     pub fn camera(&self, view: &View) -> Result<Camera> {
+        let record = self.record(view)?;
+        Camera::from_record(&record)
+            .with_context(|| view.file("json").unwrap_or(&view.stem).to_string())
+    }
+
+    /// The view's JSON record, parsed.
+    pub fn record(&self, view: &View) -> Result<Value> {
         let json = view
             .file("json")
             .with_context(|| format!("view {} has no record (.json)", view.stem))?;
-        let record: Value = serde_json::from_slice(&self.read(json, RECORD)?)
-            .with_context(|| format!("{json}: does not parse as JSON"))?;
-        Camera::from_record(&record).with_context(|| json.to_string())
+        serde_json::from_slice(&self.read(json, RECORD)?)
+            .with_context(|| format!("{json}: does not parse as JSON"))
     }
 
     /// `dataset.name`, `dataset.seed` and the recipe hash: what identifies the dataset an

@@ -71,8 +71,8 @@ pub struct ExportOptions {
     pub format: Format,
     /// The folder to create; it must not exist.
     pub out: PathBuf,
-    /// Views per WebDataset shard.
-    pub shard_size: usize,
+    /// Views per WebDataset shard; None: near-equal shards, at least 16 (see `webdataset`).
+    pub shard_size: Option<usize>,
     /// Copy images instead of hard-linking them.
     pub copy: bool,
     /// nerfstudio and COLMAP: include augmented copies of views as frames of their own (each
@@ -111,7 +111,7 @@ struct Job<'a> {
 /// Exports the finished dataset at `source` as `options` say.
 pub fn export(source: &Path, options: &ExportOptions) -> Result<Summary> {
     let dataset = Dataset::open(source)?;
-    if options.shard_size == 0 {
+    if options.shard_size == Some(0) {
         bail!("--shard-size 0: a shard holds at least one view");
     }
     let staging = Staging::create(&options.out, dataset.root())?;
