@@ -229,12 +229,17 @@ fn check_nerfstudio(data: &Path, scene: &Path) -> (String, Vec<String>) {
     (t["camera_model"].as_str().unwrap().to_string(), stems)
 }
 
-/// Every tar member of the shards in `dir`, in order: (name, bytes), with its header checked.
+/// Every tar member of the gzipped shards in `dir`, in order: (name, bytes), with its header
+/// checked, and the gzip header's (no time stamp, no name: bytes that depend on the contents).
 fn shard_members(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let shards = files_with_extension(dir, "tar");
+    let shards = files_with_extension(dir, "gz");
+    assert!(!shards.is_empty(), "no shard-*.tar.gz in {}", dir.display());
     let mut members = Vec::new();
     for shard in shards {
-        let mut archive = tar::Archive::new(std::fs::File::open(&shard).unwrap());
+        let gzip = flate2::read::GzDecoder::new(std::fs::File::open(&shard).unwrap());
+        let header = gzip.header().expect("a gzip header").clone();
+        assert_eq!((header.mtime(), header.filename()), (0, None));
+        let mut archive = tar::Archive::new(gzip);
         for entry in archive.entries().unwrap() {
             let mut entry = entry.unwrap();
             let h = entry.header();

@@ -49,12 +49,12 @@ MEMBERS = {
     "json": "the view's record (shmgen.view/1)",
 }
 
-_SHARD = re.compile(r"shard-\d{6}\.tar")
+_SHARD = re.compile(r"shard-\d{6}\.tar\.gz")
 
 
 def shard_urls(folder: str | os.PathLike[str], *, limits: Limits | None = None) -> list[str]:
     """The paths of the shards of the export at ``folder``, in order, as its ``export.json``
-    lists them; each must be a ``shard-NNNNNN.tar`` file in the folder.
+    lists them; each must be a ``shard-NNNNNN.tar.gz`` file in the folder.
 
     Raises ``FileNotFoundError`` for a folder without ``export.json`` or a listed shard
     missing, and :class:`DatasetError` for an export of another format or a listing that
@@ -74,7 +74,7 @@ def shard_urls(folder: str | os.PathLike[str], *, limits: Limits | None = None) 
     for entry in shards:
         name = entry.get("file") if isinstance(entry, dict) else None
         if not isinstance(name, str) or not _SHARD.fullmatch(name):
-            raise DatasetError(f"{shown}: shard entry {entry!r} does not name a shard-NNNNNN.tar file")
+            raise DatasetError(f"{shown}: shard entry {entry!r} does not name a shard-NNNNNN.tar.gz file")
         path = root / name
         if not path.is_file():
             raise FileNotFoundError(f"{path}: listed in export.json, missing")

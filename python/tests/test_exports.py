@@ -145,7 +145,7 @@ WDS_DTYPES = {"rgb": None, "rest_rgb": None, "depth": np.float32, "rest_depth": 
 def test_webdataset_shards_hold_every_layer_of_every_view(name, request, tmp_path):
     data = Dataset(request.getfixturevalue(name))
     out = export(data.root, "webdataset", tmp_path / "wds", "--shard-size", "5")
-    shards = sorted(str(p) for p in out.glob("shard-*.tar"))
+    shards = sorted(str(p) for p in out.glob("shard-*.tar.gz"))
     assert len(shards) == -(-len(data) // 5)
     items = list(webdataset.WebDataset(shards, shardshuffle=False))
     assert [item["__key__"] for item in items] == [view.stem for view in data]

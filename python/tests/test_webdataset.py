@@ -67,7 +67,7 @@ def test_export_json_lists_shards_of_known_members(box_wds, tmp_path):
     with pytest.raises(DatasetError, match="format 'colmap'"):
         shard_urls(tmp_path)
     (tmp_path / "export.json").write_text(json.dumps({"format": "webdataset", "shards": [{"file": "../x.tar"}]}))
-    with pytest.raises(DatasetError, match="shard-NNNNNN.tar"):
+    with pytest.raises(DatasetError, match="shard-NNNNNN.tar.gz"):
         shard_urls(tmp_path)
 
 
