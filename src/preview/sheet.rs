@@ -102,62 +102,41 @@ enum Layer {
     Displacement,
 }
 
+/// Every column the sheet can show, in the sheet's order: the layer, its name in
+/// `dataset.outputs` and its title.
+const COLUMNS: [(Layer, &str, &str); 14] = [
+    (Layer::Rgb, "rgb", "RGB"),
+    (Layer::RestRgb, "rest_rgb", "rest RGB"),
+    (Layer::Depth, "depth", "depth"),
+    (Layer::RestDepth, "rest_depth", "rest depth"),
+    (Layer::RayDistance, "ray_distance", "ray distance"),
+    (Layer::Mask, "mask", "mask"),
+    (Layer::Valid, "valid", "valid"),
+    (Layer::Erased, "erased", "erased"),
+    (Layer::Parts, "parts", "parts"),
+    (Layer::Instances, "instances", "instances"),
+    (Layer::Cracks, "cracks", "cracks"),
+    (Layer::Normals, "normals", "normals"),
+    (Layer::Flow, "flow", "flow"),
+    (Layer::Displacement, "displacement", "displacement"),
+];
+
 impl Layer {
-    const ALL: [Layer; 14] = [
-        Layer::Rgb,
-        Layer::RestRgb,
-        Layer::Depth,
-        Layer::RestDepth,
-        Layer::RayDistance,
-        Layer::Mask,
-        Layer::Valid,
-        Layer::Erased,
-        Layer::Parts,
-        Layer::Instances,
-        Layer::Cracks,
-        Layer::Normals,
-        Layer::Flow,
-        Layer::Displacement,
-    ];
+    fn column(self) -> &'static (Layer, &'static str, &'static str) {
+        COLUMNS
+            .iter()
+            .find(|c| c.0 == self)
+            .expect("every layer is in COLUMNS")
+    }
 
     /// Its name in `dataset.outputs`.
     fn output(self) -> &'static str {
-        match self {
-            Layer::Rgb => "rgb",
-            Layer::RestRgb => "rest_rgb",
-            Layer::Depth => "depth",
-            Layer::RestDepth => "rest_depth",
-            Layer::RayDistance => "ray_distance",
-            Layer::Mask => "mask",
-            Layer::Valid => "valid",
-            Layer::Erased => "erased",
-            Layer::Parts => "parts",
-            Layer::Instances => "instances",
-            Layer::Cracks => "cracks",
-            Layer::Normals => "normals",
-            Layer::Flow => "flow",
-            Layer::Displacement => "displacement",
-        }
+        self.column().1
     }
 
     /// Its column title.
     fn title(self) -> &'static str {
-        match self {
-            Layer::Rgb => "RGB",
-            Layer::RestRgb => "rest RGB",
-            Layer::Depth => "depth",
-            Layer::RestDepth => "rest depth",
-            Layer::RayDistance => "ray distance",
-            Layer::Mask => "mask",
-            Layer::Valid => "valid",
-            Layer::Erased => "erased",
-            Layer::Parts => "parts",
-            Layer::Instances => "instances",
-            Layer::Cracks => "cracks",
-            Layer::Normals => "normals",
-            Layer::Flow => "flow",
-            Layer::Displacement => "displacement",
-        }
+        self.column().2
     }
 
     /// Whether its values are metres along a ray (one colour bar serves them all).
@@ -348,8 +327,9 @@ fn shrink(recipe: &mut Recipe, options: &PreviewOptions) -> (u64, u32) {
 /// The per-view layers the dataset writes, in the sheet's order. A dataset that writes none
 /// (meshes or points only) still gets its RGB, so the sheet shows what was drawn.
 fn layers(dataset: &DatasetSpec) -> Vec<Layer> {
-    let written: Vec<Layer> = Layer::ALL
-        .into_iter()
+    let written: Vec<Layer> = COLUMNS
+        .iter()
+        .map(|c| c.0)
         .filter(|l| dataset.outputs.wants(l.output()))
         .collect();
     if written.is_empty() {
@@ -1004,6 +984,12 @@ dataset(#{
         draw(&mut recipe, &options).unwrap()
     }
 
+    /// `BLOCKS` with RGB, depth, mask, parts and instances, at 32 × 24 px.
+    fn five_columns() -> Drawn {
+        let outputs = r#"["rgb", "depth", "mask", "parts", "instances"]"#;
+        sheet(BLOCKS, outputs, "", 32)
+    }
+
     /// Where `text`, drawn at `scale` straight from the font's bitmaps (BASIC_LEGACY: byte =
     /// row, bit 0 = leftmost pixel), appears in the rectangle (x, y, width, height): lit
     /// pixels in the sheet's ink, the others not.
@@ -1024,6 +1010,18 @@ dataset(#{
         })
     }
 
+    /// The rectangle of row `r`'s label.
+    fn label_area(layout: &Layout, r: usize) -> (u32, u32, u32, u32) {
+        let (x, y) = layout.cell_at(0, r as u32);
+        let height = layout.cell.1 + SEPARATOR;
+        (
+            x - SEPARATOR - layout.labels,
+            y,
+            layout.labels + SEPARATOR,
+            height,
+        )
+    }
+
     /// The (x, y) pixel of cell (column, row), counting from the cell's corner.
     fn at(drawn: &Drawn, column: usize, row: usize, x: u32, y: u32) -> Rgb {
         let (left, top) = drawn.layout.cell_at(column as u32, row as u32);
@@ -1034,14 +1032,16 @@ dataset(#{
     fn every_per_view_output_has_a_column_and_every_column_an_output() {
         for writer in &WRITERS {
             assert!(
-                Layer::ALL.iter().any(|l| l.output() == writer.output),
+                COLUMNS.iter().any(|c| c.1 == writer.output),
                 "{} has no column",
                 writer.output
             );
         }
-        for layer in Layer::ALL {
-            assert!(
-                WRITERS.iter().any(|w| w.output == layer.output()),
+        for (layer, output, _) in COLUMNS {
+            assert!(WRITERS.iter().any(|w| w.output == output), "{layer:?}");
+            assert_eq!(
+                COLUMNS.iter().filter(|c| c.0 == layer).count(),
+                1,
                 "{layer:?}"
             );
         }
@@ -1081,12 +1081,7 @@ dataset(#{
 
     #[test]
     fn columns_are_the_written_layers_under_their_titles() {
-        let drawn = sheet(
-            BLOCKS,
-            r#"["rgb", "depth", "mask", "parts", "instances"]"#,
-            "",
-            32,
-        );
+        let drawn = five_columns();
         assert_eq!(
             drawn.layers,
             [
@@ -1118,13 +1113,7 @@ dataset(#{
         // Rows: 2 samples × 2 views, labelled.
         assert_eq!(drawn.rows.len(), 4);
         for (r, row) in drawn.rows.iter().enumerate() {
-            let (x, y) = layout.cell_at(0, r as u32);
-            let area = (
-                x - layout.labels,
-                y,
-                layout.labels,
-                layout.cell.1 + SEPARATOR,
-            );
+            let area = label_area(layout, r);
             let sample = format!("sample {}", row.sample);
             assert!(
                 (1..=2).any(|s| find_text(&drawn.canvas, area, &sample, s)),
@@ -1135,12 +1124,7 @@ dataset(#{
 
     #[test]
     fn cells_agree_with_each_other_and_depth_reads_off_its_bar() {
-        let drawn = sheet(
-            BLOCKS,
-            r#"["rgb", "depth", "mask", "parts", "instances"]"#,
-            "",
-            32,
-        );
+        let drawn = five_columns();
         let (w, h) = drawn.layout.cell;
         // The sheet's depth range, from the rendered depths themselves.
         let depths: Vec<f32> = drawn
@@ -1322,13 +1306,7 @@ dataset(#{
         assert_eq!(order, expected);
         let layout = &drawn.layout;
         for (r, row) in drawn.rows.iter().enumerate() {
-            let (x, y) = layout.cell_at(0, r as u32);
-            let area = (
-                x - layout.labels,
-                y,
-                layout.labels,
-                layout.cell.1 + SEPARATOR,
-            );
+            let area = label_area(layout, r);
             let marked = (1..=2).any(|s| find_text(&drawn.canvas, area, "copy", s));
             assert_eq!(marked, row.copy.is_some(), "row {r}");
             if let Some(copy) = row.copy {
