@@ -70,7 +70,8 @@ enum Command {
         /// Views of each sample, 1 to 100 (default: up to 4).
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_PREVIEW as i64))]
         views: Option<u32>,
-        /// Longer side of each image in pixels (never above the recipe's resolution).
+        /// Longer side of each image in pixels, at most (never above the recipe's resolution;
+        /// smaller when the sheet would not fit 1920×1080).
         #[arg(
             long,
             value_name = "PX",

@@ -1,6 +1,6 @@
 //! `shmgen watch` and `shmgen check` end to end, through the built binary: edits, broken saves
 //! and their fixes, editors' save patterns (delete and recreate, write and rename), imported
-//! modules, Ctrl-C, the sheet's layout and the loopback web page.
+//! modules, Ctrl-C, the sheet written by --once and the loopback web page.
 
 use std::io::{Read, Write};
 use std::net::TcpStream;
@@ -344,14 +344,10 @@ fn ctrl_c_exits_cleanly() {
     assert_eq!(left, ["piece.rhai", "recipe.preview.png", "recipe.rhai"]);
 }
 
-/// The (x, y) pixel of an RGB8 image `width` wide.
-fn pixel(data: &[u8], width: usize, x: usize, y: usize) -> [u8; 3] {
-    let i = 3 * (y * width + x);
-    [data[i], data[i + 1], data[i + 2]]
-}
-
 #[test]
-fn once_writes_a_sheet_whose_columns_agree() {
+fn once_writes_an_rgb_png_sheet() {
+    // What each column and row of the sheet shows is tested with the sheet
+    // (src/preview/sheet.rs, tests/sheet.rs); here only that --once writes one to --out.
     let (dir, recipe) = project();
     let out = dir.path().join("sheet.png");
     let output = Command::new(BIN)
@@ -362,113 +358,12 @@ fn once_writes_a_sheet_whose_columns_agree() {
         .output()
         .unwrap();
     assert!(output.status.success(), "{output:?}");
-
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).unwrap()));
     let mut reader = decoder.read_info().unwrap();
     let mut data = vec![0; reader.output_buffer_size().unwrap()];
     let info = reader.next_frame(&mut data).unwrap();
     assert_eq!(info.color_type, png::ColorType::Rgb);
-    // 64×48 at a longer side of 32 px is 32×24. Columns: RGB, depth, mask, parts, instances;
-    // rows: 2 samples × 2 views; separators between cells.
-    let (w, h, sep) = (32, 24, shmgen::preview::SEPARATOR as usize);
-    let (columns, rows) = (5, 4);
-    assert_eq!(info.width as usize, columns * w + (columns - 1) * sep);
-    assert_eq!(info.height as usize, rows * h + (rows - 1) * sep);
-
-    let sheet_width = info.width as usize;
-    let at = |column: usize, row: usize, x: usize, y: usize| {
-        pixel(
-            &data,
-            sheet_width,
-            column * (w + sep) + x,
-            row * (h + sep) + y,
-        )
-    };
-    let (mut surface, mut background) = (0, 0);
-    for row in 0..rows {
-        for y in 0..h {
-            for x in 0..w {
-                let hit = at(0, row, x, y) != [0, 0, 255];
-                let mask = at(2, row, x, y);
-                assert_eq!(
-                    mask,
-                    if hit { [255; 3] } else { [0; 3] },
-                    "row {row} ({x}, {y})"
-                );
-                for label in [1, 3, 4] {
-                    let black = at(label, row, x, y) == [0; 3];
-                    assert_eq!(black, !hit, "column {label}, row {row} ({x}, {y})");
-                }
-                if hit {
-                    surface += 1;
-                } else {
-                    background += 1;
-                }
-            }
-        }
-    }
-    assert!(surface > 100 && background > 100, "{surface} {background}");
-}
-
-/// `watch --once` of `recipe` at a longer side of 32 px: the sheet's (width, height, pixels).
-fn sheet_of(recipe: &Path, out: &Path) -> (usize, usize, Vec<u8>) {
-    let output = Command::new(BIN)
-        .arg("watch")
-        .arg(recipe)
-        .args(["--once", "--size", "32", "--out"])
-        .arg(out)
-        .output()
-        .unwrap();
-    assert!(output.status.success(), "{output:?}");
-    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(out).unwrap()));
-    let mut reader = decoder.read_info().unwrap();
-    let mut data = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut data).unwrap();
-    (info.width as usize, info.height as usize, data)
-}
-
-#[test]
-fn once_shows_each_augmented_copy_as_a_row_after_its_view() {
-    let (dir, recipe) = project();
-    let clean = sheet_of(&recipe, &dir.path().join("clean.png"));
-    let augmented = RECIPE.replace(
-        "    scene: |rng|",
-        "    augment: #{ copies: 2, operations: [#{ op: \"warp\", zoom: [1.2, 1.5], rotation: [0.3, 1.0], shift_x: 0.0, shift_y: 0.0, probability: 1.0 }] },\n    scene: |rng|",
-    );
-    assert_ne!(augmented, RECIPE);
-    std::fs::write(&recipe, augmented).unwrap();
-    let (width, height, data) = sheet_of(&recipe, &dir.path().join("augmented.png"));
-    // Rows: 2 samples × 2 views × (the clean view and its 2 copies), cells 32 × 24.
-    let (h, sep) = (24, shmgen::preview::SEPARATOR as usize);
-    let rows = 12;
-    assert_eq!((width, height), (clean.0, rows * h + (rows - 1) * sep));
-    // The RGB cell of row `r` (depth colours span the whole sheet, so only RGB compares
-    // across sheets).
-    let rgb = |data: &[u8], width: usize, r: usize| -> Vec<u8> {
-        (0..h)
-            .flat_map(|y| {
-                let start = 3 * width * (r * (h + sep) + y);
-                data[start..start + 3 * 32].to_vec()
-            })
-            .collect()
-    };
-    for view in 0..4 {
-        // The clean view first, as the sheet without augmentation shows it; then its copies,
-        // each turned and zoomed differently.
-        let first = rgb(&data, width, 3 * view);
-        assert!(
-            first == rgb(&clean.2, width, view),
-            "view {view}: not the clean view"
-        );
-        let (a, b) = (
-            rgb(&data, width, 3 * view + 1),
-            rgb(&data, width, 3 * view + 2),
-        );
-        assert!(
-            a != first && b != first && a != b,
-            "view {view}: copies alike"
-        );
-    }
+    assert!(info.width > 32 && info.height > 24, "{info:?}");
 }
 
 #[test]

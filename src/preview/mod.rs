@@ -7,7 +7,10 @@
 //! recipe's files (it only reads them). A preview is a picture for a person, never part of a
 //! dataset.
 
+mod canvas;
 mod check;
+mod colours;
+mod legend;
 mod serve;
 mod sheet;
 mod watch;

@@ -89,8 +89,14 @@ fn build(options: &WatchOptions) -> Result<(Preview, Vec<PathBuf>)> {
 }
 
 fn summary(preview: &Preview, start: Instant, out: &Path) -> String {
+    // The sheet fits a screen: say when that left images out.
+    let shown = if preview.shown < preview.images {
+        format!(" ({} of {} images shown)", preview.shown, preview.images)
+    } else {
+        String::new()
+    };
     format!(
-        "preview: {} samples × {} views at {}×{} in {:.2} s → {}",
+        "preview: {} samples × {} views at {}×{}{shown} in {:.2} s → {}",
         preview.samples,
         preview.views,
         preview.width,
