@@ -5,7 +5,6 @@
 
 use crate::augment::srgb;
 use crate::build::{BuiltSample, StructureMesh};
-use crate::geometry::SurfaceSample;
 use crate::output::{MeshLayer, PointLayer, SampleLayers};
 use crate::render::{SampleSurfaces, Surfaces};
 use crate::scene::DatasetSpec;
@@ -70,7 +69,7 @@ impl SampleLayers for SampleGeometry<'_> {
                 .iter()
                 .map(|s| s.normal.as_vec3().to_array())
                 .collect(),
-            colours: self.colours(&drawn),
+            colours: self.colours(drawn.iter().map(|s| (s.triangle, s.position)).collect()),
         }
     }
 }
@@ -80,8 +79,8 @@ impl SampleGeometry<'_> {
     /// without light or shadow, evaluated where the renderer evaluates it (on the unloaded
     /// surface under the point). Texture detail finer than the points' mean spacing, √(area /
     /// points), is averaged out as a pixel of that size would average it: a point stands for
-    /// the patch around it.
-    fn colours(&self, drawn: &[SurfaceSample]) -> Vec<[u8; 3]> {
+    /// the patch around it. `drawn` holds each point's triangle and position.
+    fn colours(&self, drawn: Vec<(usize, DVec3)>) -> Vec<[u8; 3]> {
         let sample = self.sample;
         let surfaces = SampleSurfaces {
             mesh: &self.mesh,
@@ -93,8 +92,8 @@ impl SampleGeometry<'_> {
         let spacing = (self.mesh.area() / drawn.len().max(1) as f64).sqrt();
         drawn
             .par_iter()
-            .map(|s| {
-                let albedo = surfaces.at(s.triangle as u32, s.position, spacing).albedo;
+            .map(|&(triangle, position)| {
+                let albedo = surfaces.at(triangle as u32, position, spacing).albedo;
                 albedo.map(|c| srgb::encode(c as f32))
             })
             .collect()
