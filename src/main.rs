@@ -107,11 +107,12 @@ enum Command {
         threads: Option<usize>,
     },
     /// Convert a finished dataset for other tools (nothing is rendered again): nerfstudio
-    /// scenes, COLMAP text models, WebDataset tar shards or 16-bit millimetre depth PNGs.
+    /// scenes, COLMAP text models, WebDataset tar shards, 16-bit millimetre depth PNGs or
+    /// optical flow (KITTI PNG and Middlebury .flo).
     Export {
         /// The dataset folder (`shmgen run --out`), finished.
         dataset: PathBuf,
-        /// nerfstudio, colmap, webdataset or png16.
+        /// nerfstudio, colmap, webdataset, png16 or flow.
         #[arg(long, value_parser = str::parse::<Format>)]
         format: Format,
         /// The folder to create (it must not exist; it appears only when complete).
@@ -296,6 +297,12 @@ fn execute(command: Command) -> Result<()> {
                 eprintln!(
                     "warning: {} depth pixels beyond 65.535 m were written as 65535 mm",
                     summary.saturated
+                );
+            }
+            if summary.flow_out_of_range > 0 {
+                eprintln!(
+                    "warning: {} flow vectors beyond ±512 px were written invalid in the KITTI PNGs (the .flo files keep them)",
+                    summary.flow_out_of_range
                 );
             }
             if summary.raised > 0 {

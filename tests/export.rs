@@ -14,8 +14,9 @@ use std::time::Duration;
 mod common;
 
 use common::{
-    files_with_extension, hashes, manifest_files, ok, quickstart, read_exr, read_json, read_png16,
-    run, run_limited, shmgen, stderr, view_path, write,
+    distort, files_with_extension, hashes, manifest_files, ok, quickstart, read_exr, read_json,
+    read_ply, read_png, read_png16, run, run_limited, sample_path, shmgen, stderr, transform,
+    view_path, write,
 };
 
 fn export(dataset: &Path, format: &str, out: &Path, extra: &[&str]) -> Output {
@@ -120,7 +121,6 @@ fn check_colmap(data: &Path, scene: &Path, stems: &[&String]) -> Vec<String> {
     assert_eq!(lines.len(), 2 * stems.len(), "two lines per image");
     let mut models = Vec::new();
     for (pair, stem) in lines.chunks(2).zip(stems) {
-        assert_eq!(pair[1], "", "no 2-D points");
         let f: Vec<&str> = pair[0].split(' ').collect();
         assert_eq!(f.len(), 10);
         let n: Vec<f64> = f[1..8].iter().map(|x| x.parse().unwrap()).collect();
@@ -158,8 +158,205 @@ fn check_colmap(data: &Path, scene: &Path, stems: &[&String]) -> Vec<String> {
         );
         models.push(camera[0].clone());
     }
-    assert!(data_lines(&scene.join("sparse/0/points3D.txt")).is_empty());
+    check_points(data, scene, stems, &lines);
     models
+}
+
+/// One image of a COLMAP model as the test sees it: its view's camera, depth and RGB from
+/// the dataset, and the 2-D points of its images.txt line (x, y, POINT3D_ID).
+struct Frame {
+    w2c: [[f64; 4]; 4],
+    centre: [f64; 3],
+    k: [[f64; 3]; 3],
+    lens: [f64; 5],
+    width: usize,
+    depth: Vec<f32>,
+    rgb: Vec<u8>,
+    mask: Vec<u8>,
+    points2d: Vec<([f64; 2], u64)>,
+}
+
+impl Frame {
+    fn new(data: &Path, stem: &str, points2d_line: &str) -> Frame {
+        let (s, v, copy) = indices(stem);
+        let record = read_json(&view_path(data, s, v, copy, "json"));
+        let camera = &record["camera"];
+        let c2w: [[f64; 4]; 4] = common::matrix(&camera["c2w_opencv"]);
+        let lens = match camera["distortion"].is_null() {
+            true => [0.0; 5],
+            false => {
+                ["k1", "k2", "p1", "p2", "k3"].map(|k| camera["distortion"][k].as_f64().unwrap())
+            }
+        };
+        let words: Vec<&str> = points2d_line.split_whitespace().collect();
+        assert!(words.len().is_multiple_of(3), "X Y POINT3D_ID triples");
+        let (width, _, _, rgb) = read_png(&view_path(data, s, v, copy, "rgb.png"));
+        Frame {
+            w2c: common::matrix(&camera["w2c_opencv"]),
+            centre: [c2w[0][3], c2w[1][3], c2w[2][3]],
+            k: common::matrix(&camera["K"]),
+            lens,
+            width,
+            depth: read_exr(&view_path(data, s, v, copy, "depth.exr")),
+            rgb,
+            mask: read_png(&view_path(data, s, v, copy, "mask.png")).3,
+            points2d: words
+                .chunks(3)
+                .map(|t| {
+                    (
+                        [t[0].parse().unwrap(), t[1].parse().unwrap()],
+                        t[2].parse().unwrap(),
+                    )
+                })
+                .collect(),
+        }
+    }
+
+    /// Where `p` projects (OpenCV's lens model, independent of shmgen's) and its depth.
+    fn project(&self, p: [f64; 3]) -> ([f64; 2], f64) {
+        let c = transform(&self.w2c, p);
+        let (x, y) = distort(&self.lens, c[0] / c[2], c[1] / c[2]);
+        let k = self.k;
+        ([k[0][0] * x + k[0][2], k[1][1] * y + k[1][2]], c[2])
+    }
+
+    fn pixel(&self, xy: [f64; 2]) -> usize {
+        xy[1].floor() as usize * self.width + xy[0].floor() as usize
+    }
+
+    /// Whether the unit `normal` at `p` faces the camera at least as much as `cos`.
+    fn faces(&self, p: [f64; 3], normal: [f64; 3], cos: f64) -> bool {
+        let to: [f64; 3] = std::array::from_fn(|i| self.centre[i] - p[i]);
+        let length = to.iter().map(|c| c * c).sum::<f64>().sqrt();
+        (0..3).map(|i| normal[i] * to[i]).sum::<f64>() > cos * length
+    }
+
+    /// Whether the 3 × 3 pixels around `xy` all see the structure, away from the border.
+    fn well_inside(&self, xy: [f64; 2]) -> bool {
+        let (col, row) = (xy[0].floor() as usize, xy[1].floor() as usize);
+        let height = self.mask.len() / self.width;
+        (2..self.width - 2).contains(&col)
+            && (2..height - 2).contains(&row)
+            && (row - 1..=row + 1)
+                .all(|r| (col - 1..=col + 1).all(|c| self.mask[r * self.width + c] == 255))
+    }
+}
+
+/// The points of a sample's points.ply: position → unit normal.
+fn ply_points(path: &Path) -> Vec<([f64; 3], [f64; 3])> {
+    let ply = read_ply(path);
+    let value = |e: &ply_rs_bw::ply::DefaultElement, name: &str| match e[name] {
+        ply_rs_bw::ply::Property::Double(v) => v,
+        ply_rs_bw::ply::Property::Float(v) => f64::from(v),
+        ref other => panic!("{name}: {other:?}"),
+    };
+    ply["vertex"]
+        .iter()
+        .map(|e| {
+            (
+                ["x", "y", "z"].map(|n| value(e, n)),
+                ["nx", "ny", "nz"].map(|n| value(e, n)),
+            )
+        })
+        .collect()
+}
+
+/// points3D.txt against the images' 2-D points (each referenced by one track entry, with its
+/// point's id), the views' cameras (each 2-D point the projection of its 3-D point through
+/// them), depth (the point seen: its pixel's depth is its own, its face turned to the camera)
+/// and RGB (its colour the mean of its pixels'), and the sample's points.ply (every point one
+/// of its points, and each of its points facing a camera well inside the box's image seen).
+fn check_points(data: &Path, scene: &Path, stems: &[&String], lines: &[String]) {
+    let frames: Vec<Frame> = lines
+        .chunks(2)
+        .zip(stems)
+        .map(|(pair, stem)| Frame::new(data, stem, &pair[1]))
+        .collect();
+    let points = data_lines(&scene.join("sparse/0/points3D.txt"));
+    let ply = sample_path(data, indices(stems[0]).0, "points.ply");
+    if !ply.exists() {
+        assert!(points.is_empty() && frames.iter().all(|f| f.points2d.is_empty()));
+        return;
+    }
+    let ply = ply_points(&ply);
+    let normal_of: std::collections::HashMap<[u64; 3], [f64; 3]> =
+        ply.iter().map(|(p, n)| (p.map(f64::to_bits), *n)).collect();
+    let mut observed = std::collections::HashSet::new();
+    for (line, id) in points.iter().zip(1u64..) {
+        let f: Vec<&str> = line.split(' ').collect();
+        assert_eq!(f[0], id.to_string(), "ids count from 1");
+        let xyz: [f64; 3] = std::array::from_fn(|i| f[1 + i].parse().unwrap());
+        let rgb: [f64; 3] = std::array::from_fn(|i| f[4 + i].parse().unwrap());
+        assert_eq!(f[7], "0", "exact projections: no reprojection error");
+        let normal = normal_of[&xyz.map(f64::to_bits)];
+        let track = &f[8..];
+        assert!(!track.is_empty() && track.len().is_multiple_of(2), "{line}");
+        let mut sum = [0.0; 3];
+        for pair in track.chunks(2) {
+            let image: usize = pair[0].parse().unwrap();
+            let index: usize = pair[1].parse().unwrap();
+            let frame = &frames[image - 1];
+            let (xy, point) = frame.points2d[index];
+            assert_eq!(point, id, "the 2-D point names its 3-D point");
+            let (expected, z) = frame.project(xyz);
+            assert!(
+                (xy[0] - expected[0]).abs() < 1e-3 && (xy[1] - expected[1]).abs() < 1e-3,
+                "point {id} in image {image}: {xy:?} vs {expected:?}"
+            );
+            let pixel = frame.pixel(xy);
+            // Seen: the box is convex, so its face turns towards the camera, and the pixel
+            // it falls in sees a surface no farther than a pixel's footprint at a slant.
+            assert!(
+                frame.faces(xyz, normal, 0.0),
+                "point {id} seen from behind in image {image}"
+            );
+            let depth = f64::from(frame.depth[pixel]);
+            let footprint = z / frame.k[0][0].min(frame.k[1][1]);
+            assert!(
+                depth > 0.0 && (depth - z).abs() < 10.0 * footprint,
+                "point {id} in image {image}: depth {depth} vs {z}"
+            );
+            for (c, total) in sum.iter_mut().enumerate() {
+                *total += f64::from(frame.rgb[3 * pixel + c]);
+            }
+            assert!(
+                observed.insert((image, index)),
+                "one track entry per 2-D point"
+            );
+        }
+        let n = (track.len() / 2) as f64;
+        assert_eq!(
+            rgb,
+            sum.map(|s| (s / n).round()),
+            "point {id}: the mean of its pixels"
+        );
+    }
+    let all: usize = frames.iter().map(|f| f.points2d.len()).sum();
+    assert_eq!(observed.len(), all, "every 2-D point is in a track");
+    // The box is convex and alone: a point on a face turned towards the camera, projecting
+    // well inside its image, is seen there.
+    for (image, frame) in (1..).zip(&frames) {
+        let seen: std::collections::HashSet<[u64; 3]> = frame
+            .points2d
+            .iter()
+            .map(|(_, id)| {
+                let f: Vec<&str> = points[*id as usize - 1].split(' ').collect();
+                std::array::from_fn(|i| f[1 + i].parse::<f64>().unwrap().to_bits())
+            })
+            .collect();
+        let mut expected = 0;
+        for (p, n) in &ply {
+            let (xy, z) = frame.project(*p);
+            if z > 0.0 && frame.faces(*p, *n, 0.2) && frame.well_inside(xy) {
+                expected += 1;
+                assert!(
+                    seen.contains(&p.map(f64::to_bits)),
+                    "{p:?} unseen in image {image}"
+                );
+            }
+        }
+        assert!(expected > 20, "image {image}: {expected} points to see");
+    }
 }
 
 /// Checks a nerfstudio scene against the records; returns its camera model and frame stems.
@@ -479,7 +676,16 @@ fn unfinished_foreign_and_occupied_folders_are_refused_and_nothing_is_left() {
     refused(&whole, &out, "already exists");
     refused(&whole, &whole.join("exports"), "inside the dataset");
     let o = export(&whole, "tiff", &dir.path().join("t"), &[]);
-    assert!(stderr(&o).contains("expected nerfstudio, colmap, webdataset or png16"));
+    assert!(stderr(&o).contains("expected nerfstudio, colmap, webdataset, png16 or flow"));
+    let o = export(&whole, "flow", &dir.path().join("f"), &[]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains(
+            "view 000000_00 has no flow.exr file; flow needs the dataset's \"flow\" output"
+        ),
+        "{}",
+        stderr(&o)
+    );
     let names: Vec<_> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name())

@@ -126,11 +126,14 @@ class Mesh:
 
 @dataclass
 class Points:
-    """Points on a surface: ``points`` ``(N, 3)`` float64 world metres and ``normals``
-    ``(N, 3)`` float32 unit normals (outward for shmgen's closed shapes)."""
+    """Points on a surface: ``points`` ``(N, 3)`` float64 world metres, ``normals``
+    ``(N, 3)`` float32 unit normals (outward for shmgen's closed shapes) and ``colours``
+    ``(N, 3)`` uint8 sRGB, the material's albedo at each point (None in datasets written
+    before points had colours)."""
 
     points: np.ndarray
     normals: np.ndarray
+    colours: np.ndarray | None = None
 
 
 def _first_bad(bad: NDArray[np.bool_], values: NDArray[Any], shown: str, rule: str) -> None:
@@ -582,7 +585,10 @@ class Sample:
         squared = np.einsum("ij,ij->i", normals, normals)
         _first_vertex(~_unit_or_zero(squared) | (squared == 0), normals, ply.path,
                       f"a normal must be finite with length 1 (within {UNIT_TOLERANCE})")
-        return Points(xyz, normals)
+        has_colours = all(c in vertex for c in ("red", "green", "blue"))
+        colours = (np.stack([vertex[c] for c in ("red", "green", "blue")], axis=1).astype(np.uint8)
+                   if has_colours else None)
+        return Points(xyz, normals, colours)
 
 
 def _first_vertex(bad: NDArray[np.bool_], values: NDArray[Any], path: Path, rule: str) -> None:

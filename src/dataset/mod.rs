@@ -16,7 +16,7 @@ mod read;
 
 pub use camera::Camera;
 pub use content::{Check, Hashing, Verified, check_stream, verify};
-pub use read::{GreyImage, Layer, decode_exr, decode_grey_png};
+pub use read::{GreyImage, Layer, decode_exr, decode_grey_png, decode_rgb_png};
 
 use anyhow::{Context, Result, bail};
 use files::{Bound, MANIFEST_LINE, RECORD, image_bound, open_inside, read_bounded};
@@ -276,13 +276,34 @@ impl Dataset {
     /// The view's grey PNG of `kind` (`mask.png`, `valid.png`, …), its header checked
     /// against the view's size before it is decoded.
     pub fn grey(&self, view: &View, kind: &str) -> Result<GreyImage> {
+        let what = "a grey PNG of the view's size";
+        self.png(view, kind, what, 2, decode_grey_png)
+    }
+
+    /// The view's 8-bit RGB PNG of `kind` (`rgb.png`, `rest_rgb.png`), row-major, its header
+    /// checked against the view's size before it is decoded.
+    pub fn rgb(&self, view: &View, kind: &str) -> Result<Vec<[u8; 3]>> {
+        let what = "an RGB PNG of the view's size";
+        self.png(view, kind, what, 3, decode_rgb_png)
+    }
+
+    /// The view's PNG of `kind` read within the bound of `what`, `bytes` bytes a pixel at
+    /// the view's size, and decoded by `decode` (which checks the header against that size).
+    fn png<T>(
+        &self,
+        view: &View,
+        kind: &str,
+        what: &'static str,
+        bytes: u64,
+        decode: ImageDecoder<T>,
+    ) -> Result<T> {
         let relative = self.file_of(view, kind)?;
         let (width, height) = self.size(view)?;
         let bound = Bound {
-            what: "a grey PNG of the view's size",
-            bytes: image_bound(width, height, 1, 2),
+            what,
+            bytes: image_bound(width, height, 1, bytes),
         };
-        decode_grey_png(&self.read(relative, bound)?, relative, (width, height))
+        decode(&self.read(relative, bound)?, relative, (width, height))
     }
 
     /// The view's width and height, from its record.
@@ -329,6 +350,9 @@ impl Dataset {
         })
     }
 }
+
+/// A decoder of an image file's bytes: (bytes, the file's name, the view's width and height).
+type ImageDecoder<T> = fn(&[u8], &str, (u32, u32)) -> Result<T>;
 
 /// Sample index → the files its manifest line lists.
 type Listed = BTreeMap<u64, Vec<String>>;

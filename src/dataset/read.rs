@@ -1,6 +1,6 @@
 //! Decoders of the files a view holds: OpenEXR layers by channel name (depth `Z`, flow `U V`,
-//! displacement and normals `X Y Z`) and grey PNGs of 8 or 16 bits (masks, validity, depth in
-//! millimetres). They decode bytes already read (with a bound, see `files`), and check the
+//! displacement and normals `X Y Z`), grey PNGs of 8 or 16 bits (masks, validity, depth in
+//! millimetres) and 8-bit RGB PNGs (images). They decode bytes already read (with a bound, see `files`), and check the
 //! header against the size the view's record gives before decoding a pixel: a file declaring
 //! 40000 × 40000 pixels costs a header read, not 15 GB. Errors name the file and what it
 //! lacks.
@@ -98,13 +98,17 @@ pub fn decode_exr(bytes: &[u8], name: &str, names: &[&str], size: (u32, u32)) ->
     })
 }
 
-/// The grey PNG of 8 or 16 bits `bytes` (of the file `name`), which must be `size` =
-/// (width, height) pixels.
-pub fn decode_grey_png(bytes: &[u8], name: &str, size: (u32, u32)) -> Result<GreyImage> {
-    let unreadable = || format!("{name}: not a readable PNG");
-    let mut reader = png::Decoder::new(Cursor::new(bytes))
+/// A PNG's decoder with its header read, refused unless it is `size` = (width, height)
+/// pixels of colour type `colour`.
+fn png_of_size<'a>(
+    bytes: &'a [u8],
+    name: &str,
+    size: (u32, u32),
+    colour: png::ColorType,
+) -> Result<png::Reader<Cursor<&'a [u8]>>> {
+    let reader = png::Decoder::new(Cursor::new(bytes))
         .read_info()
-        .with_context(unreadable)?;
+        .with_context(|| format!("{name}: not a readable PNG"))?;
     let header = reader.info();
     if (header.width, header.height) != size {
         bail!(
@@ -115,12 +119,37 @@ pub fn decode_grey_png(bytes: &[u8], name: &str, size: (u32, u32)) -> Result<Gre
             size.1
         );
     }
-    if header.color_type != png::ColorType::Grayscale {
+    if header.color_type != colour {
         bail!(
-            "{name}: a one-channel grey PNG is needed, this one is {:?}",
+            "{name}: a {colour:?} PNG is needed, this one is {:?}",
             header.color_type
         );
     }
+    Ok(reader)
+}
+
+/// The 8-bit RGB PNG `bytes` (of the file `name`), which must be `size` = (width, height)
+/// pixels: its pixels, row-major.
+pub fn decode_rgb_png(bytes: &[u8], name: &str, size: (u32, u32)) -> Result<Vec<[u8; 3]>> {
+    let unreadable = || format!("{name}: not a readable PNG");
+    let mut reader = png_of_size(bytes, name, size, png::ColorType::Rgb)?;
+    let length = reader.output_buffer_size().with_context(unreadable)?;
+    let mut buf = vec![0; length];
+    let info = reader.next_frame(&mut buf).with_context(unreadable)?;
+    if info.bit_depth != png::BitDepth::Eight {
+        bail!("{name}: {:?}-bit RGB; 8-bit is needed", info.bit_depth);
+    }
+    Ok(buf[..info.buffer_size()]
+        .chunks_exact(3)
+        .map(|p| [p[0], p[1], p[2]])
+        .collect())
+}
+
+/// The grey PNG of 8 or 16 bits `bytes` (of the file `name`), which must be `size` =
+/// (width, height) pixels.
+pub fn decode_grey_png(bytes: &[u8], name: &str, size: (u32, u32)) -> Result<GreyImage> {
+    let unreadable = || format!("{name}: not a readable PNG");
+    let mut reader = png_of_size(bytes, name, size, png::ColorType::Grayscale)?;
     let length = reader.output_buffer_size().with_context(unreadable)?;
     let mut buf = vec![0; length];
     let info = reader.next_frame(&mut buf).with_context(unreadable)?;

@@ -7,15 +7,22 @@
 //!                                            OPENCV fx fy cx cy k1 k2 p1 p2 (FULL_OPENCV with
 //!                                            k3 and k4 = k5 = k6 = 0 when k3 ≠ 0)
 //! DIR/{sample:06}/sparse/0/images.txt        IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME, then
-//!                                            an empty line of 2-D points
-//! DIR/{sample:06}/sparse/0/points3D.txt      no points
+//!                                            its 2-D points: X Y POINT3D_ID …
+//! DIR/{sample:06}/sparse/0/points3D.txt      POINT3D_ID X Y Z R G B ERROR TRACK[] as
+//!                                            (IMAGE_ID, POINT2D_IDX), from the sample's
+//!                                            `points.ply` (none without the `points` output)
 //! ```
+//!
+//! Which points, which frames see them, where and in what colour: `tracks`. A 2-D point is the
+//! exact projection of its 3-D point, so every ERROR (COLMAP's mean reprojection error) is 0.
+//! POINT2D_IDX counts from 0 in the image's list, POINT3D_ID from 1.
 //!
 //! The pose is world → camera in OpenCV axes (COLMAP's), R as a Hamilton unit quaternion
 //! with QW ≥ 0, t as written in `w2c_opencv`. COLMAP puts the centre of the top-left pixel at
 //! (0.5, 0.5), as we do, so K's principal point is written unchanged. Numbers are written in
 //! the shortest form that reads back to the same f64.
 
+use super::tracks::{self, Point3d};
 use super::{Job, frames, intrinsics, needed};
 use crate::dataset::{Camera, View};
 use anyhow::{Result, bail};
@@ -25,6 +32,7 @@ use std::fmt::Write as _;
 pub(super) fn write(job: &mut Job) -> Result<Value> {
     let (dataset, out, options) = (job.dataset, job.out, job.options);
     for (sample, views) in frames(dataset, options)? {
+        let sample_points = sample.file("points.ply");
         let sample = sample.index;
         let scene = out.join(format!("{sample:06}"));
         let mut cameras = String::from(
@@ -33,13 +41,19 @@ pub(super) fn write(job: &mut Job) -> Result<Value> {
         let mut images = String::from(
             "# Image list with two lines of data per image:\n#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n#   POINTS2D[] as (X, Y, POINT3D_ID)\n",
         );
+        let points = match sample_points {
+            Some(ply) => tracks::observed(dataset, ply, &views)?,
+            None => Vec::new(),
+        };
+        let (points2d, tracks) = index_observations(&points, views.len());
         writeln!(cameras, "# Number of cameras: {}", views.len())?;
         writeln!(
             images,
-            "# Number of images: {}, mean observations per image: 0",
-            views.len()
+            "# Number of images: {}, mean observations per image: {}",
+            views.len(),
+            mean(points2d.iter().map(Vec::len), views.len())
         )?;
-        for (id, view) in (1..).zip(&views) {
+        for ((id, view), points2d) in (1..).zip(&views).zip(&points2d) {
             let camera = dataset.camera(view)?;
             let name = format!("{}.png", view.stem);
             let rgb = needed(view, "rgb.png", "colmap")?;
@@ -50,9 +64,10 @@ pub(super) fn write(job: &mut Job) -> Result<Value> {
             let t = camera.w2c_opencv;
             writeln!(
                 images,
-                "{id} {qw} {qx} {qy} {qz} {} {} {} {id} {name}\n",
+                "{id} {qw} {qx} {qy} {qz} {} {} {} {id} {name}",
                 t[0][3], t[1][3], t[2][3]
             )?;
+            writeln!(images, "{}", points2d.join(" "))?;
             job.summary.views += 1;
         }
         let sparse = scene.join("sparse/0");
@@ -62,12 +77,60 @@ pub(super) fn write(job: &mut Job) -> Result<Value> {
             .write(&sparse.join("images.txt"), images.as_bytes())?;
         job.placer.write(
             &sparse.join("points3D.txt"),
-            b"# 3D point list with one line of data per point:\n#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n# Number of points: 0, mean track length: 0\n",
+            points_text(&points, &tracks)?.as_bytes(),
         )?;
     }
     Ok(json!({
         "layout": "{sample:06}/images/{stem}.png and {sample:06}/sparse/0/{cameras,images,points3D}.txt",
+        "points3D": {
+            "source": "the sample's points.ply (the `points` output), its first points up to the cap; none without it",
+            "max_points": tracks::MAX_POINTS,
+            "track": "the frames where the point projects inside the image and the depth of its pixel is the point's own",
+            "colour": "mean RGB of the pixels the point falls in, over its track",
+            "error": 0,
+        },
     }))
+}
+
+/// Each image's POINTS2D (`X Y POINT3D_ID`, in point order) and each point's TRACK
+/// (`IMAGE_ID POINT2D_IDX`), image ids counting from 1 in frame order.
+fn index_observations(points: &[Point3d], frames: usize) -> (Vec<Vec<String>>, Vec<Vec<String>>) {
+    let mut points2d: Vec<Vec<String>> = vec![Vec::new(); frames];
+    let tracks = (1..)
+        .zip(points)
+        .map(|(id, point)| {
+            let track = point.track.iter().map(|o| {
+                let list = &mut points2d[o.frame];
+                list.push(format!("{} {} {id}", o.xy[0], o.xy[1]));
+                format!("{} {}", o.frame + 1, list.len() - 1)
+            });
+            track.collect()
+        })
+        .collect();
+    (points2d, tracks)
+}
+
+/// points3D.txt of `points` with their `tracks`.
+fn points_text(points: &[Point3d], tracks: &[Vec<String>]) -> Result<String> {
+    let mut text = String::from(
+        "# 3D point list with one line of data per point:\n#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n",
+    );
+    writeln!(
+        text,
+        "# Number of points: {}, mean track length: {}",
+        points.len(),
+        mean(points.iter().map(|p| p.track.len()), points.len())
+    )?;
+    for ((id, point), track) in (1..).zip(points).zip(tracks) {
+        let ([x, y, z], [r, g, b]) = (point.xyz, point.rgb);
+        writeln!(text, "{id} {x} {y} {z} {r} {g} {b} 0 {}", track.join(" "))?;
+    }
+    Ok(text)
+}
+
+/// The mean of `counts` over `n` (0 for none), as COLMAP's headers give it.
+fn mean(counts: impl Iterator<Item = usize>, n: usize) -> f64 {
+    counts.sum::<usize>() as f64 / n.max(1) as f64
 }
 
 /// `MODEL WIDTH HEIGHT PARAMS…` of a view's camera.

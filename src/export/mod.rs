@@ -1,6 +1,6 @@
 //! `shmgen export`: a finished dataset converted, without rendering anything again, into the
-//! layouts other tools read: nerfstudio scenes, COLMAP text models, WebDataset tar shards and
-//! 16-bit millimetre depth PNGs.
+//! layouts other tools read: nerfstudio scenes, COLMAP text models, WebDataset tar shards,
+//! 16-bit millimetre depth PNGs and optical flow as KITTI PNGs and Middlebury `.flo` files.
 //!
 //! Owns: the exported folder and its bytes (`export.json` says what it holds). Must not touch:
 //! the source dataset (it is only read; images are hard-linked, which shares their bytes and
@@ -10,9 +10,11 @@
 
 mod colmap;
 mod depth_mm;
+mod flow;
 mod nerfstudio;
 mod png16;
 mod staging;
+mod tracks;
 mod webdataset;
 
 use crate::dataset::{Dataset, Sample, View};
@@ -33,6 +35,8 @@ pub enum Format {
     Webdataset,
     /// Depth as 16-bit PNG in millimetres, mirroring `samples/`.
     Png16,
+    /// Optical flow as KITTI 16-bit PNG and Middlebury `.flo`, mirroring `samples/`.
+    Flow,
 }
 
 impl Format {
@@ -43,6 +47,7 @@ impl Format {
             Format::Colmap => "colmap",
             Format::Webdataset => "webdataset",
             Format::Png16 => "png16",
+            Format::Flow => "flow",
         }
     }
 }
@@ -55,11 +60,12 @@ impl FromStr for Format {
             Format::Colmap,
             Format::Webdataset,
             Format::Png16,
+            Format::Flow,
         ]
         .into_iter()
         .find(|f| f.name() == s)
         .ok_or_else(|| {
-            format!("unknown export format {s:?}: expected nerfstudio, colmap, webdataset or png16")
+            format!("unknown export format {s:?}: expected nerfstudio, colmap, webdataset, png16 or flow")
         })
     }
 }
@@ -96,6 +102,8 @@ pub struct Summary {
     pub saturated: u64,
     /// Depth pixels closer than 0.5 mm, written as 1 mm so they do not read as "no surface".
     pub raised: u64,
+    /// Valid flow vectors beyond KITTI's ±512 px, written invalid in its PNGs.
+    pub flow_out_of_range: u64,
 }
 
 /// What each format's writer works with: the dataset, the folder being written, the options,
@@ -127,6 +135,7 @@ pub fn export(source: &Path, options: &ExportOptions) -> Result<Summary> {
         Format::Colmap => colmap::write(&mut job)?,
         Format::Webdataset => webdataset::write(&mut job)?,
         Format::Png16 => png16::write(&mut job)?,
+        Format::Flow => flow::write(&mut job)?,
     };
     let Job {
         mut placer,

@@ -158,12 +158,13 @@ impl Mesh {
     /// of its triangle (by its winding), made from the uniform numbers in [0, 1) `uniform`
     /// gives, three a point: a triangle by its share of the area, then a point uniform on it,
     /// (1 − √r₁)·a + √r₁(1 − r₂)·b + √r₁r₂·c (Osada et al., "Shape distributions", ACM TOG
-    /// 2002, §4.2). None when the surface has no area.
+    /// 2002, §4.2). Each point keeps its triangle, where its material is found. None when the
+    /// surface has no area.
     pub fn sample_surface(
         &self,
         count: usize,
         mut uniform: impl FnMut() -> f64,
-    ) -> Option<Vec<(DVec3, DVec3)>> {
+    ) -> Option<Vec<SurfaceSample>> {
         let mut total = 0.0;
         let cumulative: Vec<f64> = (0..self.triangles.len())
             .map(|t| {
@@ -183,12 +184,26 @@ impl Mesh {
                     .min(cumulative.len() - 1);
                 let [a, b, c] = self.triangle(t);
                 let (s, r) = (uniform().sqrt(), uniform());
-                let p = (1.0 - s) * a + s * (1.0 - r) * b + s * r * c;
-                (p, (b - a).cross(c - a).normalize_or_zero())
+                SurfaceSample {
+                    position: (1.0 - s) * a + s * (1.0 - r) * b + s * r * c,
+                    normal: (b - a).cross(c - a).normalize_or_zero(),
+                    triangle: t,
+                }
             })
             .collect();
         Some(points)
     }
+}
+
+/// A point drawn on a mesh's surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceSample {
+    /// Where it lies.
+    pub position: DVec3,
+    /// The unit normal of its triangle, by the triangle's winding.
+    pub normal: DVec3,
+    /// The index of its triangle.
+    pub triangle: usize,
 }
 
 #[cfg(test)]
@@ -226,8 +241,14 @@ mod tests {
         let mesh = uneven();
         let points = mesh.sample_surface(40_000, even_numbers()).unwrap();
         let mut counts = [0usize; 3];
-        for (p, n) in &points {
+        for SurfaceSample {
+            position: p,
+            normal: n,
+            triangle,
+        } in &points
+        {
             let t = p.z.round() as usize;
+            assert_eq!(*triangle, t, "the triangle it lies on");
             assert!((p.z - t as f64).abs() < 1e-12, "on a triangle's plane: {p}");
             let leg = [0.25, 0.75, 1.0][t];
             assert!(

@@ -65,6 +65,22 @@ pub fn grey16_png(width: u32, height: u32, values: &[u16]) -> Vec<u8> {
     )
 }
 
+/// 16-bit RGB, row-major, three samples per pixel (KITTI's flow images); big-endian in the file.
+pub fn rgb16_png(width: u32, height: u32, values: &[[u16; 3]]) -> Vec<u8> {
+    let bytes: Vec<u8> = values
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_be_bytes())
+        .collect();
+    png(
+        width,
+        height,
+        ::png::ColorType::Rgb,
+        ::png::BitDepth::Sixteen,
+        &bytes,
+    )
+}
+
 /// The largest id a segmentation image holds (a 16-bit PNG).
 pub const MAX_SEGMENTATION_ID: u32 = u16::MAX as u32;
 

@@ -20,12 +20,14 @@ pub struct MeshLayer<'a> {
     pub parts: &'a [u32],
 }
 
-/// Points on a surface with their unit normals.
+/// Points on a surface with their unit normals and colours.
 pub struct PointLayer {
     /// Positions, world axes, metres.
     pub positions: Vec<DVec3>,
     /// Unit normal at each point, world axes.
     pub normals: Vec<[f32; 3]>,
+    /// The surface's colour at each point, sRGB 8-bit (the material's albedo there).
+    pub colours: Vec<[u8; 3]>,
 }
 
 /// The header of a binary little-endian PLY: each element with its count and properties
@@ -87,7 +89,8 @@ pub fn mesh_ply(mesh: &MeshLayer) -> Result<Vec<u8>> {
 
 const VERTEX_XYZ: [&str; 3] = ["double x", "double y", "double z"];
 
-/// Binary PLY of a point cloud: vertex `double x, y, z` and `float nx, ny, nz`.
+/// Binary PLY of a point cloud: vertex `double x, y, z`, `float nx, ny, nz` and `uchar red,
+/// green, blue` (the names Open3D, trimesh and nerfstudio's splatfacto read colours by).
 pub fn points_ply(points: &PointLayer) -> Vec<u8> {
     let header = ply_header(&[(
         "vertex",
@@ -99,18 +102,26 @@ pub fn points_ply(points: &PointLayer) -> Vec<u8> {
             "float nx",
             "float ny",
             "float nz",
+            "uchar red",
+            "uchar green",
+            "uchar blue",
         ],
     )]);
-    let mut out = Vec::with_capacity(header.len() + 36 * points.positions.len());
+    let mut out = Vec::with_capacity(header.len() + POINT_BYTES * points.positions.len());
     out.extend_from_slice(header.as_bytes());
-    for (&p, n) in points.positions.iter().zip(&points.normals) {
+    let each = points.positions.iter().zip(&points.normals);
+    for ((&p, n), colour) in each.zip(&points.colours) {
         point_bytes(&mut out, p);
         for c in n {
             out.extend_from_slice(&c.to_le_bytes());
         }
+        out.extend_from_slice(colour);
     }
     out
 }
+
+/// Bytes of one point of `points_ply`: three doubles, three floats, three bytes.
+const POINT_BYTES: usize = 24 + 12 + 3;
 
 /// glTF's `componentType` of float32 and uint32, and `target` of vertex and index buffers.
 const FLOAT: u32 = 5126;
@@ -260,5 +271,26 @@ mod tests {
         let bin_at = 20 + json_length;
         assert_eq!(&bytes[bin_at + 4..bin_at + 8], b"BIN\0");
         assert_eq!(word(bin_at), 4 * 12 + 12 * 4);
+    }
+
+    #[test]
+    fn point_ply_vertices_carry_position_normal_and_colour() {
+        let points = PointLayer {
+            positions: vec![DVec3::new(1.0, -2.0, 3.5), DVec3::new(5e6, 0.0, 0.0)],
+            normals: vec![[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]],
+            colours: vec![[255, 128, 7], [0, 1, 2]],
+        };
+        let bytes = points_ply(&points);
+        let text = String::from_utf8_lossy(&bytes);
+        let end = text.find("end_header\n").unwrap() + "end_header\n".len();
+        assert!(text[..end].ends_with(
+            "property float nz\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n"
+        ));
+        assert_eq!(bytes.len() - end, 2 * 39);
+        let second = end + 39;
+        let x = f64::from_le_bytes(bytes[second..second + 8].try_into().unwrap());
+        assert_eq!(x, 5e6);
+        assert_eq!(&bytes[end + 36..end + 39], [255, 128, 7]);
+        assert_eq!(&bytes[second + 36..second + 39], [0, 1, 2]);
     }
 }

@@ -23,7 +23,7 @@ mod writers;
 
 pub use encode::{
     DEPTH_CHANNEL, MAX_SEGMENTATION_ID, depth_exr, grey16_png, id_png, mask_png, rgb_png,
-    vector_exr,
+    rgb16_png, vector_exr,
 };
 pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, write_atomic};
 pub use guard::refuse_data_target;

@@ -362,6 +362,7 @@ mod tests {
             PointLayer {
                 positions: vec![glam::DVec3::new(0.2, 0.2, 0.01)],
                 normals: vec![[0.0, 0.0, 1.0]],
+                colours: vec![[10, 20, 30]],
             }
         }
     }

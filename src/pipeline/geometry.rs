@@ -1,12 +1,16 @@
 //! A built sample's geometry as the per-sample writers read it: the loaded and unloaded meshes
 //! (one vertex list order, one triangle list) with part ids, and points drawn on the loaded
-//! surface from the sample's own stream, so they are the same on any thread or shard.
+//! surface from the sample's own stream, so they are the same on any thread or shard, coloured
+//! by the material's albedo where they lie.
 
+use crate::augment::srgb;
 use crate::build::{BuiltSample, StructureMesh};
 use crate::output::{MeshLayer, PointLayer, SampleLayers};
+use crate::render::{SampleSurfaces, Surfaces};
 use crate::scene::DatasetSpec;
 use crate::seeds::{self, Scope, Stream};
 use glam::DVec3;
+use rayon::prelude::*;
 
 /// The geometry of one sample of a dataset: its structures, without a ground.
 pub struct SampleGeometry<'a> {
@@ -60,8 +64,38 @@ impl SampleLayers for SampleGeometry<'_> {
             .sample_surface(dataset.points as usize, || stream.unit())
             .unwrap_or_default();
         PointLayer {
-            positions: drawn.iter().map(|(p, _)| *p).collect(),
-            normals: drawn.iter().map(|(_, n)| n.as_vec3().to_array()).collect(),
+            positions: drawn.iter().map(|s| s.position).collect(),
+            normals: drawn
+                .iter()
+                .map(|s| s.normal.as_vec3().to_array())
+                .collect(),
+            colours: self.colours(drawn.iter().map(|s| (s.triangle, s.position)).collect()),
         }
+    }
+}
+
+impl SampleGeometry<'_> {
+    /// The material's albedo at each drawn point as sRGB bytes: the surface's own colour,
+    /// without light or shadow, evaluated where the renderer evaluates it (on the unloaded
+    /// surface under the point). Texture detail finer than the points' mean spacing, √(area /
+    /// points), is averaged out as a pixel of that size would average it: a point stands for
+    /// the patch around it. `drawn` holds each point's triangle and position.
+    fn colours(&self, drawn: Vec<(usize, DVec3)>) -> Vec<[u8; 3]> {
+        let sample = self.sample;
+        let surfaces = SampleSurfaces {
+            mesh: &self.mesh,
+            rest: self.rest,
+            piece: &sample.piece,
+            pieces: &sample.pieces,
+            shaders: &sample.shaders,
+        };
+        let spacing = (self.mesh.area() / drawn.len().max(1) as f64).sqrt();
+        drawn
+            .par_iter()
+            .map(|&(triangle, position)| {
+                let albedo = surfaces.at(triangle as u32, position, spacing).albedo;
+                albedo.map(|c| srgb::encode(c as f32))
+            })
+            .collect()
     }
 }
