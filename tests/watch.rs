@@ -685,6 +685,8 @@ fn idle_and_slow_clients_neither_add_threads_nor_keep_a_request_out() {
     watch.wait_for_preview(1, &sheet);
     let port = served_port(&watch);
     let pid = watch.child.id();
+    // The background scene pass has its own threads while it runs; count without them.
+    wait_until("the scene pass", || watch.stdout().contains("scenes: all"));
     let before = threads(pid);
 
     // 300 clients hold connections: half say nothing, half start a request and stall.
@@ -735,4 +737,107 @@ fn idle_and_slow_clients_neither_add_threads_nor_keep_a_request_out() {
     stream.read_to_end(&mut response).unwrap();
     let response = String::from_utf8_lossy(&response);
     assert!(response.starts_with("HTTP/1.1 431"), "{response}");
+}
+
+/// Six samples; only sample 4 (4 % 5 == 4) takes the branch with the misspelt method, so the
+/// sheet (samples 0–1) renders and only a pass over every sample can find it.
+const TYPO_IN_SAMPLE_4: &str = r#"dataset(#{
+    name: "rare branch",
+    seed: 1,
+    samples: 6,
+    views: 1,
+    camera: #{ width: 32, height: 24 },
+    scene: |rng| {
+        let b = beam(#{ length: 2.0, width: 0.2, height: 0.3 }).simply_supported();
+        if rng.sample % 5 == 4 {
+            b = b.materail("steel");
+        }
+        b
+    },
+});
+"#;
+
+/// Line and column (from 1) of the first `needle` in `text`.
+fn line_col(text: &str, needle: &str) -> (usize, usize) {
+    text.lines()
+        .enumerate()
+        .find_map(|(i, line)| line.find(needle).map(|c| (i + 1, c + 1)))
+        .unwrap_or_else(|| panic!("{needle} not in the text"))
+}
+
+#[test]
+fn the_scene_pass_finds_an_error_in_a_sample_the_sheet_does_not_show_and_a_fix_clears_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = dir.path().join("recipe.rhai");
+    std::fs::write(&recipe, TYPO_IN_SAMPLE_4).unwrap();
+    let watch = Watch::start(&recipe, &["--samples", "2", "--serve", "0"]);
+    watch.wait_for_preview(1, &preview_of(&recipe));
+    let port = served_port(&watch);
+
+    wait_until("the scene pass's error", || {
+        watch
+            .stderr()
+            .contains("scenes: the scene of sample 4 fails")
+    });
+    let stderr = watch.stderr();
+    let (line, col) = line_col(TYPO_IN_SAMPLE_4, "materail");
+    for expected in [
+        format!("recipe.rhai:{line}:{col}"),
+        "while drawing the scene of sample 4".to_string(),
+        "did you mean `material`?".to_string(),
+    ] {
+        assert!(stderr.contains(&expected), "{expected} in:\n{stderr}");
+    }
+    let state = String::from_utf8_lossy(&get(port, "/state").1).into_owned();
+    assert!(
+        state.contains("sample 4 fails") && state.contains(&format!("recipe.rhai:{line}:{col}")),
+        "the page shows it: {state}"
+    );
+
+    std::fs::write(&recipe, TYPO_IN_SAMPLE_4.replace("materail", "material")).unwrap();
+    watch.wait_for_preview(2, &preview_of(&recipe));
+    wait_until("the pass over the fixed recipe", || {
+        watch
+            .stdout()
+            .contains("scenes: all 6 samples drawn without error")
+    });
+    let state: serde_json::Value = serde_json::from_slice(&get(port, "/state").1).unwrap();
+    assert!(state["error"].is_null(), "the error is gone: {state}");
+    assert!(
+        state["scenes"]
+            .as_str()
+            .is_some_and(|s| s.contains("all 6 samples drawn without error")),
+        "{state}"
+    );
+}
+
+/// `check` draws in full only the first 8 samples; its scene pass still finds an error in the
+/// scene of sample 10, and says when every scene passed.
+#[test]
+fn check_draws_every_sample_s_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = dir.path().join("recipe.rhai");
+    let text = TYPO_IN_SAMPLE_4
+        .replace("samples: 6", "samples: 12")
+        .replace("rng.sample % 5 == 4", "rng.sample == 10");
+    std::fs::write(&recipe, &text).unwrap();
+    let output = check(&recipe);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    let (line, col) = line_col(&text, "materail");
+    for expected in [
+        format!("recipe.rhai:{line}:{col}"),
+        "while drawing the scene of sample 10".to_string(),
+    ] {
+        assert!(stderr.contains(&expected), "{expected} in:\n{stderr}");
+    }
+
+    std::fs::write(&recipe, text.replace("materail", "material")).unwrap();
+    let output = check(&recipe);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{output:?}");
+    assert!(
+        stdout.contains("scenes: all 12 samples drawn without error"),
+        "{stdout}"
+    );
 }

@@ -1,18 +1,23 @@
 //! `shmgen check`: validates a recipe and estimates what the full run will cost, without
 //! writing the dataset.
 //!
-//! Owns: the report (dataset settings, structure sizes, run-time and disk estimates). Must
-//! not touch: the renderer or the dataset format: the estimate times a real `pipeline::run`
-//! of a few samples into a temporary folder, which is removed.
+//! Owns: the report (dataset settings, structure sizes, run-time and disk estimates) and the
+//! scene pass, which draws every sample's scene (the recipe's closure alone, nothing meshed or
+//! rendered) so that an error in a branch only some samples take is found before the run;
+//! `watch` runs the same pass in the background. Must not touch: the renderer or the dataset
+//! format: the estimate times a real `pipeline::run` of a few samples into a temporary
+//! folder, which is removed.
 
 use crate::build::BuiltSample;
 use crate::pipeline::{self, RunOptions, Shard, prepare};
-use crate::recipe::Recipe;
+use crate::recipe::{Recipe, RecipeError};
 use crate::scene::Structure;
 use anyhow::Result;
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashSet};
+use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// Samples drawn and meshed for the structure report.
 const DRAWN: u64 = 8;
@@ -27,7 +32,68 @@ pub fn check(path: &Path, sets: &[(String, String)], threads: Option<usize>) -> 
         .map(|index| prepare(&recipe, index))
         .collect::<Result<Vec<_>>>()?;
     print_structures(&samples);
+    // The samples above were drawn in full; the pass draws the scenes of all the others.
+    let total = recipe.dataset.samples;
+    match draw_scenes(&recipe, drawn..total, &|| false) {
+        ScenePass::Passed { seconds } => println!("  {}", scenes_passed(total, seconds)),
+        ScenePass::Failed { error, .. } => return Err(error.into()),
+        ScenePass::Abandoned => unreachable!("the pass of `check` is never stopped"),
+    }
     estimate(&mut recipe, threads)
+}
+
+/// How drawing the scenes of a range of samples ended.
+pub enum ScenePass {
+    /// Every scene was drawn without error.
+    Passed { seconds: f64 },
+    /// The scene of `sample`, the lowest failing one, fails with `error`.
+    Failed {
+        sample: u64,
+        error: RecipeError,
+        seconds: f64,
+    },
+    /// Stopped on request before the end.
+    Abandoned,
+}
+
+/// Draws the scene of every sample in `samples` on the current rayon pool (a pool of one
+/// thread draws them in order), stopping at the first error or as soon as `stop` says so
+/// (asked before each sample). The error reported is that of the lowest failing sample, so
+/// that it does not depend on the number of threads.
+pub fn draw_scenes(
+    recipe: &Recipe,
+    samples: Range<u64>,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> ScenePass {
+    let start = Instant::now();
+    let failure = samples.into_par_iter().find_map_first(|sample| {
+        if stop() {
+            return Some(None);
+        }
+        recipe
+            .scene(sample)
+            .err()
+            .map(|error| Some((sample, error)))
+    });
+    let seconds = start.elapsed().as_secs_f64();
+    match failure {
+        None => ScenePass::Passed { seconds },
+        Some(Some((sample, error))) => ScenePass::Failed {
+            sample,
+            error,
+            seconds,
+        },
+        Some(None) => ScenePass::Abandoned,
+    }
+}
+
+/// The line that says every scene was drawn, and how long the pass took.
+pub fn scenes_passed(samples: u64, seconds: f64) -> String {
+    format!(
+        "scenes: all {} drawn without error (scene pass {:.2} s)",
+        counted(samples, "sample"),
+        seconds
+    )
 }
 
 fn print_dataset(recipe: &Recipe) {
