@@ -935,17 +935,8 @@ fn an_unknown_option_is_shown_at_its_key() {
 /// In an imported module, the key is shown in the module's file.
 #[test]
 fn an_unknown_option_in_a_module_is_shown_in_the_module() {
-    let dir = tempfile::tempdir().unwrap();
     let module = "fn portal(span) {\n    beam(#{ length: span, width: 0.1, height: 0.3, \"axail\": \"free\" })\n}\n";
-    write(dir.path(), "frames.rhai", module);
-    let recipe = write(
-        dir.path(),
-        "bad.rhai",
-        "import \"frames\" as frames;\ndataset(#{ scene: |rng| frames::portal(3.0) })\n",
-    );
-    let output = run(&recipe, &dir.path().join("out"), &[]);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(!output.status.success());
+    let stderr = failing_portal(module);
     let col = module.lines().nth(1).unwrap().find("\"axail\"").unwrap() + 1;
     assert!(
         stderr.contains(&format!("frames.rhai:2:{col}\n")),
@@ -1012,22 +1003,26 @@ fn a_failure_in_a_later_sample_writes_nothing() {
     );
 }
 
-#[test]
-fn errors_inside_imported_modules_point_into_the_module() {
+/// Runs a recipe whose scene is `frames::portal(3.0)` from the module `frames.rhai` holding
+/// `module`, which must fail; its stderr.
+fn failing_portal(module: &str) -> String {
     let dir = tempfile::tempdir().unwrap();
-    write(
-        dir.path(),
-        "frames.rhai",
-        "fn portal(span) {\n    beam(#{ length: span, width: 0.0, height: 0.3 })\n}\n",
-    );
+    write(dir.path(), "frames.rhai", module);
     let recipe = write(
         dir.path(),
         "bad.rhai",
         "import \"frames\" as frames;\ndataset(#{ scene: |rng| frames::portal(3.0) })\n",
     );
     let output = run(&recipe, &dir.path().join("out"), &[]);
-    let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success());
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+#[test]
+fn errors_inside_imported_modules_point_into_the_module() {
+    let stderr = failing_portal(
+        "fn portal(span) {\n    beam(#{ length: span, width: 0.0, height: 0.3 })\n}\n",
+    );
     assert!(stderr.contains("frames.rhai:2:"), "{stderr}");
     assert!(
         stderr.contains("beam.width = 0 must be positive"),
