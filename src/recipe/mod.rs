@@ -36,6 +36,7 @@ use api::{Dataset, Params, ScriptRng};
 use engine::{Resolver, Sources};
 use rhai::{AST, ASTNode, Array, Dynamic, Engine, FnPtr, Position, Scope, Stmt};
 use std::collections::BTreeMap;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -146,6 +147,23 @@ impl Recipe {
     /// Draws the scene of one sample.
     pub fn scene(&self, sample: u64) -> Result<SceneSpec, RecipeError> {
         on_script_stack(|| self.scene_here(sample))?
+    }
+
+    /// Draws the scenes of `samples` in order, handing each outcome to `visit`, until it
+    /// returns `Break`. All on one script thread: setting one up per sample would take as long
+    /// as drawing a small scene.
+    pub fn each_scene(
+        &self,
+        samples: std::ops::Range<u64>,
+        mut visit: impl FnMut(u64, Result<SceneSpec, RecipeError>) -> ControlFlow<()> + Send,
+    ) -> Result<(), RecipeError> {
+        on_script_stack(|| {
+            for sample in samples {
+                if visit(sample, self.scene_here(sample)).is_break() {
+                    break;
+                }
+            }
+        })
     }
 
     fn scene_here(&self, sample: u64) -> Result<SceneSpec, RecipeError> {
