@@ -576,16 +576,26 @@ fn augmentation_and_camera_options_are_checked_by_name() {
         ),
     ] {
         let dir = tempfile::tempdir().unwrap();
-        let path = write(
-            dir.path(),
-            "r.rhai",
-            box_recipe(&format!("{camera} width: 32, height: 32"), &augment),
-        );
+        let recipe = box_recipe(&format!("{camera} width: 32, height: 32"), &augment);
+        let path = write(dir.path(), "r.rhai", &recipe);
         let output = run(&path, &dir.path().join("out"), &[]);
         let text = common::stderr(&output);
+        // An unknown option is shown at its key (`fil:`), any other error at `dataset(`.
+        let place = match expected.strip_prefix("unknown option `") {
+            Some(path) => {
+                let key = format!("{}:", path.split('`').next().unwrap().rsplit('.').next().unwrap());
+                let (line, col) = recipe
+                    .lines()
+                    .enumerate()
+                    .find_map(|(i, l)| l.find(&key).map(|c| (i + 1, c + 1)))
+                    .unwrap();
+                format!("r.rhai:{line}:{col}\n")
+            }
+            None => "r.rhai:1:1".to_string(),
+        };
         assert!(
-            !output.status.success() && text.contains(expected) && text.contains("r.rhai:1:1"),
-            "{expected}: {text}"
+            !output.status.success() && text.contains(expected) && text.contains(&place),
+            "{expected} at {place}: {text}"
         );
     }
 }

@@ -819,6 +819,178 @@ fn unknown_options_are_refused_with_a_suggestion() {
     );
 }
 
+/// What an error shown at the first `token` of `text` (a recipe saved as `bad.rhai`) prints:
+/// its place `<dir>/bad.rhai:line:col`, the source line, and the caret under the token.
+fn shown_at(text: &str, token: &str) -> [String; 3] {
+    let (line, col, source) = text
+        .lines()
+        .enumerate()
+        .find_map(|(i, l)| l.find(token).map(|c| (i + 1, c + 1, l)))
+        .unwrap_or_else(|| panic!("`{token}` is not in the recipe"));
+    let gutter = line.to_string().len();
+    [
+        format!("<dir>/bad.rhai:{line}:{col}\n"),
+        format!("{line} | {source}\n"),
+        format!("{:gutter$} | {:>col$}\n", "", "^"),
+    ]
+}
+
+/// A recipe whose dataset map holds `options` (and a small camera unless they set one) and
+/// whose scene is `scene`.
+fn dataset_with(options: &str, scene: &str) -> String {
+    let camera = match options.contains("camera:") {
+        true => "",
+        false => "    camera: #{ width: 32, height: 24 },\n",
+    };
+    format!("dataset(#{{\n    samples: 2,\n{camera}{options}\n    scene: |rng| {scene},\n}})\n")
+}
+
+const A_BEAM: &str = "beam(#{ length: 1.0, width: 0.1, height: 0.1 })";
+
+/// Every option map the API checks for unknown keys shows a misspelt key at the key itself:
+/// nested maps, list items, quoted keys, the scene's calls and methods, a map built in a
+/// variable, and the right one of two keys spelt alike.
+#[test]
+fn an_unknown_option_is_shown_at_its_key() {
+    let shape = |call: &str| format!("assembly(\"a\", [{call}])");
+    let cases: Vec<(String, &str)> = vec![
+        (dataset_with("    sampels: 3,", A_BEAM), "sampels"),
+        (
+            dataset_with("    light: #{ sun: #{ elevaton: 0.5 } },", A_BEAM),
+            "elevaton",
+        ),
+        (
+            dataset_with(
+                "    background: #{ sky: #{ \"zenit\": [0.1, 0.2, 0.3] } },",
+                A_BEAM,
+            ),
+            "\"zenit\"",
+        ),
+        (
+            dataset_with("    ground: #{ materal: \"grass\" },", A_BEAM),
+            "materal",
+        ),
+        (
+            dataset_with(
+                "    augment: #{ operations: [\n        #{ op: \"gamma\", gamma: 1.1, probability: 1.0 },\n        #{ op: \"gamma\", gamma: 1.1, probability: 1.0, probabilty: 0.5 },\n    ] },",
+                A_BEAM,
+            ),
+            "probabilty",
+        ),
+        (
+            dataset_with(
+                "    views: 2,\n    camera: #{ fixed: [#{ position: [3.0, 0.0, 1.0] }, #{ position: [0.0, 3.0, 1.0], rol: 0.1 }] },",
+                A_BEAM,
+            ),
+            "rol",
+        ),
+        // The light's misspelt key comes first in the text, but the background is read first.
+        (
+            dataset_with(
+                "    light: #{ sun: #{ colr: [1.0, 1.0, 1.0] } },\n    background: #{ sky: #{ colr: [0.1, 0.2, 0.3] } },",
+                A_BEAM,
+            ),
+            "colr: [0.1",
+        ),
+        (
+            dataset_with(
+                "",
+                "beam(#{ length: 1.0, width: 0.1, height: 0.1, segmets: 4 })",
+            ),
+            "segmets",
+        ),
+        (
+            dataset_with(
+                "",
+                &format!("{A_BEAM}.material(\"steel\", #{{ roughnes: 0.5 }})"),
+            ),
+            "roughnes",
+        ),
+        (
+            dataset_with(
+                "",
+                &shape("shape::mesh(\"pier.obj\", #{ normalise: true })"),
+            ),
+            "normalise",
+        ),
+        (
+            format!(
+                "let lens = #{{ f_number: 2.8, focus_distance: 3.0, sensor_widht: 0.036 }};\n{}",
+                dataset_with(
+                    "    camera: #{ width: 32, height: 24, depth_of_field: lens },",
+                    A_BEAM
+                )
+            ),
+            "sensor_widht",
+        ),
+    ];
+    for (text, key) in cases {
+        let mut expected = shown_at(&text, key).to_vec();
+        expected.push("unknown option `".to_string());
+        let expected: Vec<&str> = expected.iter().map(String::as_str).collect();
+        rejects(&text, &[], &expected);
+    }
+}
+
+/// In an imported module, the key is shown in the module's file.
+#[test]
+fn an_unknown_option_in_a_module_is_shown_in_the_module() {
+    let module = "fn portal(span) {\n    beam(#{ length: span, width: 0.1, height: 0.3, \"axail\": \"free\" })\n}\n";
+    let stderr = failing_portal(module);
+    let col = module.lines().nth(1).unwrap().find("\"axail\"").unwrap() + 1;
+    assert!(
+        stderr.contains(&format!("frames.rhai:2:{col}\n")),
+        "{stderr}"
+    );
+    assert!(stderr.contains("did you mean `axial`?"), "{stderr}");
+}
+
+/// A misspelt method or function gets the nearest name that exists, in `run` and in `check`,
+/// at the call; a name that exists but not for the arguments given is said to exist.
+#[test]
+fn an_unknown_function_gets_the_nearest_name() {
+    let cases = [
+        (
+            format!("{A_BEAM}.materail(\"steel\")"),
+            "materail",
+            "did you mean `material`?",
+        ),
+        (
+            "assembly(\"a\", [shape::bx(1.0, 1.0, 1.0)])".to_string(),
+            "bx(",
+            "did you mean `shape::box`?",
+        ),
+        (
+            format!("{A_BEAM}.material(3)"),
+            "material",
+            "`material` exists, but not for these arguments",
+        ),
+    ];
+    for (scene, call, hint) in cases {
+        let text = dataset_with("", &scene);
+        let mut expected = shown_at(&text, call).to_vec();
+        expected.push(hint.to_string());
+        let expected: Vec<&str> = expected.iter().map(String::as_str).collect();
+        rejects(&text, &[], &expected);
+        let dir = tempfile::tempdir().unwrap();
+        let recipe = write(dir.path(), "bad.rhai", &text);
+        let output = Command::new(BIN)
+            .arg("check")
+            .arg(&recipe)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr)
+            .replace(&dir.path().display().to_string(), "<dir>");
+        assert!(!output.status.success(), "{stderr}");
+        for fragment in &expected {
+            assert!(
+                stderr.contains(fragment),
+                "check: `{fragment}` in:\n{stderr}"
+            );
+        }
+    }
+}
+
 #[test]
 fn a_failure_in_a_later_sample_writes_nothing() {
     // Most samples are fine; some draw an impossible load position.
@@ -831,22 +1003,26 @@ fn a_failure_in_a_later_sample_writes_nothing() {
     );
 }
 
-#[test]
-fn errors_inside_imported_modules_point_into_the_module() {
+/// Runs a recipe whose scene is `frames::portal(3.0)` from the module `frames.rhai` holding
+/// `module`, which must fail; its stderr.
+fn failing_portal(module: &str) -> String {
     let dir = tempfile::tempdir().unwrap();
-    write(
-        dir.path(),
-        "frames.rhai",
-        "fn portal(span) {\n    beam(#{ length: span, width: 0.0, height: 0.3 })\n}\n",
-    );
+    write(dir.path(), "frames.rhai", module);
     let recipe = write(
         dir.path(),
         "bad.rhai",
         "import \"frames\" as frames;\ndataset(#{ scene: |rng| frames::portal(3.0) })\n",
     );
     let output = run(&recipe, &dir.path().join("out"), &[]);
-    let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success());
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+#[test]
+fn errors_inside_imported_modules_point_into_the_module() {
+    let stderr = failing_portal(
+        "fn portal(span) {\n    beam(#{ length: span, width: 0.0, height: 0.3 })\n}\n",
+    );
     assert!(stderr.contains("frames.rhai:2:"), "{stderr}");
     assert!(
         stderr.contains("beam.width = 0 must be positive"),

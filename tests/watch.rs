@@ -133,6 +133,19 @@ impl Watch {
     }
 }
 
+impl Watch {
+    /// Saves `TYPO_IN_SAMPLE_4` with its typo fixed over `recipe` (the watcher's second
+    /// sheet) and waits for the scene pass over its 6 samples to pass.
+    fn save_the_fix(&self, recipe: &Path) {
+        std::fs::write(recipe, TYPO_IN_SAMPLE_4.replace("materail", "material")).unwrap();
+        self.wait_for_preview(2, &preview_of(recipe));
+        wait_until("the pass over the fixed recipe", || {
+            self.stdout()
+                .contains("scenes: all 6 samples drawn without error")
+        });
+    }
+}
+
 impl Drop for Watch {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -580,6 +593,8 @@ fn idle_and_slow_clients_neither_add_threads_nor_keep_a_request_out() {
     watch.wait_for_preview(1, &sheet);
     let port = served_port(&watch);
     let pid = watch.child.id();
+    // The background scene pass has its own threads while it runs; count without them.
+    wait_until("the scene pass", || watch.stdout().contains("scenes: all"));
     let before = threads(pid);
 
     // 300 clients hold connections: half say nothing, half start a request and stall.
@@ -630,4 +645,151 @@ fn idle_and_slow_clients_neither_add_threads_nor_keep_a_request_out() {
     stream.read_to_end(&mut response).unwrap();
     let response = String::from_utf8_lossy(&response);
     assert!(response.starts_with("HTTP/1.1 431"), "{response}");
+}
+
+/// Six samples; only sample 4 (4 % 5 == 4) takes the branch with the misspelt method, so the
+/// sheet (samples 0–1) renders and only a pass over every sample can find it.
+const TYPO_IN_SAMPLE_4: &str = r#"dataset(#{
+    name: "rare branch",
+    seed: 1,
+    samples: 6,
+    views: 1,
+    camera: #{ width: 32, height: 24 },
+    scene: |rng| {
+        let b = beam(#{ length: 2.0, width: 0.2, height: 0.3 }).simply_supported();
+        if rng.sample % 5 == 4 {
+            b = b.materail("steel");
+        }
+        b
+    },
+});
+"#;
+
+/// A folder with `TYPO_IN_SAMPLE_4` changed to `samples` samples, the misspelt branch taken
+/// when `taken` (a condition on `rng.sample`): the folder, the recipe and its text.
+fn typo_recipe(samples: u64, taken: &str) -> (tempfile::TempDir, PathBuf, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = dir.path().join("recipe.rhai");
+    let text = TYPO_IN_SAMPLE_4
+        .replace("samples: 6", &format!("samples: {samples}"))
+        .replace("rng.sample % 5 == 4", taken);
+    std::fs::write(&recipe, &text).unwrap();
+    (dir, recipe, text)
+}
+
+/// Line and column (from 1) of the first `needle` in `text`.
+fn line_col(text: &str, needle: &str) -> (usize, usize) {
+    text.lines()
+        .enumerate()
+        .find_map(|(i, line)| line.find(needle).map(|c| (i + 1, c + 1)))
+        .unwrap_or_else(|| panic!("{needle} not in the text"))
+}
+
+#[test]
+fn the_scene_pass_finds_an_error_in_a_sample_the_sheet_does_not_show_and_a_fix_clears_it() {
+    let (_dir, recipe, _) = typo_recipe(6, "rng.sample % 5 == 4");
+    let watch = Watch::start(&recipe, &["--samples", "2", "--serve", "0"]);
+    watch.wait_for_preview(1, &preview_of(&recipe));
+    let port = served_port(&watch);
+
+    wait_until("the scene pass's error", || {
+        watch
+            .stderr()
+            .contains("scenes: the scene of sample 4 fails")
+    });
+    let stderr = watch.stderr();
+    let (line, col) = line_col(TYPO_IN_SAMPLE_4, "materail");
+    for expected in [
+        format!("recipe.rhai:{line}:{col}"),
+        "while drawing the scene of sample 4".to_string(),
+        "did you mean `material`?".to_string(),
+    ] {
+        assert!(stderr.contains(&expected), "{expected} in:\n{stderr}");
+    }
+    let state = String::from_utf8_lossy(&get(port, "/state").1).into_owned();
+    assert!(
+        state.contains("sample 4 fails") && state.contains(&format!("recipe.rhai:{line}:{col}")),
+        "the page shows it: {state}"
+    );
+
+    watch.save_the_fix(&recipe);
+    let state: serde_json::Value = serde_json::from_slice(&get(port, "/state").1).unwrap();
+    assert!(state["error"].is_null(), "the error is gone: {state}");
+    assert!(
+        state["scenes"]
+            .as_str()
+            .is_some_and(|s| s.contains("all 6 samples drawn without error")),
+        "{state}"
+    );
+}
+
+/// `check` draws in full only the first 8 samples; its scene pass still finds an error in the
+/// scene of sample 10, and says when every scene passed.
+#[test]
+fn check_draws_every_sample_s_scene() {
+    let (_dir, recipe, text) = typo_recipe(12, "rng.sample == 10");
+    let output = check(&recipe);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    let (line, col) = line_col(&text, "materail");
+    for expected in [
+        format!("recipe.rhai:{line}:{col}"),
+        "while drawing the scene of sample 10".to_string(),
+    ] {
+        assert!(stderr.contains(&expected), "{expected} in:\n{stderr}");
+    }
+
+    std::fs::write(&recipe, text.replace("materail", "material")).unwrap();
+    let output = check(&recipe);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{output:?}");
+    assert!(
+        stdout.contains("scenes: all 12 samples drawn without error"),
+        "{stdout}"
+    );
+}
+
+/// Names of the threads of process `pid` (Linux's /proc/PID/task/*/comm).
+fn thread_names(pid: u32) -> Vec<String> {
+    std::fs::read_dir(format!("/proc/{pid}/task"))
+        .map(|tasks| {
+            tasks
+                .flatten()
+                .filter_map(|t| std::fs::read_to_string(t.path().join("comm")).ok())
+                .map(|name| name.trim().to_string())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// A save abandons the running pass: with a million samples it would run for minutes, but
+/// once the fixed recipe's pass has reported, no pass thread is left, and the abandoned pass
+/// never reports.
+#[test]
+fn a_new_save_abandons_the_running_scene_pass() {
+    let (_dir, recipe, _) = typo_recipe(1_000_000, "rng.sample == 999999");
+    let watch = Watch::start(&recipe, &["--samples", "1"]);
+    watch.wait_for_preview(1, &preview_of(&recipe));
+    let pid = watch.child.id();
+    let passes = || {
+        thread_names(pid)
+            .iter()
+            .filter(|name| name.as_str() == "scene pass")
+            .count()
+    };
+    wait_until("the pass to run", || passes() > 0);
+
+    watch.save_the_fix(&recipe);
+    let start = Instant::now();
+    wait_until("the abandoned pass to stop", || passes() == 0);
+    assert!(
+        start.elapsed() < Duration::from_secs(5),
+        "{:?}",
+        start.elapsed()
+    );
+    let said = format!("{}{}", watch.stdout(), watch.stderr());
+    assert!(
+        !said.contains("1000000 samples") && !said.contains("sample 999999"),
+        "{said}"
+    );
 }

@@ -1,18 +1,23 @@
 //! `shmgen check`: validates a recipe and estimates what the full run will cost, without
 //! writing the dataset.
 //!
-//! Owns: the report (dataset settings, structure sizes, run-time and disk estimates). Must
-//! not touch: the renderer or the dataset format: the estimate times a real `pipeline::run`
-//! of a few samples into a temporary folder, which is removed.
+//! Owns: the report (dataset settings, structure sizes, run-time and disk estimates) and the
+//! scene pass, which draws every sample's scene (the recipe's closure alone, nothing meshed or
+//! rendered) so that an error in a branch only some samples take is found before the run;
+//! `watch` runs the same pass in the background. Must not touch: the renderer or the dataset
+//! format: the estimate times a real `pipeline::run` of a few samples into a temporary
+//! folder, which is removed.
 
 use crate::build::BuiltSample;
 use crate::pipeline::{self, RunOptions, Shard, prepare};
-use crate::recipe::Recipe;
+use crate::recipe::{Recipe, RecipeError};
 use crate::scene::Structure;
 use anyhow::Result;
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashSet};
+use std::ops::{ControlFlow, Range};
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// Samples drawn and meshed for the structure report.
 const DRAWN: u64 = 8;
@@ -27,7 +32,101 @@ pub fn check(path: &Path, sets: &[(String, String)], threads: Option<usize>) -> 
         .map(|index| prepare(&recipe, index))
         .collect::<Result<Vec<_>>>()?;
     print_structures(&samples);
+    // The samples above were drawn in full; the pass draws the scenes of all the others.
+    let total = recipe.dataset.samples;
+    match draw_scenes(&recipe, drawn..total, &|| false) {
+        ScenePass::Passed { seconds } => println!("  {}", scenes_passed(total, seconds)),
+        ScenePass::Failed { error, .. } => return Err(error.into()),
+        ScenePass::Abandoned => unreachable!("the pass of `check` is never stopped"),
+    }
     estimate(&mut recipe, threads)
+}
+
+/// How drawing the scenes of a range of samples ended.
+pub enum ScenePass {
+    /// Every scene was drawn without error.
+    Passed { seconds: f64 },
+    /// The scene of `sample`, the lowest failing one, fails with `error`.
+    Failed {
+        sample: u64,
+        error: RecipeError,
+        seconds: f64,
+    },
+    /// Stopped on request before the end.
+    Abandoned,
+}
+
+/// Samples drawn one after the other by one task of the pass.
+const SCENES_PER_TASK: u64 = 64;
+
+/// Draws the scene of every sample in `samples` on the current rayon pool (a pool of one
+/// thread draws them in order), stopping at the first error or as soon as `stop` says so
+/// (asked before each sample). The error reported is that of the lowest failing sample, so
+/// that it does not depend on the number of threads.
+pub fn draw_scenes(
+    recipe: &Recipe,
+    samples: Range<u64>,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> ScenePass {
+    let start = Instant::now();
+    let tasks = samples
+        .end
+        .saturating_sub(samples.start)
+        .div_ceil(SCENES_PER_TASK);
+    let failure = (0..tasks).into_par_iter().find_map_first(|task| {
+        let first = samples.start + task * SCENES_PER_TASK;
+        let part = first..(first + SCENES_PER_TASK).min(samples.end);
+        first_failure(recipe, part, stop)
+    });
+    let seconds = start.elapsed().as_secs_f64();
+    match failure {
+        None => ScenePass::Passed { seconds },
+        Some(Some((sample, error))) => ScenePass::Failed {
+            sample,
+            error,
+            seconds,
+        },
+        Some(None) => ScenePass::Abandoned,
+    }
+}
+
+/// The first failing sample of `samples` and its error; `Some(None)` when stopped first.
+fn first_failure(
+    recipe: &Recipe,
+    samples: Range<u64>,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Option<Option<(u64, RecipeError)>> {
+    if stop() {
+        return Some(None);
+    }
+    let (first, last) = (samples.start, samples.end.saturating_sub(1));
+    let mut found = None;
+    // After each sample but the last, `stop` is asked before the next one is drawn: once
+    // per sample in all.
+    let drawn = recipe.each_scene(samples, |sample, scene| {
+        if let Err(error) = scene {
+            found = Some(Some((sample, error)));
+        } else if sample < last && stop() {
+            found = Some(None);
+        }
+        match found {
+            Some(_) => ControlFlow::Break(()),
+            None => ControlFlow::Continue(()),
+        }
+    });
+    match drawn {
+        Ok(()) => found,
+        Err(error) => Some(Some((first, error))),
+    }
+}
+
+/// The line that says every scene was drawn, and how long the pass took.
+pub fn scenes_passed(samples: u64, seconds: f64) -> String {
+    format!(
+        "scenes: all {} drawn without error (scene pass {:.2} s)",
+        counted(samples, "sample"),
+        seconds
+    )
 }
 
 fn print_dataset(recipe: &Recipe) {
@@ -181,6 +280,67 @@ fn counted(n: u64, noun: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// 200 samples whose scenes fail at samples 130 and 170 only.
+    fn failing_at_130_and_170() -> (tempfile::TempDir, Recipe) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.rhai");
+        std::fs::write(
+            &path,
+            "dataset(#{ samples: 200, scene: |rng| {\n    let b = beam(#{ length: 1.0, width: 0.1, height: 0.1 });\n    if rng.sample == 130 || rng.sample == 170 { b = b.materail(\"steel\"); }\n    b\n} })\n",
+        )
+        .unwrap();
+        let recipe = Recipe::load(&path, &[]).unwrap();
+        (dir, recipe)
+    }
+
+    fn pool(threads: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+    }
+
+    #[test]
+    fn the_pass_reports_the_lowest_failing_sample_whatever_the_threads() {
+        let (_dir, recipe) = failing_at_130_and_170();
+        for threads in [1, 2] {
+            match pool(threads).install(|| draw_scenes(&recipe, 0..200, &|| false)) {
+                ScenePass::Failed { sample, error, .. } => {
+                    assert_eq!(sample, 130, "{threads} threads");
+                    assert!(error.to_string().contains("sample 130"), "{error}");
+                }
+                _ => panic!("{threads} threads: the pass did not fail"),
+            }
+        }
+        assert!(matches!(
+            draw_scenes(&recipe, 0..130, &|| false),
+            ScenePass::Passed { .. }
+        ));
+        assert!(matches!(
+            draw_scenes(&recipe, 171..200, &|| false),
+            ScenePass::Passed { .. }
+        ));
+    }
+
+    /// Asked once before each sample, and the pass ends as soon as it says stop.
+    #[test]
+    fn the_pass_stops_when_asked() {
+        let (_dir, recipe) = failing_at_130_and_170();
+        let asked = AtomicU64::new(0);
+        let stop = || asked.fetch_add(1, Ordering::SeqCst) + 1 >= 100;
+        let pass = pool(1).install(|| draw_scenes(&recipe, 0..200, &stop));
+        assert!(matches!(pass, ScenePass::Abandoned));
+        assert_eq!(asked.load(Ordering::SeqCst), 100);
+        let asked = AtomicU64::new(0);
+        let never = || {
+            asked.fetch_add(1, Ordering::SeqCst);
+            false
+        };
+        pool(1).install(|| draw_scenes(&recipe, 0..130, &never));
+        assert_eq!(asked.load(Ordering::SeqCst), 130, "once per sample");
+    }
 
     #[test]
     fn spreads_and_units() {

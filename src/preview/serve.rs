@@ -1,7 +1,8 @@
 //! The preview as a local web page that refreshes itself, for a browser next to the editor.
 //!
 //! Owns: a tiny HTTP/1.1 server on 127.0.0.1 only (never another interface), serving the
-//! page, the latest good sheet and the latest state (error text of a broken save). It is
+//! page, the latest good sheet and the latest state (error text of a broken save or of a
+//! sample whose scene fails, and the outcome of the scene pass). It is
 //! bounded whatever the clients do: one thread, at most `MAX_CONNECTIONS` connections, a
 //! deadline for each request and each response, a size limit on requests. Must not touch:
 //! files (it serves what the watcher hands it from memory) or anything but loopback.
@@ -36,6 +37,7 @@ body { background: #1e1e1e; color: #ddd; font: 14px ui-monospace, monospace; mar
 </style></head>
 <body>
 <div id="status">waiting for the first preview…</div>
+<div id="scenes"></div>
 <pre id="error"></pre>
 <img id="sheet" alt="">
 <script>
@@ -45,6 +47,7 @@ async function poll() {
   try {
     const state = await (await fetch("state", { cache: "no-store" })).json();
     document.getElementById("error").textContent = state.error || "";
+    document.getElementById("scenes").textContent = state.scenes || "";
     if (state.preview > 0) {
       document.getElementById("status").textContent = state.summary;
       if (state.preview !== seen) {
@@ -70,6 +73,8 @@ struct State {
     preview: u64,
     summary: String,
     error: Option<String>,
+    /// What the background pass over every sample's scene found, once it has.
+    scenes: Option<String>,
 }
 
 /// A running server; the watcher publishes into it.
@@ -103,10 +108,16 @@ impl Server {
         state.preview += 1;
         state.summary = summary;
         state.error = None;
+        state.scenes = None;
     }
 
     pub fn fail(&self, error: String) {
         self.state.lock().unwrap().error = Some(error);
+    }
+
+    /// The scene pass over every sample of the latest sheet passed.
+    pub fn scenes_checked(&self, line: String) {
+        self.state.lock().unwrap().scenes = Some(line);
     }
 }
 
@@ -320,6 +331,7 @@ fn route(head: &str, state: &Mutex<State>) -> (&'static str, &'static str, Vec<u
                 "preview": state.preview,
                 "summary": state.summary,
                 "error": state.error,
+                "scenes": state.scenes,
             });
             ("200 OK", "application/json", body.to_string().into_bytes())
         }

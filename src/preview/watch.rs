@@ -2,15 +2,23 @@
 //! module it imports or a file it reads changes.
 //!
 //! Owns: which folders are watched, which file events count, the coalescing of one save's
-//! events into one reload, and reporting (terminal and, optionally, the web page). Must not
-//! touch: the recipe's files (it only reads them) or the dataset format. A broken save never
-//! ends the watcher: the error is shown and the last good sheet stays in place.
+//! events into one reload, the background scene pass after each sheet, and reporting
+//! (terminal and, optionally, the web page). Must not touch: the recipe's files (it only
+//! reads them) or the dataset format. A broken save never ends the watcher: the error is shown
+//! and the last good sheet stays in place.
+//!
+//! The sheet shows only the first samples, so a mistake in a branch that only later samples
+//! take (`if rng.sample % 5 == 4 { ... }`) would pass unseen until the full run. After each
+//! sheet, one background thread therefore draws every sample's scene (`check::draw_scenes`,
+//! the pass of `shmgen check`) and reports the first error with its sample, or that all
+//! passed and how long it took. A new save abandons the pass between two samples.
 //!
 //! Folders, not files, are watched (non-recursively): an editor's atomic save replaces the
 //! file, and a watch on the file itself would be lost with the old inode (inotify(7);
 //! docs/implementation-notes.md §2.1). Not recursively, because a recipe's folder may also
 //! hold datasets, whose thousands of files must neither cost watches nor trigger reloads.
 
+use super::check::{ScenePass, draw_scenes, scenes_passed};
 use super::serve::Server;
 use super::sheet::{self, Preview, PreviewOptions};
 use crate::output::refuse_data_target;
@@ -21,7 +29,9 @@ use notify::event::{AccessKind, AccessMode, ModifyKind};
 use notify::{Event, EventKind, RecursiveMode, Watcher};
 use std::collections::{BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// A save is many events (writes, close, rename, or a delete then a create); a reload waits
@@ -62,7 +72,7 @@ pub fn watch(options: &WatchOptions) -> Result<()> {
     refuse_data_target(&out, "--out", None, false)?;
     if options.once {
         let start = Instant::now();
-        let (preview, _) = build(options)?;
+        let (preview, _, _) = build(options)?;
         write_atomic(&out, &preview.png)?;
         println!("{}", summary(&preview, start, &out));
         return Ok(());
@@ -80,12 +90,15 @@ fn default_out(recipe: &Path) -> PathBuf {
     recipe.with_file_name(format!("{stem}{PREVIEW_SUFFIX}"))
 }
 
-/// Loads the recipe and renders its sheet; also returns the files the recipe used.
-fn build(options: &WatchOptions) -> Result<(Preview, Vec<PathBuf>)> {
+/// Loads the recipe and renders its sheet; also returns the files the recipe used, and the
+/// recipe with its number of samples (the sheet cuts the dataset down to what it shows).
+fn build(options: &WatchOptions) -> Result<(Preview, Vec<PathBuf>, (Recipe, u64))> {
     let mut recipe = Recipe::load(&options.recipe, &options.sets)?;
+    let samples = recipe.dataset.samples;
     let preview = sheet::render(&mut recipe, &options.preview)?;
     // After rendering: drawing the preview's samples may have read more mesh files.
-    Ok((preview, recipe.watched_paths()))
+    let files = recipe.watched_paths();
+    Ok((preview, files, (recipe, samples)))
 }
 
 fn summary(preview: &Preview, start: Instant, out: &Path) -> String {
@@ -123,8 +136,9 @@ struct Session<'a> {
     watched: Watched,
     watcher: notify::RecommendedWatcher,
     events: Receiver<Message>,
-    server: Option<Server>,
+    server: Option<Arc<Server>>,
     has_preview: bool,
+    scene_pass: ScenePasses,
 }
 
 impl<'a> Session<'a> {
@@ -139,7 +153,7 @@ impl<'a> Session<'a> {
             let _ = tx.send(Message::Files(event));
         })
         .context("starting the file watcher")?;
-        let server = options.serve.map(Server::start).transpose()?;
+        let server = options.serve.map(Server::start).transpose()?.map(Arc::new);
         if let Some(server) = &server {
             println!("serving the preview at {}", server.url);
         }
@@ -149,6 +163,7 @@ impl<'a> Session<'a> {
             out,
             watcher,
             events,
+            scene_pass: ScenePasses::new(server.clone()),
             server,
             has_preview: false,
         };
@@ -176,14 +191,15 @@ impl<'a> Session<'a> {
     /// when the change that caused it was first seen.
     fn reload(&mut self, since: Option<Instant>) {
         let start = Instant::now();
+        self.scene_pass.abandon();
         self.watched.snapshot();
-        let result = build(self.options).and_then(|(preview, files)| {
+        let result = build(self.options).and_then(|(preview, files, recipe)| {
             self.watched.watch(&mut self.watcher, files);
             write_atomic(&self.out, &preview.png)?;
-            Ok(preview)
+            Ok((preview, recipe))
         });
         match result {
-            Ok(preview) => {
+            Ok((preview, (recipe, samples))) => {
                 let line = summary(&preview, start, &self.out);
                 match since {
                     Some(since) => println!(
@@ -196,6 +212,7 @@ impl<'a> Session<'a> {
                     server.publish(preview.png, line);
                 }
                 self.has_preview = true;
+                self.scene_pass.start(recipe, samples, preview.samples);
             }
             Err(e) => {
                 let error = format!("{e:#}");
@@ -212,6 +229,145 @@ impl<'a> Session<'a> {
                     server.fail(error);
                 }
             }
+        }
+    }
+}
+
+/// Runs the background scene pass of the latest good sheet, one at a time.
+struct ScenePasses {
+    /// Counts reloads; a pass stops as soon as it no longer runs for the latest one.
+    generation: Arc<AtomicU64>,
+    /// Held while a pass reports and while a reload moves the generation on, so that an
+    /// abandoned pass can never print after the reload has begun.
+    reporting: Arc<Mutex<()>>,
+    server: Option<Arc<Server>>,
+}
+
+/// How often a long pass says how far it got.
+const PROGRESS_EVERY: Duration = Duration::from_secs(10);
+
+impl ScenePasses {
+    fn new(server: Option<Arc<Server>>) -> Self {
+        ScenePasses {
+            generation: Arc::default(),
+            reporting: Arc::default(),
+            server,
+        }
+    }
+
+    /// Abandons the running pass (it stops before its next sample, and says nothing more).
+    fn abandon(&self) {
+        let _reporting = self.reporting.lock().unwrap();
+        self.generation.fetch_add(1, Ordering::SeqCst);
+    }
+
+    /// Draws the scenes of all `samples` of `recipe` on one background thread, so that the
+    /// watcher, the sheet's renders and the editor stay responsive. `shown` samples are on
+    /// the sheet.
+    fn start(&self, recipe: Recipe, samples: u64, shown: u64) {
+        let pass = Pass {
+            generation: self.generation.clone(),
+            mine: self.generation.load(Ordering::SeqCst),
+            reporting: self.reporting.clone(),
+            server: self.server.clone(),
+            samples,
+            shown,
+        };
+        let spawned = std::thread::Builder::new()
+            .name("scene pass".into())
+            .spawn(move || pass.run(&recipe));
+        if let Err(e) = spawned {
+            eprintln!("warning: cannot start the scene pass: {e}");
+        }
+    }
+}
+
+/// One background pass over every sample's scene.
+struct Pass {
+    generation: Arc<AtomicU64>,
+    /// The generation this pass runs for.
+    mine: u64,
+    reporting: Arc<Mutex<()>>,
+    server: Option<Arc<Server>>,
+    samples: u64,
+    shown: u64,
+}
+
+impl Pass {
+    fn current(&self) -> bool {
+        self.generation.load(Ordering::SeqCst) == self.mine
+    }
+
+    fn run(&self, recipe: &Recipe) {
+        // A pool of one thread: the pass must not compete with the sheet for every core,
+        // and in one thread it draws the samples in order.
+        let pool = match rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .thread_name(|_| "scene pass".into())
+            .build()
+        {
+            Ok(pool) => pool,
+            Err(e) => return eprintln!("warning: cannot start the scene pass: {e}"),
+        };
+        let start = Instant::now();
+        let last_said = Mutex::new(start);
+        let drawn = AtomicU64::new(0);
+        let stop = || {
+            let n = drawn.fetch_add(1, Ordering::Relaxed);
+            self.progress(n, start, &mut last_said.lock().unwrap());
+            !self.current()
+        };
+        let outcome = pool.install(|| draw_scenes(recipe, 0..self.samples, &stop));
+        self.report(outcome);
+    }
+
+    /// Every `PROGRESS_EVERY`, how many samples are drawn: a dataset of many thousands
+    /// takes a while, and the engineer should know the pass is still going.
+    fn progress(&self, drawn: u64, start: Instant, last_said: &mut Instant) {
+        if last_said.elapsed() < PROGRESS_EVERY {
+            return;
+        }
+        *last_said = Instant::now();
+        let _reporting = self.reporting.lock().unwrap();
+        if self.current() {
+            println!(
+                "scenes: {drawn} of {} samples drawn without error so far ({:.0} s)",
+                self.samples,
+                start.elapsed().as_secs_f64()
+            );
+        }
+    }
+
+    fn report(&self, outcome: ScenePass) {
+        let _reporting = self.reporting.lock().unwrap();
+        if !self.current() {
+            return;
+        }
+        match outcome {
+            ScenePass::Passed { seconds } => {
+                let line = scenes_passed(self.samples, seconds);
+                println!("{line}");
+                if let Some(server) = &self.server {
+                    server.scenes_checked(line);
+                }
+            }
+            ScenePass::Failed {
+                sample,
+                error,
+                seconds,
+            } => {
+                let error = format!(
+                    "{error}\nscenes: the scene of sample {sample} fails (found after drawing {} of {} samples in {seconds:.2} s; the sheet shows samples 0–{})",
+                    sample + 1,
+                    self.samples,
+                    self.shown.saturating_sub(1)
+                );
+                eprintln!("{error}");
+                if let Some(server) = &self.server {
+                    server.fail(error);
+                }
+            }
+            ScenePass::Abandoned => {}
         }
     }
 }

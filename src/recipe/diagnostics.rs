@@ -1,6 +1,8 @@
 //! Turning Rhai errors into messages that point into the user's files:
 //! `error: ...` then `--> file:line:col`, the source line and a caret, then the call chain.
-//! Warnings take the same form.
+//! Warnings take the same form. A call to a function or method that does not exist gets the
+//! nearest name the script could have meant, as an unknown option does; an unknown option is
+//! shown at its key where the key is written (see `option_sites`).
 
 use super::engine::{
     MAX_ARRAY_ELEMENTS, MAX_CALL_LEVELS, MAX_EXPR_DEPTH, MAX_FUNCTION_EXPR_DEPTH,
@@ -9,7 +11,7 @@ use super::engine::{
 use super::memory::MAX_SCRIPT_BYTES;
 use crate::scene::SourceSite;
 use crate::words::{clip, short_numbers};
-use rhai::{EvalAltResult, NativeCallContext, ParseError, ParseErrorType, Position};
+use rhai::{AST, Engine, EvalAltResult, NativeCallContext, ParseError, ParseErrorType, Position};
 use std::collections::BTreeSet;
 use std::fmt;
 use std::sync::{Arc, Mutex};
@@ -57,15 +59,20 @@ impl RecipeError {
         ))
     }
 
-    /// `context` says what was being evaluated, e.g. "while drawing the scene of sample 3".
+    /// `context` says what was being evaluated, e.g. "while drawing the scene of sample 3";
+    /// `callable` what the script could call, for the nearest name to a missing function.
     pub fn eval(
         err: &EvalAltResult,
         main_label: &str,
         sources: &Sources,
         context: Option<&str>,
+        callable: &Callable,
     ) -> Self {
         let mut chain = Vec::new();
-        let (message, at) = innermost(err, main_label, &mut chain);
+        let (message, mut at) = innermost(err, main_label, &mut chain, callable);
+        if let Some(key) = option_key(&message, &at, sources) {
+            at.pos = key;
+        }
         RecipeError(render("error", &message, &at, &chain, context, sources))
     }
 }
@@ -122,11 +129,19 @@ impl Warnings {
     }
 }
 
+/// Where the key is written of the unknown option that `message` names, the error being
+/// raised by the call at `at`.
+fn option_key(message: &str, at: &Located, sources: &Sources) -> Option<Position> {
+    let path = super::options::unknown_option_path(message)?;
+    super::option_sites::key_position(&sources.text(&at.label)?, at.pos, path)
+}
+
 /// Follows calls and imports down to the error itself, collecting where each step happened.
 fn innermost(
     err: &EvalAltResult,
     label: &str,
     chain: &mut Vec<(String, Located)>,
+    callable: &Callable,
 ) -> (String, Located) {
     match err {
         EvalAltResult::ErrorInFunctionCall(name, source, inner, pos) => {
@@ -147,7 +162,7 @@ fn innermost(
             } else {
                 source.as_str()
             };
-            innermost(inner, inner_label, chain)
+            innermost(inner, inner_label, chain, callable)
         }
         EvalAltResult::ErrorInModule(module, inner, pos) => {
             chain.push((
@@ -157,10 +172,10 @@ fn innermost(
                     pos: *pos,
                 },
             ));
-            innermost(inner, module, chain)
+            innermost(inner, module, chain, callable)
         }
         leaf => (
-            message(leaf),
+            message(leaf, callable),
             Located {
                 label: label.to_string(),
                 pos: leaf.position(),
@@ -171,7 +186,7 @@ fn innermost(
 
 /// What went wrong, in the user's terms where Rhai's own words are unclear: the limits are
 /// named with their values.
-fn message(err: &EvalAltResult) -> String {
+fn message(err: &EvalAltResult, callable: &Callable) -> String {
     match err {
         EvalAltResult::ErrorParsing(kind, _) => parse_message(kind),
         EvalAltResult::ErrorRuntime(value, _) => value.to_string(),
@@ -182,6 +197,10 @@ fn message(err: &EvalAltResult) -> String {
         EvalAltResult::ErrorFunctionNotFound(signature, _) if signature.starts_with("anon$") => {
             closure_not_found(signature)
         }
+        EvalAltResult::ErrorFunctionNotFound(signature, _) => format!(
+            "function not found: {signature}{}",
+            callable.hint(signature)
+        ),
         EvalAltResult::ErrorStackOverflow(_) => format!(
             "function calls nested more than {MAX_CALL_LEVELS} deep; does a function call itself without end?"
         ),
@@ -208,6 +227,67 @@ fn message(err: &EvalAltResult) -> String {
                 .to_string()
         }
     }
+}
+
+/// What a script can call: the engine's functions and methods (its static modules' under
+/// their `module::` names) and the functions the script defines.
+pub struct Callable<'a> {
+    pub engine: &'a Engine,
+    pub ast: Option<&'a AST>,
+}
+
+impl Callable<'_> {
+    /// Names a script can call, qualified by module (`shape::box`); operators, getters and
+    /// closures (which have no name to type) are left out.
+    fn names(&self) -> Vec<String> {
+        let mut names = self.engine.collect_fn_metadata(
+            None,
+            |info| {
+                let name = info.metadata.name.as_str();
+                is_identifier(name).then(|| match info.namespace.as_str() {
+                    "" => name.to_string(),
+                    module => format!("{module}::{name}"),
+                })
+            },
+            true,
+        );
+        if let Some(ast) = self.ast {
+            names.extend(ast.iter_functions().map(|f| f.name.to_string()));
+        }
+        names.sort_unstable();
+        names.dedup();
+        names
+    }
+
+    /// What to add to "function not found: `signature`": the nearest name in the same module
+    /// (`; did you mean `material`?`), or that the name exists but takes other arguments.
+    fn hint(&self, signature: &str) -> String {
+        let called = signature
+            .split_once(" (")
+            .map_or(signature, |(name, _)| name);
+        let module = |name: &str| name.rsplit_once("::").map(|(m, _)| m.to_string());
+        let names = self.names();
+        if names.iter().any(|n| n == called) {
+            return format!("; `{called}` exists, but not for these arguments");
+        }
+        let same_module: Vec<&str> = names
+            .iter()
+            .filter(|n| module(n) == module(called))
+            .map(String::as_str)
+            .collect();
+        crate::words::nearest(called, &same_module)
+            .map(|name| format!("; did you mean `{name}`?"))
+            .unwrap_or_default()
+    }
+}
+
+/// Whether `name` can be typed as a function name: letters, digits and `_`, not starting
+/// with a digit.
+fn is_identifier(name: &str) -> bool {
+    name.chars()
+        .next()
+        .is_some_and(|c| c.is_alphabetic() || c == '_')
+        && name.chars().all(|c| c.is_alphanumeric() || c == '_')
 }
 
 /// A syntax error's message.

@@ -47,6 +47,11 @@ impl Sources {
             .insert(label.to_string(), text.to_string());
     }
 
+    /// The whole text of the file labelled `label`.
+    pub fn text(&self, label: &str) -> Option<String> {
+        self.0.lock().unwrap().get(label).cloned()
+    }
+
     pub fn line(&self, label: &str, line: usize) -> Option<String> {
         self.0
             .lock()

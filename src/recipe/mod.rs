@@ -20,10 +20,12 @@ mod files;
 mod ground_api;
 mod material_api;
 mod memory;
+mod option_sites;
 mod options;
 mod result;
 mod shape_api;
 
+use diagnostics::Callable;
 pub use diagnostics::RecipeError;
 pub use engine::stdlib_dir;
 pub use memory::CountingAllocator;
@@ -34,6 +36,7 @@ use api::{Dataset, Params, ScriptRng};
 use engine::{Resolver, Sources};
 use rhai::{AST, ASTNode, Array, Dynamic, Engine, FnPtr, Position, Scope, Stmt};
 use std::collections::BTreeMap;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -98,9 +101,13 @@ impl Recipe {
             .compile(&text)
             .map_err(|e| RecipeError::parse(&e, &label, &sources))?;
         ast.set_source(label.as_str());
+        let callable = Callable {
+            engine: &engine,
+            ast: Some(&ast),
+        };
         let result: Dynamic = engine
             .eval_ast_with_scope(&mut Scope::new(), &ast)
-            .map_err(|e| RecipeError::eval(&e, &label, &sources, None))?;
+            .map_err(|e| RecipeError::eval(&e, &label, &sources, None, &callable))?;
         let type_name = result.type_name().to_string();
         let Some(Dataset { spec, scene, site }) = result.try_cast::<Dataset>() else {
             return Err(RecipeError::plain(format!(
@@ -114,7 +121,7 @@ impl Recipe {
         for (module, alias) in imports(&ast) {
             let m = resolver
                 .resolve(&engine, &module, Position::NONE)
-                .map_err(|e| RecipeError::eval(&e, &label, &sources, None))?;
+                .map_err(|e| RecipeError::eval(&e, &label, &sources, None, &callable))?;
             sample_engine.register_static_module(alias, m);
         }
         let mut recipe = Recipe {
@@ -142,6 +149,23 @@ impl Recipe {
         on_script_stack(|| self.scene_here(sample))?
     }
 
+    /// Draws the scenes of `samples` in order, handing each outcome to `visit`, until it
+    /// returns `Break`. All on one script thread: setting one up per sample would take as long
+    /// as drawing a small scene.
+    pub fn each_scene(
+        &self,
+        samples: std::ops::Range<u64>,
+        mut visit: impl FnMut(u64, Result<SceneSpec, RecipeError>) -> ControlFlow<()> + Send,
+    ) -> Result<(), RecipeError> {
+        on_script_stack(|| {
+            for sample in samples {
+                if visit(sample, self.scene_here(sample)).is_break() {
+                    break;
+                }
+            }
+        })
+    }
+
     fn scene_here(&self, sample: u64) -> Result<SceneSpec, RecipeError> {
         let context = format!("while drawing the scene of sample {sample}");
         let rng = ScriptRng::new(
@@ -154,9 +178,13 @@ impl Recipe {
         let mut scene = self.scene.clone();
         let private: Vec<Dynamic> = scene.curry().iter().map(Dynamic::flatten_clone).collect();
         scene.set_curry(private);
-        let value: Dynamic = scene
-            .call(&self.engine, &self.ast, (rng,))
-            .map_err(|e| RecipeError::eval(&e, &self.label, &self.sources, Some(&context)))?;
+        let callable = Callable {
+            engine: &self.engine,
+            ast: Some(&self.ast),
+        };
+        let value: Dynamic = scene.call(&self.engine, &self.ast, (rng,)).map_err(|e| {
+            RecipeError::eval(&e, &self.label, &self.sources, Some(&context), &callable)
+        })?;
         let structures = structures(value)
             .map_err(|m| RecipeError::plain(format!("{}: {m} ({context})", self.label)))?;
         Ok(SceneSpec { structures })

@@ -9,6 +9,16 @@ use rhai::{Dynamic, Map};
 
 pub type OptResult<T> = Result<T, String>;
 
+/// How the message about an unknown option begins; the option's full path follows, up to a
+/// backtick (`unknown_option_path` reads it back, to point at the key in the source).
+const UNKNOWN_OPTION: &str = "unknown option `";
+
+/// The path of the option that `message` says is unknown, if it says so.
+pub fn unknown_option_path(message: &str) -> Option<&str> {
+    let rest = &message[message.find(UNKNOWN_OPTION)? + UNKNOWN_OPTION.len()..];
+    rest.split_once('`').map(|(path, _)| path)
+}
+
 pub struct Options {
     map: Map,
     context: String,
@@ -294,7 +304,7 @@ impl Options {
             .map(|k| format!("; did you mean `{k}`?"))
             .unwrap_or_default();
         Err(format!(
-            "unknown option `{}`{hint} (known: {})",
+            "{UNKNOWN_OPTION}{}`{hint} (known: {})",
             self.path(key),
             known.join(", ")
         ))
@@ -370,5 +380,7 @@ mod tests {
             e.starts_with("unknown option `beam.widht`; did you mean `width`?"),
             "{e}"
         );
+        assert_eq!(unknown_option_path(&e), Some("beam.widht"));
+        assert_eq!(unknown_option_path("beam.width = 0 must be positive"), None);
     }
 }
