@@ -447,7 +447,9 @@ fn end_point_error_of_a_constant_offset_is_its_norm() {
     let truths = truths(&data);
     let predictions = dir.path().join("predictions");
     for t in &truths {
-        // Truth written here where the dataset has none yet: some field, valid on the mask.
+        // Truth written here where the dataset has none yet: some field, valid on the mask,
+        // under the channel names of shmgen.view/1 datasets (U V, X Y Z), which eval still
+        // reads; the predictions too.
         let flow_u: Vec<f32> = (0..t.w * t.h).map(|i| (i % t.w) as f32 * 0.01).collect();
         let flow_v: Vec<f32> = (0..t.w * t.h).map(|i| -((i / t.w) as f32) * 0.02).collect();
         let disp: Vec<Vec<f32>> = (0..3)

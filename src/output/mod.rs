@@ -22,15 +22,15 @@ mod openexr;
 mod writers;
 
 pub use encode::{
-    DEPTH_CHANNEL, MAX_SEGMENTATION_ID, depth_exr, grey16_png, id_png, mask_png, rgb_png,
-    vector_exr,
+    DEPTH_CHANNEL, ExrChannels, FLOW_CHANNELS, MAX_SEGMENTATION_ID, SCALAR_CHANNELS,
+    VECTOR_CHANNELS, depth_exr, grey16_png, id_png, mask_png, rgb_png, vector_exr,
 };
 pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, write_atomic};
 pub use guard::refuse_data_target;
 pub use meshes::{MeshLayer, PointLayer};
 pub use writers::{
     DEFAULT_OUTPUTS, Flow, SAMPLE_WRITERS, SampleLayers, SampleWriter, ViewLayers, WRITERS, Writer,
-    output_names,
+    exr_channels, output_names,
 };
 
 /// Relative path of one view's file of the given kind (`rgb.png`, `depth.exr`, ...):

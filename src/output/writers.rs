@@ -2,7 +2,10 @@
 //! the layers of a rendered view) and per sample (`SAMPLE_WRITERS`, reading the sample's
 //! geometry). Each returns its files; adding an output is adding a writer here.
 
-use super::encode::{depth_exr, id_png, mask_png, rgb_png, vector_exr};
+use super::encode::{
+    ExrChannels, FLOW_CHANNELS, SCALAR_CHANNELS, VECTOR_CHANNELS, depth_exr, id_png, mask_png,
+    rgb_png, vector_exr,
+};
 use super::meshes::{MeshLayer, PointLayer, mesh_glb, mesh_ply, points_ply};
 use anyhow::Result;
 
@@ -150,10 +153,10 @@ pub const WRITERS: [Writer; 14] = [
         output: "normals",
         files: &["normals.exr"],
         write: |v| {
-            let note = "unit normal of the surface seen, facing the camera, in the axes of the view record's normals.frame; 0 = no surface";
+            let note = "R, G, B = x, y, z of the unit normal of the surface seen, facing the camera, in the axes of the view record's normals.axes; 0 = no surface";
             Ok(vec![vector_exr(
                 v.size(),
-                XYZ,
+                VECTOR_CHANNELS.names,
                 &v.normals(),
                 ("shmgen_normals", note),
             )?])
@@ -163,10 +166,10 @@ pub const WRITERS: [Writer; 14] = [
         output: "displacement",
         files: &["displacement.exr"],
         write: |v| {
-            let note = "displacement unloaded -> loaded of the surface point seen, world axes, metres; 0 = no surface";
+            let note = "R, G, B = x, y, z of the displacement unloaded -> loaded of the surface point seen, world axes, metres; 0 = no surface";
             Ok(vec![vector_exr(
                 v.size(),
-                XYZ,
+                VECTOR_CHANNELS.names,
                 &v.displacement(),
                 ("shmgen_displacement", note),
             )?])
@@ -178,9 +181,10 @@ pub const WRITERS: [Writer; 14] = [
         write: |v| {
             let (w, h) = v.size();
             let flow = v.flow();
-            let note = "pixels from the unloaded image to the loaded one; 0 where flow_valid is 0";
+            let note = "R, G = u, v: pixels from the unloaded image to the loaded one; 0 where flow_valid is 0";
+            let names = FLOW_CHANNELS.names;
             Ok(vec![
-                vector_exr((w, h), ["U", "V"], &flow.vectors, ("shmgen_flow", note))?,
+                vector_exr((w, h), names, &flow.vectors, ("shmgen_flow", note))?,
                 mask_png(w, h, &flow.valid),
             ])
         },
@@ -206,11 +210,11 @@ pub const WRITERS: [Writer; 14] = [
         files: &["ray_distance.exr"],
         write: |v| {
             let note =
-                "distance from the camera centre to the surface point, metres; 0 = no surface";
+                "Y = distance from the camera centre to the surface point, metres; 0 = no surface";
             let distance: Vec<[f32; 1]> = v.ray_distance().into_iter().map(|d| [d]).collect();
             Ok(vec![vector_exr(
                 v.size(),
-                ["Y"],
+                SCALAR_CHANNELS.names,
                 &distance,
                 ("shmgen_ray_distance", note),
             )?])
@@ -218,8 +222,25 @@ pub const WRITERS: [Writer; 14] = [
     },
 ];
 
-/// The channels of a 3-vector layer.
-const XYZ: [&str; 3] = ["X", "Y", "Z"];
+/// The channels of every EXR file a view may have, by kind: what the writers above write,
+/// and what readers of a dataset look for.
+const EXR_CHANNELS: [(&str, ExrChannels); 6] = [
+    ("depth.exr", SCALAR_CHANNELS),
+    ("rest_depth.exr", SCALAR_CHANNELS),
+    ("ray_distance.exr", SCALAR_CHANNELS),
+    ("normals.exr", VECTOR_CHANNELS),
+    ("displacement.exr", VECTOR_CHANNELS),
+    ("flow.exr", FLOW_CHANNELS),
+];
+
+/// The channels of a view's EXR file of `kind` (`depth.exr`, `flow.exr`, …), if shmgen
+/// writes one of that kind.
+pub fn exr_channels(kind: &str) -> Option<ExrChannels> {
+    EXR_CHANNELS
+        .iter()
+        .find(|(k, _)| *k == kind)
+        .map(|(_, channels)| *channels)
+}
 
 /// The geometry of a built sample, for the per-sample writers.
 pub trait SampleLayers {
@@ -364,6 +385,46 @@ mod tests {
                 normals: vec![[0.0, 0.0, 1.0]],
             }
         }
+    }
+
+    #[test]
+    fn every_exr_file_holds_its_kinds_channels_in_component_order() {
+        // Tiny's layers, component by component, pixel by pixel.
+        let expected = |kind: &str| -> Vec<Vec<f32>> {
+            match kind {
+                "depth.exr" => vec![vec![2.5, 0.0]],
+                "rest_depth.exr" => vec![vec![2.45, 0.0]],
+                "ray_distance.exr" => vec![vec![2.6, 0.0]],
+                "normals.exr" => vec![vec![0.0, 0.0], vec![0.6, 0.0], vec![-0.8, 0.0]],
+                "displacement.exr" => vec![vec![1e-3, 0.0], vec![0.0, 0.0], vec![-0.02, 0.0]],
+                "flow.exr" => vec![vec![0.25, 0.0], vec![1.5, 0.0]],
+                other => panic!("no expected values for {other}"),
+            }
+        };
+        let mut checked = 0;
+        for writer in &WRITERS {
+            let files = (writer.write)(&Tiny).unwrap();
+            for (kind, bytes) in writer.files.iter().zip(files) {
+                if !kind.ends_with(".exr") {
+                    continue;
+                }
+                let channels = exr_channels(kind).unwrap_or_else(|| panic!("{kind}"));
+                let meta = exr::meta::MetaData::read_from_buffered(&bytes[..], false).unwrap();
+                let stored: Vec<String> = meta.headers[0]
+                    .channels
+                    .list
+                    .iter()
+                    .map(|c| c.name.to_string())
+                    .collect();
+                let mut names = channels.names.to_vec();
+                names.sort_unstable();
+                assert_eq!(stored, names, "{kind}: the channels written now");
+                let layer = crate::dataset::decode_exr(&bytes, kind, channels, (2, 1)).unwrap();
+                assert_eq!(layer.channels, expected(kind), "{kind}");
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, EXR_CHANNELS.len());
     }
 
     #[test]
