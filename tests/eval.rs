@@ -634,7 +634,7 @@ fn eighths_of_a_metre(data: &Path) -> Vec<Truth> {
             .collect();
         let file = format!("samples/0000/{}.depth.exr", t.stem);
         let scratch = data.with_extension("scratch.exr");
-        write_exr(&scratch, t.w, t.h, &[("Z", depth)]);
+        write_exr(&scratch, t.w, t.h, &[("Y", depth)]);
         replace_in_dataset(data, &file, &std::fs::read(&scratch).unwrap());
     }
     truths(data)

@@ -18,7 +18,6 @@ pub use camera::Camera;
 pub use content::{Check, Hashing, Verified, check_stream, verify};
 pub use read::{GreyImage, Layer, decode_exr, decode_grey_png};
 
-use crate::output::exr_channels;
 use anyhow::{Context, Result, bail};
 use files::{Bound, MANIFEST_LINE, RECORD, image_bound, open_inside, read_bounded};
 use serde_json::Value;
@@ -258,22 +257,20 @@ impl Dataset {
     }
 
     /// The components of the view's EXR of `kind` (`depth.exr`, `flow.exr`, …) in component
-    /// order (see `output::exr_channels`: the channels written now, or those of
-    /// `shmgen.view/1` datasets), its header checked against the view's size before any pixel
-    /// is decoded.
-    pub fn layer(&self, view: &View, kind: &str) -> Result<Layer> {
-        let channels = exr_channels(kind)
-            .with_context(|| format!("{kind}: not a kind of EXR file shmgen writes"))?;
+    /// order, from the first of the channel sets `sets` the file has (see [`decode_exr`]), its
+    /// header checked against the view's size before any pixel is decoded.
+    pub fn layer(&self, view: &View, kind: &str, sets: &[&[&str]]) -> Result<Layer> {
         let relative = self.file_of(view, kind)?;
         let (width, height) = self.size(view)?;
+        let components = sets.first().map_or(1, |names| names.len());
         let bound = Bound {
             what: "an EXR of the view's size",
-            bytes: image_bound(width, height, channels.names.len() as u64, 4),
+            bytes: image_bound(width, height, components as u64, 4),
         };
         decode_exr(
             &self.read(relative, bound)?,
             relative,
-            channels,
+            sets,
             (width, height),
         )
     }

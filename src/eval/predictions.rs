@@ -173,7 +173,7 @@ pub(super) fn read(
     };
     let bytes = read_bounded(open_regular(path)?, &name, bound)?;
     let (w, h, planes) = if name.ends_with(".exr") {
-        let layer = decode_exr(&bytes, &name, channels, size)?;
+        let layer = decode_exr(&bytes, &name, &channels.sets(), size)?;
         let planes = layer
             .channels
             .into_iter()

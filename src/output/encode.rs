@@ -21,6 +21,13 @@ pub struct ExrChannels {
     pub legacy: &'static [&'static str],
 }
 
+impl ExrChannels {
+    /// The names written now, then those of `shmgen.view/1`: what a reader looks for, in order.
+    pub fn sets(&self) -> [&'static [&'static str]; 2] {
+        [self.names, self.legacy]
+    }
+}
+
 /// One value per pixel (planar depth, unloaded depth, ray distance), in metres.
 pub const SCALAR_CHANNELS: ExrChannels = ExrChannels {
     names: &["Y"],
@@ -190,17 +197,17 @@ fn float_exr(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use exr::prelude::*;
     use std::io::Cursor;
 
     /// Channels by name with their values, in the order the file lists them.
-    type NamedChannels = Vec<(String, Vec<f32>)>;
+    pub(in crate::output) type NamedChannels = Vec<(String, Vec<f32>)>;
 
     /// Reads an EXR back with the exr crate's own reader (a separate code path): its size and
     /// every channel by name, which must be float32.
-    fn read_channels(bytes: &[u8]) -> ((usize, usize), NamedChannels) {
+    pub(in crate::output) fn read_channels(bytes: &[u8]) -> ((usize, usize), NamedChannels) {
         let image = read()
             .no_deep_data()
             .largest_resolution_level()

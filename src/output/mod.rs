@@ -30,7 +30,7 @@ pub use guard::refuse_data_target;
 pub use meshes::{MeshLayer, PointLayer};
 pub use writers::{
     DEFAULT_OUTPUTS, Flow, SAMPLE_WRITERS, SampleLayers, SampleWriter, ViewLayers, WRITERS, Writer,
-    exr_channels, output_names,
+    output_names,
 };
 
 /// Relative path of one view's file of the given kind (`rgb.png`, `depth.exr`, ...):

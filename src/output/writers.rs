@@ -3,8 +3,8 @@
 //! geometry). Each returns its files; adding an output is adding a writer here.
 
 use super::encode::{
-    ExrChannels, FLOW_CHANNELS, SCALAR_CHANNELS, VECTOR_CHANNELS, depth_exr, id_png, mask_png,
-    rgb_png, vector_exr,
+    FLOW_CHANNELS, SCALAR_CHANNELS, VECTOR_CHANNELS, depth_exr, id_png, mask_png, rgb_png,
+    vector_exr,
 };
 use super::meshes::{MeshLayer, PointLayer, mesh_glb, mesh_ply, points_ply};
 use anyhow::Result;
@@ -222,26 +222,6 @@ pub const WRITERS: [Writer; 14] = [
     },
 ];
 
-/// The channels of every EXR file a view may have, by kind: what the writers above write,
-/// and what readers of a dataset look for.
-const EXR_CHANNELS: [(&str, ExrChannels); 6] = [
-    ("depth.exr", SCALAR_CHANNELS),
-    ("rest_depth.exr", SCALAR_CHANNELS),
-    ("ray_distance.exr", SCALAR_CHANNELS),
-    ("normals.exr", VECTOR_CHANNELS),
-    ("displacement.exr", VECTOR_CHANNELS),
-    ("flow.exr", FLOW_CHANNELS),
-];
-
-/// The channels of a view's EXR file of `kind` (`depth.exr`, `flow.exr`, …), if shmgen
-/// writes one of that kind.
-pub fn exr_channels(kind: &str) -> Option<ExrChannels> {
-    EXR_CHANNELS
-        .iter()
-        .find(|(k, _)| *k == kind)
-        .map(|(_, channels)| *channels)
-}
-
 /// The geometry of a built sample, for the per-sample writers.
 pub trait SampleLayers {
     /// The loaded (deformed) mesh of every structure, merged.
@@ -388,17 +368,25 @@ mod tests {
     }
 
     #[test]
-    fn every_exr_file_holds_its_kinds_channels_in_component_order() {
-        // Tiny's layers, component by component, pixel by pixel.
-        let expected = |kind: &str| -> Vec<Vec<f32>> {
+    fn every_exr_file_holds_its_components_in_the_channels_opencv_reads() {
+        // Tiny's layers by channel: Y for one value, R G B = x y z, R G = u v (flow).
+        let expected = |kind: &str| -> Vec<(&str, Vec<f32>)> {
             match kind {
-                "depth.exr" => vec![vec![2.5, 0.0]],
-                "rest_depth.exr" => vec![vec![2.45, 0.0]],
-                "ray_distance.exr" => vec![vec![2.6, 0.0]],
-                "normals.exr" => vec![vec![0.0, 0.0], vec![0.6, 0.0], vec![-0.8, 0.0]],
-                "displacement.exr" => vec![vec![1e-3, 0.0], vec![0.0, 0.0], vec![-0.02, 0.0]],
-                "flow.exr" => vec![vec![0.25, 0.0], vec![1.5, 0.0]],
-                other => panic!("no expected values for {other}"),
+                "depth.exr" => vec![("Y", vec![2.5, 0.0])],
+                "rest_depth.exr" => vec![("Y", vec![2.45, 0.0])],
+                "ray_distance.exr" => vec![("Y", vec![2.6, 0.0])],
+                "normals.exr" => vec![
+                    ("B", vec![-0.8, 0.0]),
+                    ("G", vec![0.6, 0.0]),
+                    ("R", vec![0.0, 0.0]),
+                ],
+                "displacement.exr" => vec![
+                    ("B", vec![-0.02, 0.0]),
+                    ("G", vec![0.0, 0.0]),
+                    ("R", vec![1e-3, 0.0]),
+                ],
+                "flow.exr" => vec![("G", vec![1.5, 0.0]), ("R", vec![0.25, 0.0])],
+                other => panic!("no expected channels for {other}"),
             }
         };
         let mut checked = 0;
@@ -408,23 +396,15 @@ mod tests {
                 if !kind.ends_with(".exr") {
                     continue;
                 }
-                let channels = exr_channels(kind).unwrap_or_else(|| panic!("{kind}"));
-                let meta = exr::meta::MetaData::read_from_buffered(&bytes[..], false).unwrap();
-                let stored: Vec<String> = meta.headers[0]
-                    .channels
-                    .list
-                    .iter()
-                    .map(|c| c.name.to_string())
+                let (_, stored) = super::super::encode::tests::read_channels(&bytes);
+                let want: Vec<(String, Vec<f32>)> = (expected(kind).into_iter())
+                    .map(|(n, v)| (n.to_string(), v))
                     .collect();
-                let mut names = channels.names.to_vec();
-                names.sort_unstable();
-                assert_eq!(stored, names, "{kind}: the channels written now");
-                let layer = crate::dataset::decode_exr(&bytes, kind, channels, (2, 1)).unwrap();
-                assert_eq!(layer.channels, expected(kind), "{kind}");
+                assert_eq!(stored, want, "{kind}");
                 checked += 1;
             }
         }
-        assert_eq!(checked, EXR_CHANNELS.len());
+        assert_eq!(checked, 6);
     }
 
     #[test]
