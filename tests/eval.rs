@@ -447,7 +447,9 @@ fn end_point_error_of_a_constant_offset_is_its_norm() {
     let truths = truths(&data);
     let predictions = dir.path().join("predictions");
     for t in &truths {
-        // Truth written here where the dataset has none yet: some field, valid on the mask.
+        // Truth written here where the dataset has none yet: some field, valid on the mask,
+        // under the channel names of shmgen.view/1 datasets (U V, X Y Z), which eval still
+        // reads; the predictions too.
         let flow_u: Vec<f32> = (0..t.w * t.h).map(|i| (i % t.w) as f32 * 0.01).collect();
         let flow_v: Vec<f32> = (0..t.w * t.h).map(|i| -((i / t.w) as f32) * 0.02).collect();
         let disp: Vec<Vec<f32>> = (0..3)
@@ -632,7 +634,7 @@ fn eighths_of_a_metre(data: &Path) -> Vec<Truth> {
             .collect();
         let file = format!("samples/0000/{}.depth.exr", t.stem);
         let scratch = data.with_extension("scratch.exr");
-        write_exr(&scratch, t.w, t.h, &[("Z", depth)]);
+        write_exr(&scratch, t.w, t.h, &[("Y", depth)]);
         replace_in_dataset(data, &file, &std::fs::read(&scratch).unwrap());
     }
     truths(data)

@@ -247,11 +247,11 @@ fn normals_are_the_analytic_faces_of_a_box_in_either_frame_and_in_exact_copies()
             assert_eq!(v.json["normals"]["axes"], "camera_opencv");
             let cam = vectors(
                 &view_path(&in_camera, 0, view, copy, "normals.exr"),
-                ["X", "Y", "Z"],
+                ["R", "G", "B"],
             );
             let world = vectors(
                 &view_path(&in_world, 0, view, copy, "normals.exr"),
-                ["X", "Y", "Z"],
+                ["R", "G", "B"],
             );
             let c2w = v.c2w();
             let (mut hits, mut on_edges) = (0, 0);
@@ -313,7 +313,7 @@ fn normals_of_a_bent_beam_agree_with_normals_from_its_depth() {
         let v = load(&out, view, None);
         let normals = vectors(
             &view_path(&out, 0, view, None, "normals.exr"),
-            ["X", "Y", "Z"],
+            ["R", "G", "B"],
         );
         let point = |row: usize, col: usize| {
             let z = f64::from(v.depth[row * v.width + col]);
@@ -369,7 +369,7 @@ fn displacement_and_flow_follow_the_closed_form_deflection() {
             let v = load(&out, view, None);
             let d = vectors(
                 &view_path(&out, 0, view, None, "displacement.exr"),
-                ["X", "Y", "Z"],
+                ["R", "G", "B"],
             );
             assert_eq!(v.json["displacement"]["axes"], "world");
             // Flow needs the unloaded image, and its validity the occlusion rays; a lens's
@@ -405,7 +405,7 @@ fn displacement_and_flow_follow_the_closed_form_deflection() {
             // through the written camera and lens, lands at the pixel plus its flow.
             let mut rest = load(&out, view, None);
             rest.depth = read_exr(&view_path(&out, 0, view, None, "rest_depth.exr"));
-            let flow = vectors(&view_path(&out, 0, view, None, "flow.exr"), ["U", "V"]);
+            let flow = vectors(&view_path(&out, 0, view, None, "flow.exr"), ["R", "G"]);
             let (_, _, _, ok_flow) = read_png(&view_path(&out, 0, view, None, "flow_valid.png"));
             for row in 0..rest.height {
                 for col in 0..rest.width {
@@ -765,7 +765,7 @@ fn flow_is_invalid_where_the_loaded_beam_leaves_the_frame_or_goes_behind_a_box()
     let (_dir, out) = render(&text, &[]);
     let mut rest = load(&out, 0, None);
     rest.depth = read_exr(&view_path(&out, 0, 0, None, "rest_depth.exr"));
-    let flow = vectors(&view_path(&out, 0, 0, None, "flow.exr"), ["U", "V"]);
+    let flow = vectors(&view_path(&out, 0, 0, None, "flow.exr"), ["R", "G"]);
     let (_, _, _, ok_flow) = read_png(&view_path(&out, 0, 0, None, "flow_valid.png"));
     let eye = rest.json["camera"]["position"]
         .as_array()
@@ -839,7 +839,7 @@ fn a_grazing_view_keeps_normals_facing_and_flow_on_the_closed_form() {
     let text = recipe(ALL, camera, "points: 10,", &BEAM.rhai(true)).replace("views: 3", "views: 1");
     let (_dir, out) = render(&text, &[]);
     let v = load(&out, 0, None);
-    let normals = vectors(&view_path(&out, 0, 0, None, "normals.exr"), ["X", "Y", "Z"]);
+    let normals = vectors(&view_path(&out, 0, 0, None, "normals.exr"), ["R", "G", "B"]);
     let mut top = 0;
     for row in 0..v.height {
         for col in 0..v.width {
@@ -854,7 +854,7 @@ fn a_grazing_view_keeps_normals_facing_and_flow_on_the_closed_form() {
     assert!(top > 20, "{top} pixels of the top face");
     let mut rest = load(&out, 0, None);
     rest.depth = read_exr(&view_path(&out, 0, 0, None, "rest_depth.exr"));
-    let flow = vectors(&view_path(&out, 0, 0, None, "flow.exr"), ["U", "V"]);
+    let flow = vectors(&view_path(&out, 0, 0, None, "flow.exr"), ["R", "G"]);
     let (_, _, _, ok_flow) = read_png(&view_path(&out, 0, 0, None, "flow_valid.png"));
     let mut valid = 0;
     for row in 0..rest.height {
@@ -894,7 +894,7 @@ fn a_damaged_silo_moves_its_shell_only_and_radially_through_a_distorting_lens() 
         for copy in [None, Some(0)] {
             let d = vectors(
                 &view_path(&out, 0, view, copy, "displacement.exr"),
-                ["X", "Y", "Z"],
+                ["R", "G", "B"],
             );
             let (_, _, _, part) = read_png(&view_path(&out, 0, view, copy, "parts.png"));
             for (i, d) in d.iter().enumerate() {
@@ -979,7 +979,7 @@ fn image_space_warps_turn_camera_normals_and_carry_the_other_layers_but_refuse_f
             "the same draws, the same camera"
         );
         let layer =
-            |out: &Path, kind| vectors(&view_path(out, 0, view, Some(0), kind), ["X", "Y", "Z"]);
+            |out: &Path, kind| vectors(&view_path(out, 0, view, Some(0), kind), ["R", "G", "B"]);
         let (nw, ne) = (
             layer(&warped, "normals.exr"),
             layer(&rendered, "normals.exr"),
@@ -1048,7 +1048,16 @@ fn view_records_name_the_sample_files_and_the_conventions() {
         assert!(out.join(file).is_file(), "{file}");
     }
     assert_eq!(json["normals"]["axes"], "world");
-    assert_eq!(json["flow"]["channels"], serde_json::json!(["U", "V"]));
+    assert_eq!(json["flow"]["channels"], serde_json::json!(["R", "G"]));
+    assert_eq!(
+        json["normals"]["channels"],
+        serde_json::json!(["R", "G", "B"])
+    );
+    assert_eq!(
+        json["displacement"]["channels"],
+        serde_json::json!(["R", "G", "B"])
+    );
+    assert_eq!(json["depth"]["channel"], "Y");
     assert_eq!(json["ray_distance"]["channel"], "Y");
     let manifest = std::fs::read_to_string(out.join("manifest.jsonl")).unwrap();
     assert!(manifest.contains("samples/0000/000000.points.ply"));

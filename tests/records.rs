@@ -129,7 +129,7 @@ fn the_validator_rejects_records_that_break_the_schema() {
             r["camera"]["K"][0][0] = Value::Null
         }),
         ("another schema version", |r| {
-            r["schema"] = json!("shmgen.view/2")
+            r["schema"] = json!("shmgen.view/1")
         }),
         ("a missing field", |r| {
             r["camera"].as_object_mut().unwrap().remove("c2w_opencv");

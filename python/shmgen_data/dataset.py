@@ -43,7 +43,10 @@ __all__ = ["Dataset", "Sample", "View", "Mesh", "Points", "LAYERS", "MissingFile
            "DatasetError", "Limits", "Verification", "Structure", "Structures", "Augmentation"]
 
 RUN_SCHEMA = "shmgen.run/1"
-VIEW_SCHEMA = "shmgen.view/1"
+VIEW_SCHEMA = "shmgen.view/2"
+#: Every view record version this reader reads: ``shmgen.view/1`` differs only in its EXR
+#: channel names (depth ``Z``, vectors ``X Y Z``, flow ``U V``), which its records name.
+VIEW_SCHEMAS = (VIEW_SCHEMA, "shmgen.view/1")
 
 
 class MissingFileError(FileNotFoundError):
@@ -70,25 +73,26 @@ class _Layer:
 
 #: Every per-view output, by name: ``rgb`` and ``rest_rgb`` are ``(H, W, 3)`` uint8; ``depth``,
 #: ``rest_depth`` and ``ray_distance`` ``(H, W)`` float32 metres (0 = no surface); ``normals``
-#: and ``displacement`` ``(H, W, 3)`` float32; ``flow`` ``(H, W, 2)`` float32 pixels (U, V);
+#: and ``displacement`` ``(H, W, 3)`` float32 (x, y, z); ``flow`` ``(H, W, 2)`` float32 pixels
+#: (u, v); the EXR channels are the ones the view's record names (``Y``; ``R G B``; ``R G``);
 #: the masks ``mask``, ``cracks``, ``erased``, ``valid`` and ``flow_valid`` ``(H, W)`` bool
 #: (True where the file holds 255); ``parts`` and ``instances`` ``(H, W)`` int32 ids.
 LAYERS = {
     "rgb": _Layer("rgb.png", "rgb"),
-    "depth": _Layer("depth.exr", "exr", "depth", ("Z",), "depth"),
+    "depth": _Layer("depth.exr", "exr", "depth", ("Y",), "depth"),
     "mask": _Layer("mask.png", "binary"),
     "parts": _Layer("parts.png", "ids", values="ids", ids_table="part_ids"),
     "instances": _Layer("instances.png", "ids", values="ids", ids_table="instance_ids"),
     "cracks": _Layer("cracks.png", "binary"),
     "erased": _Layer("erased.png", "binary"),
     "valid": _Layer("valid.png", "binary"),
-    "normals": _Layer("normals.exr", "exr", "normals", ("X", "Y", "Z"), "unit"),
-    "displacement": _Layer("displacement.exr", "exr", "displacement", ("X", "Y", "Z"), "finite"),
-    "flow": _Layer("flow.exr", "exr", "flow", ("U", "V"), "finite"),
+    "normals": _Layer("normals.exr", "exr", "normals", ("R", "G", "B"), "unit"),
+    "displacement": _Layer("displacement.exr", "exr", "displacement", ("R", "G", "B"), "finite"),
+    "flow": _Layer("flow.exr", "exr", "flow", ("R", "G"), "finite"),
     "flow_valid": _Layer("flow_valid.png", "binary"),
     "rest_rgb": _Layer("rest_rgb.png", "rgb"),
     # rest_depth follows the depth convention (the record's `depth` covers both files).
-    "rest_depth": _Layer("rest_depth.exr", "exr", "depth", ("Z",), "depth"),
+    "rest_depth": _Layer("rest_depth.exr", "exr", "depth", ("Y",), "depth"),
     "ray_distance": _Layer("ray_distance.exr", "exr", "ray_distance", ("Y",), "depth"),
 }
 
@@ -348,15 +352,15 @@ class View:
 
     @property
     def record(self) -> Record:
-        """The view's JSON record (``shmgen.view/1``)."""
+        """The view's JSON record (``shmgen.view/2``, or ``/1`` of older datasets)."""
         if self._record is None:
             try:
                 path = self.files["json"]
             except KeyError:
                 raise MissingFileError(f"view {self.stem} of {self.root} has no record (.json)") from None
             record = self._source.read_json(_relative(self.root, path))
-            if record.get("schema") != VIEW_SCHEMA:
-                raise DatasetError(f"{path}: schema {record.get('schema')!r}; this reader reads {VIEW_SCHEMA!r}")
+            if record.get("schema") not in VIEW_SCHEMAS:
+                raise DatasetError(f"{path}: schema {record.get('schema')!r}; this reader reads {' or '.join(map(repr, VIEW_SCHEMAS))}")
             self._record = record
         return self._record
 

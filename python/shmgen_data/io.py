@@ -73,8 +73,9 @@ def read_exr(path: str | os.PathLike[str], channels: Sequence[str], *, limits: L
     """The named channels of the OpenEXR file at ``path`` as float32.
 
     One channel gives an ``(H, W)`` array, several an ``(H, W, C)`` array in the order asked
-    for (``["X", "Y", "Z"]`` for normals and displacement, ``["U", "V"]`` for flow, ``["Z"]``
-    for depth). Raises ``FileNotFoundError`` naming a missing file, ``KeyError`` naming the
+    for (``["R", "G", "B"]`` = x, y, z for normals and displacement, ``["R", "G"]`` = u, v for
+    flow, ``["Y"]`` for depth; datasets of ``shmgen.view/1`` named them ``X Y Z``, ``U V`` and
+    ``Z``: the view record's ``channels`` say which). Raises ``FileNotFoundError`` naming a missing file, ``KeyError`` naming the
     channel a file lacks and the channels it has, and :class:`DatasetError` for a file that
     is not a regular one, too large, or does not decode.
     """

@@ -45,6 +45,7 @@ def test_flow_exports_read_back_by_opencv_as_the_exr_holds_them(deformation, tmp
     moved = 0
     for folder, stem in views_with_flow(deformation):
         exr = exr_channels(deformation / folder / f"{stem}.flow.exr")
+        exr = {"U": exr["R"], "V": exr["G"]}  # flow's channels R, G hold U, V
         u, v = exr["U"].astype(np.float64), exr["V"].astype(np.float64)
         with Image.open(deformation / folder / f"{stem}.flow_valid.png") as image:
             valid = np.array(image) == 255

@@ -88,7 +88,7 @@ def write_exr(path: Path, channels: dict) -> None:
 
 
 def write_depth(path: Path, depth: np.ndarray) -> None:
-    write_exr(path, {"Z": depth})
+    write_exr(path, {"Y": depth})
 
 
 def png_bytes(width: int, height: int, rows: bytes, colour_type: int = 2, depth: int = 8) -> bytes:
@@ -185,7 +185,7 @@ def test_a_fifo_never_blocks(copy):
         with pytest.raises(ValueError, match="000000_00.json: is a FIFO"):
             Dataset(copy)
         with pytest.raises(ValueError, match="000000_00.json: is a FIFO"):
-            read_exr(target, ["Z"])
+            read_exr(target, ["Y"])
 
 
 # ---------------------------------------------------------------------------------------
@@ -319,12 +319,12 @@ def test_normals_masks_ids_and_flow_out_of_their_range_are_refused(copy):
     normals = view.normals.copy()
     surface = np.argwhere(view.mask)[0]
     normals[tuple(surface)] *= 2.0
-    write_exr(view.path("normals"), {c: normals[..., k] for k, c in enumerate("XYZ")})
+    write_exr(view.path("normals"), {c: normals[..., k] for k, c in enumerate("RGB")})
     with pytest.raises(ValueError, match=rf"normals.exr: pixel \(row {surface[0]}, column {surface[1]}\) .* length 1"):
         Dataset(copy)[0].normals
     flow = view.flow.copy()
     flow[3, 4, 1] = np.nan
-    write_exr(view.path("flow"), {"U": flow[..., 0], "V": flow[..., 1]})
+    write_exr(view.path("flow"), {"R": flow[..., 0], "G": flow[..., 1]})
     with pytest.raises(ValueError, match=r"flow.exr: pixel \(row 3, column 4\) holds \[0.0, nan\]; values must be finite"):
         Dataset(copy)[0].flow
     grey = lambda value: png_bytes(160, 120, b"".join(b"\0" + bytes([value]) * 160 for _ in range(120)), 0)

@@ -256,19 +256,21 @@ impl Dataset {
         check_stream(file, check, relative, &mut std::io::sink()).map(drop)
     }
 
-    /// The channels `names` of the view's EXR of `kind` (`depth.exr`, `flow.exr`, …), its
+    /// The components of the view's EXR of `kind` (`depth.exr`, `flow.exr`, …) in component
+    /// order, from the first of the channel sets `sets` the file has (see [`decode_exr`]), its
     /// header checked against the view's size before any pixel is decoded.
-    pub fn layer(&self, view: &View, kind: &str, names: &[&str]) -> Result<Layer> {
+    pub fn layer(&self, view: &View, kind: &str, sets: &[&[&str]]) -> Result<Layer> {
         let relative = self.file_of(view, kind)?;
         let (width, height) = self.size(view)?;
+        let components = sets.first().map_or(1, |names| names.len());
         let bound = Bound {
             what: "an EXR of the view's size",
-            bytes: image_bound(width, height, names.len() as u64, 4),
+            bytes: image_bound(width, height, components as u64, 4),
         };
         decode_exr(
             &self.read(relative, bound)?,
             relative,
-            names,
+            sets,
             (width, height),
         )
     }

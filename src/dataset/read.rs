@@ -1,6 +1,7 @@
-//! Decoders of the files a view holds: OpenEXR layers by channel name (depth `Z`, flow `U V`,
-//! displacement and normals `X Y Z`), grey PNGs of 8 or 16 bits (masks, validity, depth in
-//! millimetres) and 8-bit RGB PNGs (images). They decode bytes already read (with a bound, see `files`), and check the
+//! Decoders of the files a view holds: OpenEXR layers by channel name (depth `Y`, flow `R G`,
+//! displacement and normals `R G B`, or the names `shmgen.view/1` datasets used: `Z`, `U V`,
+//! `X Y Z`: the callers pass both, from `output::ExrChannels`), grey PNGs of 8 or 16 bits
+//! (masks, validity, depth in millimetres) and 8-bit RGB PNGs (images). They decode bytes already read (with a bound, see `files`), and check the
 //! header against the size the view's record gives before decoding a pixel: a file declaring
 //! 40000 × 40000 pixels costs a header read, not 15 GB. Errors name the file and what it
 //! lacks.
@@ -33,11 +34,12 @@ pub struct GreyImage {
     pub values: Vec<u16>,
 }
 
-/// The channels `names` of the first layer of the EXR `bytes` (of the file `name`), in that
-/// order, which must be `size` = (width, height) pixels. With a single name, a file holding
-/// just one channel is accepted whatever that channel is called (a prediction written by other
-/// software may call depth `Y` or `R`).
-pub fn decode_exr(bytes: &[u8], name: &str, names: &[&str], size: (u32, u32)) -> Result<Layer> {
+/// The components of the first layer of the EXR `bytes` (of the file `name`), in component
+/// order, which must be `size` = (width, height) pixels: the first of the channel sets `sets`
+/// (one name per component; the names written now, then older ones) that the file has in
+/// full. For a single component, a file holding just one channel is accepted whatever that
+/// channel is called (a prediction written by other software may call depth `Z` or `R`).
+pub fn decode_exr(bytes: &[u8], name: &str, sets: &[&[&str]], size: (u32, u32)) -> Result<Layer> {
     use exr::meta::MetaData;
     use exr::prelude::{ReadChannels, ReadLayers, read};
     let unreadable = || format!("{name}: not a readable OpenEXR file");
@@ -78,24 +80,42 @@ pub fn decode_exr(bytes: &[u8], name: &str, names: &[&str], size: (u32, u32)) ->
         .from_buffered(Cursor::new(bytes))
         .with_context(unreadable)?;
     let layer = image.layer_data;
-    let list = &layer.channel_data.list;
-    let mut channels = Vec::with_capacity(names.len());
-    for wanted in names {
-        let found = list
-            .iter()
-            .find(|c| c.name.eq(wanted))
-            .or_else(|| (names.len() == 1 && list.len() == 1).then(|| &list[0]));
-        let Some(channel) = found else {
-            let have: Vec<String> = list.iter().map(|c| c.name.to_string()).collect();
-            bail!("{name}: no channel {wanted:?} (it has {})", have.join(", "));
-        };
-        channels.push(channel.sample_data.values_as_f32().collect());
-    }
+    let channels = pick(&layer.channel_data.list, sets, name)?
+        .iter()
+        .map(|c| c.sample_data.values_as_f32().collect())
+        .collect();
     Ok(self::Layer {
         width: layer.size.width(),
         height: layer.size.height(),
         channels,
     })
+}
+
+/// The channels of `list` holding the components, in component order: the first of `sets`
+/// the file has in full, else a file's only channel for a single component; or an error naming
+/// the sets and what the file `name` has.
+fn pick<'a>(
+    list: &'a [exr::image::AnyChannel<exr::image::FlatSamples>],
+    sets: &[&[&str]],
+    name: &str,
+) -> Result<Vec<&'a exr::image::AnyChannel<exr::image::FlatSamples>>> {
+    let find = |n: &&str| list.iter().find(|c| c.name.eq(n));
+    for names in sets {
+        let found: Vec<_> = names.iter().filter_map(find).collect();
+        if found.len() == names.len() {
+            return Ok(found);
+        }
+    }
+    if let ([[_], ..], [only]) = (sets, list) {
+        return Ok(vec![only]);
+    }
+    let wanted: Vec<String> = sets.iter().map(|names| names.join(", ")).collect();
+    let have: Vec<String> = list.iter().map(|c| c.name.to_string()).collect();
+    bail!(
+        "{name}: no channels {}; it has {}",
+        wanted.join(" nor "),
+        have.join(", ")
+    )
 }
 
 /// A PNG's decoder with its header read, refused unless it is `size` = (width, height)
@@ -175,4 +195,64 @@ pub fn decode_grey_png(bytes: &[u8], name: &str, size: (u32, u32)) -> Result<Gre
         },
         values,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The names of a 3-vector written now and before (`output::VECTOR_CHANNELS`).
+    const VECTOR: [&[&str]; 2] = [&["R", "G", "B"], &["X", "Y", "Z"]];
+
+    /// A 2 × 1 EXR of the channels `(name, values)` through the `exr` crate.
+    fn exr_of(channels: &[(&str, [f32; 2])]) -> Vec<u8> {
+        use exr::prelude::*;
+        let list: Vec<AnyChannel<FlatSamples>> = channels
+            .iter()
+            .map(|(name, v)| AnyChannel::new(*name, FlatSamples::F32(v.to_vec())))
+            .collect();
+        let image = Image::from_channels((2, 1), AnyChannels::sort(SmallVec::from_vec(list)));
+        let mut out = Cursor::new(Vec::new());
+        image.write().non_parallel().to_buffered(&mut out).unwrap();
+        out.into_inner()
+    }
+
+    #[test]
+    fn vectors_decode_in_component_order_from_the_names_written_now_or_before() {
+        for names in VECTOR {
+            let values = [[1.0, -4.0], [2.0, 0.5], [3.0, 0.0]];
+            let channels: Vec<(&str, [f32; 2])> = names.iter().copied().zip(values).collect();
+            let layer = decode_exr(&exr_of(&channels), "v.exr", &VECTOR, (2, 1)).unwrap();
+            assert_eq!(layer.channels, values.map(|v| v.to_vec()), "{names:?}");
+        }
+    }
+
+    #[test]
+    fn a_file_with_both_sets_of_names_is_read_by_the_first() {
+        let channels = [("R", [1.0; 2]), ("G", [2.0; 2]), ("B", [3.0; 2])];
+        let old = [("X", [9.0; 2]), ("Y", [9.0; 2]), ("Z", [9.0; 2])];
+        let bytes = exr_of(&[channels, old].concat());
+        let layer = decode_exr(&bytes, "v.exr", &VECTOR, (2, 1)).unwrap();
+        assert_eq!(layer.channels[2], vec![3.0, 3.0]);
+    }
+
+    #[test]
+    fn one_value_is_read_from_a_files_only_channel_whatever_its_name() {
+        let bytes = exr_of(&[("depth", [2.5, 0.0])]);
+        let layer = decode_exr(&bytes, "d.exr", &[&["Y"], &["Z"]], (2, 1)).unwrap();
+        assert_eq!(layer.channels, [vec![2.5, 0.0]]);
+    }
+
+    #[test]
+    fn missing_channels_are_named_with_both_sets_and_what_the_file_has() {
+        let bytes = exr_of(&[("U", [0.0; 2]), ("V", [0.0; 2]), ("W", [0.0; 2])]);
+        let error = decode_exr(&bytes, "v.exr", &VECTOR, (2, 1))
+            .err()
+            .unwrap()
+            .to_string();
+        assert_eq!(
+            error,
+            "v.exr: no channels R, G, B nor X, Y, Z; it has U, V, W"
+        );
+    }
 }

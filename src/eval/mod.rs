@@ -294,7 +294,7 @@ fn score_view(
         return Ok(out);
     }
     truth(view, "depth.exr", "depth")?;
-    let depth_layer = dataset.layer(view, "depth.exr", &["Z"])?;
+    let depth_layer = dataset.layer(view, "depth.exr", &Quantity::Depth.channels().sets())?;
     let (w, h) = (depth_layer.width, depth_layer.height);
     let depth = &depth_layer.channels[0];
     if let Some(path) = depth_prediction {
@@ -311,7 +311,7 @@ fn score_view(
     }
     if let Some(path) = flow_prediction {
         truth(view, "flow.exr", "flow")?;
-        let truth_flow = dataset.layer(view, "flow.exr", &["U", "V"])?;
+        let truth_flow = dataset.layer(view, "flow.exr", &Quantity::Flow.channels().sets())?;
         truth(view, "flow_valid.png", "flow")?;
         let valid = positive(dataset, view, "flow_valid.png")?;
         let predicted = predictions::read(&path, Quantity::Flow, w, h)?;
@@ -319,7 +319,11 @@ fn score_view(
     }
     if let Some(path) = displacement_prediction {
         truth(view, "displacement.exr", "displacement")?;
-        let truth_displacement = dataset.layer(view, "displacement.exr", &["X", "Y", "Z"])?;
+        let truth_displacement = dataset.layer(
+            view,
+            "displacement.exr",
+            &Quantity::Displacement.channels().sets(),
+        )?;
         // Displacement is that of the surface point the pixel sees: defined where it sees one.
         let valid: Vec<bool> = depth.iter().map(|&d| d > 0.0).collect();
         let predicted = predictions::read(&path, Quantity::Displacement, w, h)?;

@@ -1,11 +1,15 @@
 //! Finding and reading predictions. PREDICTIONS mirrors the dataset's `samples/` folder (it may
 //! be that folder's parent or the folder itself), with the dataset's file stems:
 //!
-//! - depth: `{stem}.depth.exr` (channel `Z`, or a file's only channel), `{stem}.depth.npy`
+//! - depth: `{stem}.depth.exr` (channel `Y`, or a file's only channel), `{stem}.depth.npy`
 //!   (float32 or float64, shape H×W or H×W×1), `{stem}.depth.png` or `{stem}.depth_mm.png`
 //!   (16-bit grey, millimetres, 0 = no prediction: what `shmgen export --format png16` writes);
-//! - flow: `{stem}.flow.exr` (channels `U`, `V`) or `{stem}.flow.npy` (H×W×2), pixels;
-//! - displacement: `{stem}.displacement.exr` (`X`, `Y`, `Z`) or `.npy` (H×W×3), world metres;
+//! - flow: `{stem}.flow.exr` (channels `R`, `G` = u, v) or `{stem}.flow.npy` (H×W×2), pixels;
+//! - displacement: `{stem}.displacement.exr` (`R`, `G`, `B` = x, y, z) or `.npy` (H×W×3),
+//!   world metres;
+//!
+//! EXR predictions are read as the dataset's own files are (the names of `shmgen.view/1`
+//! datasets, `Z`, `U V`, `X Y Z`, are accepted too), so a dataset's file is a valid prediction.
 //! - surfaces: `{sample:06}.ply` (a mesh, or a point cloud when it has no faces) or
 //!   `{sample:06}.obj` (a mesh).
 //!
@@ -21,6 +25,7 @@
 use super::npy;
 use crate::dataset::files::{Bound, image_bound, open_regular, read_bounded};
 use crate::dataset::{View, decode_exr, decode_grey_png};
+use crate::output::{ExrChannels, FLOW_CHANNELS, SCALAR_CHANNELS, VECTOR_CHANNELS};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 
@@ -49,12 +54,12 @@ impl Quantity {
     /// Every quantity predicted per view.
     pub(super) const ALL: [Quantity; 3] = [Quantity::Depth, Quantity::Flow, Quantity::Displacement];
 
-    /// The EXR channels, which are also the .npy's last axis.
-    pub(super) fn channels(self) -> &'static [&'static str] {
+    /// The EXR channels, one per component (the .npy's last axis).
+    pub(super) fn channels(self) -> ExrChannels {
         match self {
-            Quantity::Depth => &["Z"],
-            Quantity::Flow => &["U", "V"],
-            Quantity::Displacement => &["X", "Y", "Z"],
+            Quantity::Depth => SCALAR_CHANNELS,
+            Quantity::Flow => FLOW_CHANNELS,
+            Quantity::Displacement => VECTOR_CHANNELS,
         }
     }
 
@@ -158,16 +163,17 @@ pub(super) fn read(
     width: usize,
     height: usize,
 ) -> Result<Vec<Vec<f64>>> {
-    let names = quantity.channels();
+    let channels = quantity.channels();
+    let components = channels.names.len();
     let name = path.to_string_lossy();
     let size = (width as u32, height as u32);
     let bound = Bound {
         what: "a prediction of the view's size",
-        bytes: image_bound(size.0, size.1, names.len() as u64, 8),
+        bytes: image_bound(size.0, size.1, components as u64, 8),
     };
     let bytes = read_bounded(open_regular(path)?, &name, bound)?;
     let (w, h, planes) = if name.ends_with(".exr") {
-        let layer = decode_exr(&bytes, &name, names, size)?;
+        let layer = decode_exr(&bytes, &name, &channels.sets(), size)?;
         let planes = layer
             .channels
             .into_iter()
@@ -176,7 +182,7 @@ pub(super) fn read(
         (layer.width, layer.height, planes)
     } else if name.ends_with(".npy") {
         let array = npy::parse(&bytes).with_context(|| format!("{}", path.display()))?;
-        let c = names.len();
+        let c = components;
         let (h, w) = match (array.shape.as_slice(), c) {
             ([h, w], 1) => (*h, *w),
             ([h, w, k], _) if *k == c => (*h, *w),

@@ -8,7 +8,7 @@
 //! (`saturated`). A value that is negative or not finite is not depth, and is an error.
 
 use crate::dataset::{Dataset, View};
-use crate::output::{DEPTH_CHANNEL, grey16_png};
+use crate::output::{SCALAR_CHANNELS, grey16_png};
 use anyhow::{Result, bail};
 use rayon::prelude::*;
 
@@ -51,7 +51,7 @@ pub(super) fn to_mm(depth: &[f32], width: usize, file: &str) -> Result<(Vec<u16>
 
 /// The view's depth EXR as a millimetre PNG.
 pub(super) fn png_of(dataset: &Dataset, view: &View) -> Result<(Vec<u8>, Clamped)> {
-    let layer = dataset.layer(view, "depth.exr", &[DEPTH_CHANNEL])?;
+    let layer = dataset.layer(view, "depth.exr", &SCALAR_CHANNELS.sets())?;
     let file = view.file("depth.exr").unwrap_or_default();
     let (mm, clamped) = to_mm(&layer.channels[0], layer.width, file)?;
     Ok((

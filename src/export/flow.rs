@@ -19,7 +19,7 @@
 
 use super::{Job, needed};
 use crate::dataset::{Dataset, View};
-use crate::output::rgb16_png;
+use crate::output::{FLOW_CHANNELS, rgb16_png};
 use anyhow::{Result, bail};
 use rayon::prelude::*;
 use serde_json::{Value, json};
@@ -97,7 +97,7 @@ pub(super) fn write(job: &mut Job) -> Result<Value> {
 
 /// The view's flow and validity, refusing a value that is not a finite number of pixels.
 fn read(dataset: &Dataset, view: &View) -> Result<ViewFlow> {
-    let layer = dataset.layer(view, "flow.exr", &["U", "V"])?;
+    let layer = dataset.layer(view, "flow.exr", &FLOW_CHANNELS.sets())?;
     let valid = dataset.grey(view, "flow_valid.png")?;
     let file = view.file("flow.exr").unwrap_or_default();
     let mut channels = layer.channels.into_iter();

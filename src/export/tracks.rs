@@ -16,7 +16,7 @@
 //! uniform as the whole.
 
 use crate::dataset::{Camera, Dataset, View, files::SAMPLE_FILE};
-use crate::output::DEPTH_CHANNEL;
+use crate::output::SCALAR_CHANNELS;
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 
@@ -92,7 +92,7 @@ fn observe(
     points: &[PlyPoint],
 ) -> Result<Vec<Option<Observation>>> {
     let camera = dataset.camera(view)?;
-    let depth = dataset.layer(view, "depth.exr", &[DEPTH_CHANNEL])?.channels[0].clone();
+    let depth = dataset.layer(view, "depth.exr", &SCALAR_CHANNELS.sets())?.channels[0].clone();
     let rgb = dataset.rgb(view, "rgb.png")?;
     let width = camera.width as usize;
     Ok(points

@@ -152,7 +152,7 @@ fn exr_channels(record: &Value, layer: &str, relative: &str) -> Result<Vec<Strin
 /// The float channels `names` of the view's EXR `kind`, as `(H, W)` or `(H, W, C)` float32,
 /// refusing a value that is not finite (a dataset may be old, unhashed, or hand-edited).
 fn float_npy(dataset: &Dataset, view: &View, kind: &str, names: &[&str]) -> Result<Vec<u8>> {
-    let layer = dataset.layer(view, kind, names)?;
+    let layer = dataset.layer(view, kind, &[names])?;
     let pixels = layer.width * layer.height;
     let mut data = Vec::with_capacity(pixels * names.len() * 4);
     for i in 0..pixels {

@@ -1,9 +1,53 @@
-//! Encoders: RGB and mask PNG (fast deflate), float OpenEXR (depth as float32 `Z`, vector
-//! layers as one float32 channel per component; scanlines in increasing order, lossless ZIP),
-//! each into memory so callers decide where bytes go.
+//! Encoders: RGB and mask PNG (fast deflate), float OpenEXR (one float32 channel per
+//! component, named so OpenCV reads every one: see [`ExrChannels`]; scanlines in increasing
+//! order, lossless ZIP), each into memory so callers decide where bytes go.
+//!
+//! Owns: the channel names of every float layer, as written now and as datasets of
+//! `shmgen.view/1` wrote them, so that writers, records and readers share one table.
+
+/// The channels of a float EXR layer, in component order: those written now, and those the
+/// same components had in datasets of `shmgen.view/1` (which readers still accept).
+///
+/// The names are the ones OpenCV's EXR decoder maps (`R`, `G`, `B`, `A`, and `Y` for grey):
+/// it reads any other name as nothing, so a depth in `Z` came back all zeros, vectors in
+/// `X Y Z` as their `Y` alone and flow in `U V` not at all. A scalar is `Y` (OpenCV returns a
+/// 2-D float32 array), a 3-vector `R G B` (OpenCV returns B, G, R: the last axis reversed), a
+/// 2-vector `R G` (OpenCV returns three channels, B filled with 0, then G, R).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ExrChannels {
+    /// The channel of each component, in component order, as written now.
+    pub names: &'static [&'static str],
+    /// The channel of each component in files of `shmgen.view/1` datasets.
+    pub legacy: &'static [&'static str],
+}
+
+impl ExrChannels {
+    /// The names written now, then those of `shmgen.view/1`: what a reader looks for, in order.
+    pub fn sets(&self) -> [&'static [&'static str]; 2] {
+        [self.names, self.legacy]
+    }
+}
+
+/// One value per pixel (planar depth, unloaded depth, ray distance), in metres.
+pub const SCALAR_CHANNELS: ExrChannels = ExrChannels {
+    names: &["Y"],
+    legacy: &["Z"],
+};
+
+/// A 3-vector per pixel (normals, displacement): x, y, z.
+pub const VECTOR_CHANNELS: ExrChannels = ExrChannels {
+    names: &["R", "G", "B"],
+    legacy: &["X", "Y", "Z"],
+};
+
+/// A 2-vector per pixel (flow): u, v.
+pub const FLOW_CHANNELS: ExrChannels = ExrChannels {
+    names: &["R", "G"],
+    legacy: &["U", "V"],
+};
 
 /// Name of the EXR channel holding planar depth (metres, float32).
-pub const DEPTH_CHANNEL: &str = "Z";
+pub const DEPTH_CHANNEL: &str = SCALAR_CHANNELS.names[0];
 
 fn png(
     width: u32,
@@ -114,21 +158,22 @@ pub fn depth_exr(width: u32, height: u32, depth: &[f32]) -> Vec<u8> {
         &[(DEPTH_CHANNEL, depth)],
         (
             "shmgen_depth",
-            "planar z along the optical axis, metres, 0 = no surface",
+            "Y = planar z along the optical axis, metres, 0 = no surface",
         ),
     )
     .expect("depth layers are finite")
 }
 
 /// Float32 EXR of one value or vector per pixel: `names` are the channels of the vector's
-/// components, in order; `note` = (attribute name, text) says what the values mean. Refuses
-/// a non-finite value, so none ever reaches a file.
+/// components, in order (N of them); `note` = (attribute name, text) says what the values
+/// mean. Refuses a non-finite value, so none ever reaches a file.
 pub fn vector_exr<const N: usize>(
     (width, height): (u32, u32),
-    names: [&str; N],
+    names: &[&str],
     values: &[[f32; N]],
     note: (&str, &str),
 ) -> anyhow::Result<Vec<u8>> {
+    assert_eq!(names.len(), N, "one channel name per component");
     let components: Vec<Vec<f32>> = (0..N)
         .map(|k| values.iter().map(|v| v[k]).collect())
         .collect();
@@ -168,17 +213,17 @@ fn float_exr(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use exr::prelude::*;
     use std::io::Cursor;
 
     /// Channels by name with their values, in the order the file lists them.
-    type NamedChannels = Vec<(String, Vec<f32>)>;
+    pub(in crate::output) type NamedChannels = Vec<(String, Vec<f32>)>;
 
     /// Reads an EXR back with the exr crate's own reader (a separate code path): its size and
     /// every channel by name, which must be float32.
-    fn read_channels(bytes: &[u8]) -> ((usize, usize), NamedChannels) {
+    pub(in crate::output) fn read_channels(bytes: &[u8]) -> ((usize, usize), NamedChannels) {
         let image = read()
             .no_deep_data()
             .largest_resolution_level()
@@ -303,34 +348,76 @@ mod tests {
         let values: Vec<[f32; 3]> = (0..12)
             .map(|i| [i as f32, -0.5 * i as f32, 1e-7 * i as f32])
             .collect();
-        let bytes = vector_exr((4, 3), ["X", "Y", "Z"], &values, ("note", "test")).unwrap();
+        let names = VECTOR_CHANNELS.names;
+        let bytes = vector_exr((4, 3), names, &values, ("note", "test")).unwrap();
         let ((w, h), channels) = read_channels(&bytes);
         assert_eq!((w, h), (4, 3));
-        for (k, name) in ["X", "Y", "Z"].iter().enumerate() {
+        for (k, name) in names.iter().enumerate() {
             let (_, back) = channels.iter().find(|(n, _)| n == name).unwrap();
             assert_eq!(*back, values.iter().map(|v| v[k]).collect::<Vec<_>>());
         }
         let mut bad = values.clone();
         bad[5][1] = f32::NAN;
-        let error = vector_exr((4, 3), ["X", "Y", "Z"], &bad, ("shmgen_x", "t")).unwrap_err();
-        assert!(error.to_string().contains("channel Y"), "{error}");
+        let error = vector_exr((4, 3), names, &bad, ("shmgen_x", "t")).unwrap_err();
+        assert!(error.to_string().contains("channel G"), "{error}");
         bad[5][1] = f32::INFINITY;
-        assert!(vector_exr((4, 3), ["X", "Y", "Z"], &bad, ("shmgen_x", "t")).is_err());
+        assert!(vector_exr((4, 3), names, &bad, ("shmgen_x", "t")).is_err());
     }
 
     #[test]
     fn channels_are_stored_in_name_order_whatever_order_they_are_given_in() {
-        // Flow given as (V, U) per pixel: the file lists U before V, as EXR requires, each
-        // channel with its own component.
-        let given = vector_exr((2, 1), ["V", "U"], &[[1.0, 2.0], [3.0, 4.0]], ("n", "t")).unwrap();
+        // (x, y, z) given as R, G, B: the file lists B, G, R, as EXR requires, each channel
+        // with its own component.
+        let given = vector_exr(
+            (2, 1),
+            &["R", "G", "B"],
+            &[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]],
+            ("n", "t"),
+        );
         let expected = vec![
-            ("U".to_string(), vec![2.0, 4.0]),
-            ("V".to_string(), vec![1.0, 3.0]),
+            ("B".to_string(), vec![3.0, 6.0]),
+            ("G".to_string(), vec![2.0, 5.0]),
+            ("R".to_string(), vec![1.0, 4.0]),
         ];
-        assert_eq!(read_channels(&given), ((2, 1), expected));
+        assert_eq!(read_channels(&given.unwrap()), ((2, 1), expected));
         // The same components given in name order make the same file, to the byte.
-        let in_order = vector_exr((2, 1), ["U", "V"], &[[2.0, 1.0], [4.0, 3.0]], ("n", "t"));
-        assert_eq!(given, in_order.unwrap());
+        let reversed = [[3.0, 2.0, 1.0], [6.0, 5.0, 4.0]];
+        let in_order = vector_exr((2, 1), &["B", "G", "R"], &reversed, ("n", "t"));
+        assert_eq!(
+            vector_exr(
+                (2, 1),
+                &["R", "G", "B"],
+                &[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]],
+                ("n", "t")
+            )
+            .unwrap(),
+            in_order.unwrap()
+        );
+    }
+
+    #[test]
+    fn the_note_is_a_string_attribute_readers_decode() {
+        // OpenEXR's type for text is "string"; a note typed otherwise reaches readers as
+        // opaque bytes (the OpenEXR package's OpaqueAttribute).
+        let bytes = depth_exr(2, 1, &[1.0, 0.0]);
+        let meta = exr::meta::MetaData::read_from_buffered(&bytes[..], false).unwrap();
+        let note = &meta.headers[0].own_attributes.other[&Text::from("shmgen_depth")];
+        let AttributeValue::Text(text) = note else {
+            panic!("{note:?}")
+        };
+        assert!(text.to_string().starts_with("Y = planar z"), "{text}");
+    }
+
+    #[test]
+    fn every_channel_name_is_one_opencv_reads() {
+        // OpenCV's EXR decoder maps R, G, B, A and Y (grey) and reads any other channel as
+        // nothing (a depth in Z came back all zeros); the Python tests read every layer with it.
+        for channels in [SCALAR_CHANNELS, VECTOR_CHANNELS, FLOW_CHANNELS] {
+            let grey = channels.names == ["Y"];
+            let colour = channels.names.iter().all(|n| ["R", "G", "B"].contains(n));
+            assert!(grey || colour, "{channels:?}");
+            assert_eq!(channels.names.len(), channels.legacy.len());
+        }
     }
 
     #[test]

@@ -22,8 +22,8 @@ mod openexr;
 mod writers;
 
 pub use encode::{
-    DEPTH_CHANNEL, MAX_SEGMENTATION_ID, depth_exr, grey16_png, id_png, mask_png, rgb_png,
-    rgb16_png, vector_exr,
+    DEPTH_CHANNEL, ExrChannels, FLOW_CHANNELS, MAX_SEGMENTATION_ID, SCALAR_CHANNELS,
+    VECTOR_CHANNELS, depth_exr, grey16_png, id_png, mask_png, rgb_png, rgb16_png, vector_exr,
 };
 pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, write_atomic};
 pub use guard::refuse_data_target;

@@ -116,7 +116,7 @@ fn header((width, height): (u32, u32), channels: &[(&str, &[f32])], note: (&str,
         ("pixelAspectRatio", "float", &one),
         ("screenWindowCenter", "v2f", &[0; 8]),
         ("screenWindowWidth", "float", &one),
-        (note.0, "text", note.1.as_bytes()),
+        (note.0, "string", note.1.as_bytes()),
     ];
     for (name, kind, value) in attributes {
         out.extend_from_slice(&c_string(name));

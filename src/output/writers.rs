@@ -2,7 +2,10 @@
 //! the layers of a rendered view) and per sample (`SAMPLE_WRITERS`, reading the sample's
 //! geometry). Each returns its files; adding an output is adding a writer here.
 
-use super::encode::{depth_exr, id_png, mask_png, rgb_png, vector_exr};
+use super::encode::{
+    FLOW_CHANNELS, SCALAR_CHANNELS, VECTOR_CHANNELS, depth_exr, id_png, mask_png, rgb_png,
+    vector_exr,
+};
 use super::meshes::{MeshLayer, PointLayer, mesh_glb, mesh_ply, points_ply};
 use anyhow::Result;
 
@@ -150,10 +153,10 @@ pub const WRITERS: [Writer; 14] = [
         output: "normals",
         files: &["normals.exr"],
         write: |v| {
-            let note = "unit normal of the surface seen, facing the camera, in the axes of the view record's normals.frame; 0 = no surface";
+            let note = "R, G, B = x, y, z of the unit normal of the surface seen, facing the camera, in the axes of the view record's normals.axes; 0 = no surface";
             Ok(vec![vector_exr(
                 v.size(),
-                XYZ,
+                VECTOR_CHANNELS.names,
                 &v.normals(),
                 ("shmgen_normals", note),
             )?])
@@ -163,10 +166,10 @@ pub const WRITERS: [Writer; 14] = [
         output: "displacement",
         files: &["displacement.exr"],
         write: |v| {
-            let note = "displacement unloaded -> loaded of the surface point seen, world axes, metres; 0 = no surface";
+            let note = "R, G, B = x, y, z of the displacement unloaded -> loaded of the surface point seen, world axes, metres; 0 = no surface";
             Ok(vec![vector_exr(
                 v.size(),
-                XYZ,
+                VECTOR_CHANNELS.names,
                 &v.displacement(),
                 ("shmgen_displacement", note),
             )?])
@@ -178,9 +181,10 @@ pub const WRITERS: [Writer; 14] = [
         write: |v| {
             let (w, h) = v.size();
             let flow = v.flow();
-            let note = "pixels from the unloaded image to the loaded one; 0 where flow_valid is 0";
+            let note = "R, G = u, v: pixels from the unloaded image to the loaded one; 0 where flow_valid is 0";
+            let names = FLOW_CHANNELS.names;
             Ok(vec![
-                vector_exr((w, h), ["U", "V"], &flow.vectors, ("shmgen_flow", note))?,
+                vector_exr((w, h), names, &flow.vectors, ("shmgen_flow", note))?,
                 mask_png(w, h, &flow.valid),
             ])
         },
@@ -206,20 +210,17 @@ pub const WRITERS: [Writer; 14] = [
         files: &["ray_distance.exr"],
         write: |v| {
             let note =
-                "distance from the camera centre to the surface point, metres; 0 = no surface";
+                "Y = distance from the camera centre to the surface point, metres; 0 = no surface";
             let distance: Vec<[f32; 1]> = v.ray_distance().into_iter().map(|d| [d]).collect();
             Ok(vec![vector_exr(
                 v.size(),
-                ["Y"],
+                SCALAR_CHANNELS.names,
                 &distance,
                 ("shmgen_ray_distance", note),
             )?])
         },
     },
 ];
-
-/// The channels of a 3-vector layer.
-const XYZ: [&str; 3] = ["X", "Y", "Z"];
 
 /// The geometry of a built sample, for the per-sample writers.
 pub trait SampleLayers {
@@ -365,6 +366,46 @@ mod tests {
                 colours: vec![[10, 20, 30]],
             }
         }
+    }
+
+    #[test]
+    fn every_exr_file_holds_its_components_in_the_channels_opencv_reads() {
+        // Tiny's layers by channel: Y for one value, R G B = x y z, R G = u v (flow).
+        let expected = |kind: &str| -> Vec<(&str, Vec<f32>)> {
+            match kind {
+                "depth.exr" => vec![("Y", vec![2.5, 0.0])],
+                "rest_depth.exr" => vec![("Y", vec![2.45, 0.0])],
+                "ray_distance.exr" => vec![("Y", vec![2.6, 0.0])],
+                "normals.exr" => vec![
+                    ("B", vec![-0.8, 0.0]),
+                    ("G", vec![0.6, 0.0]),
+                    ("R", vec![0.0, 0.0]),
+                ],
+                "displacement.exr" => vec![
+                    ("B", vec![-0.02, 0.0]),
+                    ("G", vec![0.0, 0.0]),
+                    ("R", vec![1e-3, 0.0]),
+                ],
+                "flow.exr" => vec![("G", vec![1.5, 0.0]), ("R", vec![0.25, 0.0])],
+                other => panic!("no expected channels for {other}"),
+            }
+        };
+        let mut checked = 0;
+        for writer in &WRITERS {
+            let files = (writer.write)(&Tiny).unwrap();
+            for (kind, bytes) in writer.files.iter().zip(files) {
+                if !kind.ends_with(".exr") {
+                    continue;
+                }
+                let (_, stored) = super::super::encode::tests::read_channels(&bytes);
+                let want: Vec<(String, Vec<f32>)> = (expected(kind).into_iter())
+                    .map(|(n, v)| (n.to_string(), v))
+                    .collect();
+                assert_eq!(stored, want, "{kind}");
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 6);
     }
 
     #[test]

@@ -11,7 +11,7 @@ use crate::cameras::{Camera, CameraRig, Distortion, ViewDraw, rows4};
 use crate::materials::procedural::CRACK_LABEL_COVER;
 use crate::materials::{Material, MaterialDraw};
 use crate::mechanics::{Labels, SectionProperties};
-use crate::output::{DEPTH_CHANNEL, SAMPLE_WRITERS, WRITERS};
+use crate::output::{FLOW_CHANNELS, SAMPLE_WRITERS, SCALAR_CHANNELS, VECTOR_CHANNELS, WRITERS};
 use crate::recipe::Recipe;
 use crate::render::ViewVisibility;
 use crate::scene::{DatasetSpec, GeometryMode, NormalsFrame, Structure};
@@ -29,12 +29,14 @@ pub enum RunSchema {
     V1,
 }
 
-/// Tags each view's JSON; bump when a field changes meaning.
+/// Tags each view's JSON; bump when a field changes meaning or the view's files change form.
 #[derive(Clone, Copy, Debug, Serialize, schemars::JsonSchema)]
 pub enum ViewSchema {
-    /// `shmgen.view/1`: the first version of the view JSON.
-    #[serde(rename = "shmgen.view/1")]
-    V1,
+    /// `shmgen.view/2`: the EXR files' channels are the ones OpenCV reads (depth `Y`, normals
+    /// and displacement `R G B`, flow `R G`); `shmgen.view/1` wrote depth `Z`, vectors `X Y Z`,
+    /// flow `U V`, with the same fields.
+    #[serde(rename = "shmgen.view/2")]
+    V2,
 }
 
 /// `run.json`: everything that identifies a dataset, and nothing about how it was run
@@ -86,7 +88,7 @@ pub struct RecipeRecord<'a> {
 /// The JSON of one view: everything needed to re-create and interpret its files.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct ViewRecord<'a> {
-    /// Version tag of this record: "shmgen.view/1".
+    /// Version tag of this record: "shmgen.view/2".
     pub schema: ViewSchema,
     /// The dataset's name.
     pub dataset: &'a str,
@@ -351,7 +353,9 @@ pub enum Axes {
     Image,
 }
 
-/// How to read a file of one vector per pixel (float32 OpenEXR, one channel per component).
+/// How to read a file of one vector per pixel (float32 OpenEXR, one channel per component,
+/// named so OpenCV reads them: `cv2.imread(path, cv2.IMREAD_UNCHANGED)` returns the channels
+/// B, G, R, that is the components in reverse order, B = 0 for a 2-vector).
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct VectorConvention {
     /// What each pixel's vector is.
@@ -360,14 +364,16 @@ pub struct VectorConvention {
     pub axes: Axes,
     /// Unit of the components.
     pub unit: Unit,
-    /// EXR channels holding the components, in axis order.
+    /// EXR channels holding the components, in axis order: ["R", "G", "B"] = (x, y, z), or
+    /// ["R", "G"] = (u, v) for flow.
     pub channels: Vec<&'static str>,
     /// The value of every component where the pixel has no vector (no surface seen, or for flow
     /// an invalid pixel): 0.
     pub no_value: f64,
 }
 
-/// How to read a file of one distance per pixel (float32 OpenEXR, one channel).
+/// How to read a file of one distance per pixel (float32 OpenEXR, one channel, `Y`, which
+/// OpenCV reads as a grey image).
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct DepthConvention {
     /// What a value measures: "planar_z", the camera-frame z of the surface point (not the
@@ -377,7 +383,7 @@ pub struct DepthConvention {
     pub unit: Unit,
     /// The value of pixels that see no surface (0).
     pub no_surface: f64,
-    /// The EXR channel holding the values.
+    /// The EXR channel holding the values: "Y".
     pub channel: &'static str,
 }
 
@@ -548,7 +554,7 @@ pub fn run_json(recipe: &Recipe, recorded: Option<&Value>) -> Result<Vec<u8>> {
         },
         params: &recipe.params,
         dataset: &recipe.dataset,
-        view_schema: ViewSchema::V1,
+        view_schema: ViewSchema::V2,
         layout: layout(&recipe.dataset),
         manifest: "manifest.jsonl: one line per finished sample, in sample order once the dataset is complete: {sample, views, files, hashes: {file: {bytes, blake3}}}",
     })
@@ -664,7 +670,7 @@ impl<'a> SampleRecord<'a> {
         let rig = &recipe.dataset.camera;
         let k = &camera.intrinsics;
         ViewRecord {
-            schema: ViewSchema::V1,
+            schema: ViewSchema::V2,
             dataset: &recipe.dataset.name,
             sample: sample.index,
             view,
@@ -701,27 +707,27 @@ impl<'a> SampleRecord<'a> {
                 kind: DepthKind::PlanarZ,
                 unit: Unit::Metre,
                 no_surface: 0.0,
-                channel: DEPTH_CHANNEL,
+                channel: SCALAR_CHANNELS.names[0],
             },
             ray_distance: DepthConvention {
                 kind: DepthKind::RayDistance,
                 unit: Unit::Metre,
                 no_surface: 0.0,
-                channel: "Y",
+                channel: SCALAR_CHANNELS.names[0],
             },
             normals: normals_convention(recipe.dataset.normals),
             displacement: VectorConvention {
                 meaning: "displacement of the surface point seen, from the unloaded (undamaged) structure to the loaded one",
                 axes: Axes::World,
                 unit: Unit::Metre,
-                channels: vec!["X", "Y", "Z"],
+                channels: VECTOR_CHANNELS.names.to_vec(),
                 no_value: 0.0,
             },
             flow: VectorConvention {
                 meaning: "on the unloaded image (rest_rgb), where the pixel's surface point lands in the loaded image (rgb), minus the pixel centre; valid where flow_valid is 255 (the point lands inside the frame, unhidden)",
                 axes: Axes::Image,
                 unit: Unit::Pixel,
-                channels: vec!["U", "V"],
+                channels: FLOW_CHANNELS.names.to_vec(),
                 no_value: 0.0,
             },
             mask: MaskConvention {
@@ -765,7 +771,7 @@ fn normals_convention(frame: NormalsFrame) -> VectorConvention {
             NormalsFrame::World => Axes::World,
         },
         unit: Unit::Unitless,
-        channels: vec!["X", "Y", "Z"],
+        channels: VECTOR_CHANNELS.names.to_vec(),
         no_value: 0.0,
     }
 }

@@ -178,13 +178,13 @@ pub fn read_png(path: &Path) -> (usize, usize, usize, Vec<u8>) {
     (w, h, buf.len() / (w * h), buf)
 }
 
-/// The depth channel `Z` of an OpenEXR file, through the `exr` crate's reader.
+/// The depth channel `Y` of an OpenEXR file (OpenCV's grey), through the `exr` crate's reader.
 pub fn read_exr(path: &Path) -> Vec<f32> {
     use exr::prelude::*;
     let image = read_first_flat_layer_from_file(path).unwrap();
     let channels = &image.layer_data.channel_data.list;
     assert_eq!(channels.len(), 1);
-    assert_eq!(channels[0].name, Text::from("Z"));
+    assert_eq!(channels[0].name, Text::from("Y"));
     channels[0].sample_data.values_as_f32().collect()
 }
 
