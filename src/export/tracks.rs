@@ -92,7 +92,10 @@ fn observe(
     points: &[PlyPoint],
 ) -> Result<Vec<Option<Observation>>> {
     let camera = dataset.camera(view)?;
-    let depth = dataset.layer(view, "depth.exr", &SCALAR_CHANNELS.sets())?.channels[0].clone();
+    let depth = dataset
+        .layer(view, "depth.exr", &SCALAR_CHANNELS.sets())?
+        .channels[0]
+        .clone();
     let rgb = dataset.rgb(view, "rgb.png")?;
     let width = camera.width as usize;
     Ok(points
