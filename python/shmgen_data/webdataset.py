@@ -46,7 +46,7 @@ MEMBERS = {
     "flow_valid.npy": "bool (H, W) where flow is defined",
     "parts.npy": "int32 (H, W) part ids (segmentation.part_ids)",
     "instances.npy": "int32 (H, W) instance ids (segmentation.instance_ids)",
-    "json": "the view's record (shmgen.view/1)",
+    "json": "the view's record (shmgen.view/2)",
 }
 
 _SHARD = re.compile(r"shard-\d{6}\.tar\.gz")

@@ -10,7 +10,7 @@
 //! - `rgb.png`, `rest_rgb.png` and `json` are the dataset's files, byte for byte;
 //! - every EXR layer becomes `{layer}.npy`, float32, `(H, W)` for one channel (depth, rest
 //!   depth, ray distance) or `(H, W, C)` in the record's channel order (normals, displacement
-//!   `X Y Z`, flow `U V`), which NumPy's `.npy` decoder in WebDataset reads as is;
+//!   x, y, z; flow u, v), which NumPy's `.npy` decoder in WebDataset reads as is;
 //! - masks (`mask`, `cracks`, `erased`, `valid`, `flow_valid`) become `{layer}.npy` bool
 //!   `(H, W)`, and the id images (`parts`, `instances`) `{layer}.npy` int32 `(H, W)`.
 //!
