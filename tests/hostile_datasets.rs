@@ -108,6 +108,7 @@ fn commands(data: &Path, out: &Path) -> Vec<Vec<String>> {
         export("colmap", &["--copy"]),
         export("webdataset", &[]),
         export("png16", &[]),
+        export("flow", &[]),
         // Predictions: the dataset's own layers, so every kind of file it holds is read.
         ["eval", &d, &format!("{d}/samples")]
             .iter()
