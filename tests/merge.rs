@@ -198,6 +198,15 @@ fn a_part_of_another_dataset_is_refused_naming_it_and_what_differs() {
     );
     assert!(!out.exists());
 
+    // The name of the recipe's file is not the dataset: a node may run a renamed copy.
+    let renamed = s.dir.path().join("copy-of-quickstart.rhai");
+    std::fs::copy(quickstart(), &renamed).unwrap();
+    let b = s.dir.path().join("node-b-renamed");
+    ok(run(&renamed, &b, &[SMALL, &["--shard", "1/2"]].concat()));
+    ok(merged(&out, &[&s.a, &b]));
+    assert_eq!(hashes(&s.single), hashes(&out));
+    std::fs::remove_dir_all(&out).unwrap();
+
     // Nor into an OUT holding another dataset.
     refused(
         &merged(&foreign, &[&s.a]),

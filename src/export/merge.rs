@@ -13,6 +13,7 @@ use super::staging::Placer;
 use crate::dataset::{Check, Part};
 use crate::output::{MergeTarget, differences, refuse_data_target};
 use anyhow::{Context, Result, bail};
+use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -67,7 +68,10 @@ pub fn merge(out: &Path, parts: &[PathBuf]) -> Result<MergeSummary> {
     let plan = plan(&parts, existing.as_ref())?;
 
     let total = parts[0].total;
-    let identity = |_: Option<&serde_json::Value>| Ok(parts[0].run_bytes.clone());
+    // OUT keeps its run.json; a new OUT gets the first part's (as the first shard's run
+    // writes it into a shared folder).
+    let run_json = existing.as_ref().unwrap_or(&parts[0]).run_bytes.clone();
+    let identity = |_: Option<&Value>| Ok(run_json.clone());
     let target = MergeTarget::open(out, &identity)?;
     let mut placer = Placer::new(false);
     let mut taken = vec![0u64; parts.len()];
@@ -112,7 +116,7 @@ pub fn merge(out: &Path, parts: &[PathBuf]) -> Result<MergeSummary> {
 fn refuse_other_datasets(parts: &[Part]) -> Result<()> {
     let first = &parts[0];
     for part in &parts[1..] {
-        if part.run != first.run {
+        if !same_dataset(&part.run, &first.run) {
             bail!(
                 "PART {} is not the same dataset as PART {}: {}; only shards of one run (same recipe, parameters and seed) merge",
                 part.root().display(),
@@ -130,7 +134,7 @@ fn existing_dataset(out: &Path, first: &Part) -> Result<Option<Part>> {
         return Ok(None);
     }
     let existing = Part::open(out).with_context(|| format!("OUT {}", out.display()))?;
-    if existing.run != first.run {
+    if !same_dataset(&existing.run, &first.run) {
         bail!(
             "OUT {} holds a different dataset than the parts: {}; merge into a new folder",
             out.display(),
@@ -138,6 +142,21 @@ fn existing_dataset(out: &Path, first: &Part) -> Result<Option<Part>> {
         );
     }
     Ok(Some(existing))
+}
+
+/// Whether two run.json describe the same dataset: equal but for `recipe.file`, the name of
+/// the recipe's file, which no output byte depends on (its content is `recipe.hash`), so that
+/// nodes may run renamed copies of the recipe, as `run` resumes from one
+/// (`pipeline::record::run_json`).
+fn same_dataset(a: &Value, b: &Value) -> bool {
+    let identity = |run: &Value| {
+        let mut run = run.clone();
+        if let Some(recipe) = run.get_mut("recipe").and_then(Value::as_object_mut) {
+            recipe.remove("file");
+        }
+        run
+    };
+    identity(a) == identity(b)
 }
 
 /// Which part each sample is taken from: the first that has it. A sample in several parts,

@@ -33,7 +33,8 @@ impl Holder {
 /// Refuses the output `out` (given as `flag`, e.g. `--json`) if it is or lies inside a dataset
 /// or an export, or inside `source` (the dataset the command reads). `run --out` passes
 /// `own_dataset`: its `out` may be a dataset (its own, resumed or replaced as `run` decides),
-/// but not an export, and not inside either.
+/// but not an export, and not inside either; never `source` itself (`merge OUT PART` passes
+/// each part as `source`).
 pub fn refuse_data_target(
     out: &Path,
     flag: &str,
