@@ -230,6 +230,30 @@ fn a_part_holding_a_link_is_refused() {
         &["000001_00.rgb.png", "symbolic link"],
     );
     assert!(!out.exists());
+
+    // A linked folder is refused as well, before anything is written.
+    for linked in ["samples/0000", "samples"] {
+        let folder = s.a.join(linked);
+        let moved = s.dir.path().join("elsewhere");
+        std::fs::rename(&folder, &moved).unwrap();
+        std::os::unix::fs::symlink(&moved, &folder).unwrap();
+        refused(&merged(&out, &[&s.a]), &[linked, "symbolic link"]);
+        assert!(!out.exists(), "{linked}");
+        std::fs::remove_file(&folder).unwrap();
+        std::fs::rename(&moved, &folder).unwrap();
+    }
+}
+
+#[test]
+fn an_out_holding_other_files_is_refused() {
+    let s = shards(SMALL);
+    let out = s.dir.path().join("notes");
+    common::write(&out, "todo.txt", "keep me");
+    refused(
+        &merged(&out, &[&s.a]),
+        &["is not empty and holds no shmgen dataset"],
+    );
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1);
 }
 
 #[test]

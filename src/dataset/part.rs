@@ -151,6 +151,12 @@ impl Part {
 /// to the root, whether a folder), refusing links and anything but files and folders.
 fn entries_without_links(root: &Path, relative: &str) -> Result<Vec<(String, bool)>> {
     let folder = root.join(relative);
+    if fs::symlink_metadata(&folder).is_ok_and(|m| m.file_type().is_symlink()) {
+        bail!(
+            "{}: is a symbolic link; a merge takes nothing from a part that holds links",
+            folder.display()
+        );
+    }
     let read = match fs::read_dir(&folder) {
         Ok(read) => read,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),

@@ -131,6 +131,13 @@ fn refuse_other_datasets(parts: &[Part]) -> Result<()> {
 /// The dataset already in `out`, if it has a run.json: refused unless it is the parts'.
 fn existing_dataset(out: &Path, first: &Part) -> Result<Option<Part>> {
     if std::fs::symlink_metadata(out.join("run.json")).is_err() {
+        let holds_something = std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some());
+        if holds_something {
+            bail!(
+                "OUT {} is not empty and holds no shmgen dataset; merge into a new folder (or a partial dataset of the same run)",
+                out.display()
+            );
+        }
         return Ok(None);
     }
     let existing = Part::open(out).with_context(|| format!("OUT {}", out.display()))?;

@@ -2,8 +2,9 @@
 //! that let shards share a folder, and the clean-up of what interrupted runs leave.
 //!
 //! Everything transient lives in `.partial/`: `folder.lock` (held while a run opens the
-//! folder, replaces a dataset, or finishes), `shard-K-of-N.lock` (held by the process writing
-//! shard K/N, which records its pid there) and `shard-K-of-N/` (that shard's staging).
+//! folder, replaces a dataset, or finishes, and by a merge throughout), `shard-K-of-N.lock`
+//! (held by the process writing shard K/N, which records its pid there), `shard-K-of-N/`
+//! (that shard's staging) and `merge/` (a merge's staging, see `merge`).
 //! Temporary files of `run.json` and `manifest.jsonl` are written only under `folder.lock`,
 //! so any found while holding it are stale and removed.
 

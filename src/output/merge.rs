@@ -115,7 +115,7 @@ impl MergeTarget {
 
 /// Whether the opened `file` and the file at `path` (not followed if a link) are one.
 #[cfg(unix)]
-pub fn same_file(file: &File, path: &Path) -> bool {
+fn same_file(file: &File, path: &Path) -> bool {
     use std::os::unix::fs::MetadataExt;
     match (file.metadata(), fs::symlink_metadata(path)) {
         (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
@@ -125,7 +125,7 @@ pub fn same_file(file: &File, path: &Path) -> bool {
 
 /// Whether the opened `file` and the file at `path` (not followed if a link) are one.
 #[cfg(not(unix))]
-pub fn same_file(_: &File, path: &Path) -> bool {
+fn same_file(_: &File, path: &Path) -> bool {
     fs::symlink_metadata(path).is_ok_and(|m| m.is_file())
 }
 
