@@ -136,6 +136,17 @@ enum Command {
         /// The dataset folder, finished.
         dataset: PathBuf,
     },
+    /// Gather the folders shards wrote on different nodes (`run --shard K/N --out PART`) into
+    /// one dataset, byte for byte what a single run writes. Every part must be the same
+    /// dataset; a sample in several parts must be identical there. Files are hard-linked
+    /// where possible, else copied, every byte checked against its recorded hash.
+    Merge {
+        /// The dataset folder to create, or a partial dataset of the same run to add to.
+        out: PathBuf,
+        /// Folders `shmgen run --shard` wrote (finished or not); never written to.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+    },
     /// Score predictions against a finished dataset: depth metrics (AbsRel, SqRel, RMSE,
     /// RMSE log, δ), Chamfer distance and F-score of surfaces, flow and displacement EPE.
     Eval {
@@ -324,6 +335,7 @@ fn execute(command: Command) -> Result<()> {
             Ok(())
         }
         Command::Verify { dataset } => verify(&dataset),
+        Command::Merge { out, parts } => merge(&out, &parts),
         Command::Eval {
             dataset,
             predictions,
@@ -354,6 +366,37 @@ fn execute(command: Command) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// `shmgen merge`: one summary line saying what came from where and whether the dataset is
+/// complete.
+fn merge(out: &std::path::Path, parts: &[PathBuf]) -> Result<()> {
+    let summary = export::merge(out, parts)?;
+    let from: Vec<String> = summary
+        .taken
+        .iter()
+        .map(|(part, n)| format!("{n} from {}", part.display()))
+        .collect();
+    let state = match summary.first_missing {
+        None => format!("complete: all {} samples", summary.total),
+        Some(first) => format!(
+            "incomplete: {} of {} samples missing (first: sample {first}); `shmgen run` with the parts' recipe and --out {} renders the rest",
+            summary.missing,
+            summary.total,
+            out.display()
+        ),
+    };
+    println!(
+        "merged into {}: {} ({} already there, {} duplicates identical in several parts taken once; {} files linked, {} copied; {} files or lines of unfinished samples in the parts ignored); {state}",
+        out.display(),
+        from.join(", "),
+        summary.already,
+        summary.duplicates,
+        summary.linked,
+        summary.copied,
+        summary.unfinished,
+    );
+    Ok(())
 }
 
 /// `shmgen verify`: a line per file that differs, then a summary; an error if any did.

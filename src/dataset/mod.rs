@@ -12,10 +12,12 @@
 mod camera;
 mod content;
 pub mod files;
+mod part;
 mod read;
 
 pub use camera::Camera;
 pub use content::{Check, Hashing, Verified, check_stream, verify};
+pub use part::{Part, PartSample};
 pub use read::{GreyImage, Layer, decode_exr, decode_grey_png, decode_rgb_png};
 
 use anyhow::{Context, Result, bail};
@@ -162,34 +164,9 @@ impl Dataset {
 
     /// `open` without looking at the listed files (`verify` looks at every one itself).
     fn open_unchecked(root: &Path) -> Result<Dataset> {
-        if !root.is_dir() {
-            bail!("{}: no such folder", root.display());
-        }
-        let run_path = root.join("run.json");
-        if std::fs::symlink_metadata(&run_path).is_err() {
-            bail!(
-                "{}: not a shmgen dataset (no run.json; give the folder `shmgen run --out` wrote)",
-                root.display()
-            );
-        }
-        let run: Value = serde_json::from_slice(&read_inside(root, "run.json", RECORD)?)
-            .with_context(|| {
-                format!(
-                    "{}: not a shmgen dataset (run.json does not parse)",
-                    root.display()
-                )
-            })?;
-        let schema = run.get("schema").and_then(Value::as_str).unwrap_or("none");
-        if schema != RUN_SCHEMA {
-            bail!(
-                "{}: run.json has schema {schema:?}; this shmgen reads {RUN_SCHEMA:?}",
-                run_path.display()
-            );
-        }
-        let total = run
-            .pointer("/dataset/samples")
-            .and_then(Value::as_u64)
-            .with_context(|| format!("{}: no dataset.samples", run_path.display()))?;
+        let Run {
+            value: run, total, ..
+        } = read_run(root)?;
         let (listed, checks) = read_manifest(root)?;
         let missing = (0..total).find(|s| !listed.contains_key(s));
         if let Some(first) = missing {
@@ -353,6 +330,51 @@ impl Dataset {
     }
 }
 
+/// A dataset's `run.json`: its bytes, as parsed, and the number of samples it declares.
+struct Run {
+    bytes: Vec<u8>,
+    value: Value,
+    total: u64,
+}
+
+/// Reads `run.json` of the folder `root` as an untrusted dataset's file, refusing a folder
+/// that is not a shmgen dataset of the schema this reader understands.
+fn read_run(root: &Path) -> Result<Run> {
+    if !root.is_dir() {
+        bail!("{}: no such folder", root.display());
+    }
+    let run_path = root.join("run.json");
+    if std::fs::symlink_metadata(&run_path).is_err() {
+        bail!(
+            "{}: not a shmgen dataset (no run.json; give the folder `shmgen run --out` wrote)",
+            root.display()
+        );
+    }
+    let bytes = read_inside(root, "run.json", RECORD)?;
+    let run: Value = serde_json::from_slice(&bytes).with_context(|| {
+        format!(
+            "{}: not a shmgen dataset (run.json does not parse)",
+            root.display()
+        )
+    })?;
+    let schema = run.get("schema").and_then(Value::as_str).unwrap_or("none");
+    if schema != RUN_SCHEMA {
+        bail!(
+            "{}: run.json has schema {schema:?}; this shmgen reads {RUN_SCHEMA:?}",
+            run_path.display()
+        );
+    }
+    let total = run
+        .pointer("/dataset/samples")
+        .and_then(Value::as_u64)
+        .with_context(|| format!("{}: no dataset.samples", run_path.display()))?;
+    Ok(Run {
+        bytes,
+        value: run,
+        total,
+    })
+}
+
 /// A decoder of an image file's bytes: (bytes, the file's name, the view's width and height).
 type ImageDecoder<T> = fn(&[u8], &str, (u32, u32)) -> Result<T>;
 
@@ -364,17 +386,18 @@ fn read_inside(root: &Path, relative: &str, bound: Bound) -> Result<Vec<u8>> {
     read_bounded(open_inside(root, relative)?, relative, bound)
 }
 
+/// One line of `manifest.jsonl`: a finished sample, its files and their records.
+#[derive(serde::Deserialize)]
+struct Line {
+    sample: u64,
+    files: Vec<String>,
+    #[serde(default)]
+    hashes: BTreeMap<String, Check>,
+}
+
 /// Sample index → its files, from every complete line of the manifest, and the size and
-/// hash of every file whose line records them. Each line is read up to `MANIFEST_LINE`
-/// bytes: a manifest without newlines is refused, never read whole.
+/// hash of every file whose line records them.
 fn read_manifest(root: &Path) -> Result<(Listed, HashMap<String, Check>)> {
-    #[derive(serde::Deserialize)]
-    struct Line {
-        sample: u64,
-        files: Vec<String>,
-        #[serde(default)]
-        hashes: BTreeMap<String, Check>,
-    }
     let path = root.join("manifest.jsonl");
     if std::fs::symlink_metadata(&path).is_err() {
         bail!(
@@ -382,8 +405,35 @@ fn read_manifest(root: &Path) -> Result<(Listed, HashMap<String, Check>)> {
             root.display()
         );
     }
-    let mut reader = BufReader::new(open_inside(root, "manifest.jsonl")?);
     let (mut listed, mut checks) = (BTreeMap::new(), HashMap::new());
+    each_line(root, |number, _, parsed| {
+        let Some(parsed) = parsed else {
+            bail!(
+                "{}: line {number} is incomplete or does not parse; the dataset is not finished (run `shmgen run` again to finish it)",
+                path.display()
+            );
+        };
+        if let std::collections::btree_map::Entry::Vacant(entry) = listed.entry(parsed.sample) {
+            // A line speaks for its own files only.
+            let own = |(file, _): &(String, Check)| parsed.files.contains(file);
+            checks.extend(parsed.hashes.into_iter().filter(own));
+            entry.insert(parsed.files);
+        }
+        Ok(())
+    })?;
+    Ok((listed, checks))
+}
+
+/// Calls `each` with every line of the manifest of `root` (numbered from 1, its bytes, and
+/// what it says if it is complete and parses: a line without its newline is a torn append of
+/// a run that was killed). Each line is read up to `MANIFEST_LINE` bytes: a manifest without
+/// newlines is refused, never read whole.
+fn each_line(
+    root: &Path,
+    mut each: impl FnMut(u64, &[u8], Option<Line>) -> Result<()>,
+) -> Result<()> {
+    let path = root.join("manifest.jsonl");
+    let mut reader = BufReader::new(open_inside(root, "manifest.jsonl")?);
     let mut line = Vec::new();
     for number in 1.. {
         line.clear();
@@ -400,26 +450,13 @@ fn read_manifest(root: &Path) -> Result<(Listed, HashMap<String, Check>)> {
                 path.display()
             );
         }
-        // A line without its newline is a torn append of a run that was killed: not a
-        // finished sample, and never in a finished manifest.
         let parsed = line
             .ends_with(b"\n")
             .then(|| serde_json::from_slice::<Line>(&line).ok())
             .flatten();
-        let Some(parsed) = parsed else {
-            bail!(
-                "{}: line {number} is incomplete or does not parse; the dataset is not finished (run `shmgen run` again to finish it)",
-                path.display()
-            );
-        };
-        if let std::collections::btree_map::Entry::Vacant(entry) = listed.entry(parsed.sample) {
-            // A line speaks for its own files only.
-            let own = |(file, _): &(String, Check)| parsed.files.contains(file);
-            checks.extend(parsed.hashes.into_iter().filter(own));
-            entry.insert(parsed.files);
-        }
+        each(number, &line, parsed)?;
     }
-    Ok((listed, checks))
+    Ok(())
 }
 
 /// Groups a sample's files into its views and its own files.

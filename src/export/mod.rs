@@ -7,15 +7,22 @@
 //! never changes them), rendering, recipes or how datasets are written. Output appears all at
 //! once: everything goes into a hidden sibling folder renamed to `--out` at the end
 //! (`staging`), so a killed export never leaves a half-written `--out`.
+//!
+//! `merge` writes a dataset rather than another layout: the finished samples of folders that
+//! shards wrote on different nodes, gathered into one with the same bytes as a single run,
+//! placed as the exports' files are (hard link or checked copy).
 
 mod colmap;
 mod depth_mm;
 mod flow;
+mod merge;
 mod nerfstudio;
 mod png16;
 mod staging;
 mod tracks;
 mod webdataset;
+
+pub use merge::{MergeSummary, merge};
 
 use crate::dataset::{Dataset, Sample, View};
 use anyhow::{Result, bail};

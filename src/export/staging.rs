@@ -7,8 +7,8 @@
 //! filesystem, a filesystem without links) falls back to a copy. Either way the exported bytes
 //! are the dataset's, so the export's content is the same.
 
-use crate::dataset::{Dataset, check_stream};
-use crate::output::refuse_data_target;
+use crate::dataset::{Check, Dataset, check_stream};
+use crate::output::{hard_link_opened, refuse_data_target};
 use anyhow::{Context, Result, bail};
 use std::fs::{self, File};
 use std::io;
@@ -129,9 +129,22 @@ impl Placer {
     /// link followed, regular files only), and its bytes are checked against the manifest's
     /// hash as they are read: what is exported is what the run wrote, or nothing.
     pub(super) fn place(&mut self, dataset: &Dataset, relative: &str, to: &Path) -> Result<()> {
-        make_parent(to)?;
         let (file, check) = dataset.open_file(relative)?;
-        if !self.copy && self.link(&file, &dataset.path(relative), to)? {
+        self.place_opened(file, check, &dataset.path(relative), relative, to)
+    }
+
+    /// `to` gets the bytes of `file` (opened from `from`, called `relative` in messages): a
+    /// hard link where possible, else a copy, checked against `check` either way.
+    pub(super) fn place_opened(
+        &mut self,
+        file: File,
+        check: Option<Check>,
+        from: &Path,
+        relative: &str,
+        to: &Path,
+    ) -> Result<()> {
+        make_parent(to)?;
+        if !self.copy && hard_link_opened(&file, from, to)? {
             check_stream(file, check, relative, &mut io::sink())?;
             self.linked += 1;
             return Ok(());
@@ -143,23 +156,6 @@ impl Placer {
         Ok(())
     }
 
-    /// Hard-links `from` (opened as `file`) to `to`, and makes sure the link is that very
-    /// file: had `from` been swapped for a link meanwhile, the export would hold the link.
-    /// False (nothing left at `to`) when the filesystem refuses the link.
-    fn link(&self, file: &File, from: &Path, to: &Path) -> Result<bool> {
-        if fs::hard_link(from, to).is_err() {
-            return Ok(false);
-        }
-        if !same_file(file, to) {
-            fs::remove_file(to).with_context(|| format!("removing {}", to.display()))?;
-            bail!(
-                "{}: changed while being exported (it is no longer the file that was checked)",
-                from.display()
-            );
-        }
-        Ok(true)
-    }
-
     /// Writes new bytes to `to`.
     pub(super) fn write(&mut self, to: &Path, bytes: &[u8]) -> Result<()> {
         make_parent(to)?;
@@ -167,21 +163,6 @@ impl Placer {
         self.written += 1;
         Ok(())
     }
-}
-
-/// Whether the opened `file` and the file at `path` (not followed if a link) are one.
-#[cfg(unix)]
-fn same_file(file: &File, path: &Path) -> bool {
-    use std::os::unix::fs::MetadataExt;
-    match (file.metadata(), fs::symlink_metadata(path)) {
-        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
-        _ => false,
-    }
-}
-
-#[cfg(not(unix))]
-fn same_file(_: &File, path: &Path) -> bool {
-    fs::symlink_metadata(path).is_ok_and(|m| m.is_file())
 }
 
 fn make_parent(path: &Path) -> Result<()> {

@@ -2,8 +2,9 @@
 //! that let shards share a folder, and the clean-up of what interrupted runs leave.
 //!
 //! Everything transient lives in `.partial/`: `folder.lock` (held while a run opens the
-//! folder, replaces a dataset, or finishes), `shard-K-of-N.lock` (held by the process writing
-//! shard K/N, which records its pid there) and `shard-K-of-N/` (that shard's staging).
+//! folder, replaces a dataset, or finishes, and by a merge throughout), `shard-K-of-N.lock`
+//! (held by the process writing shard K/N, which records its pid there), `shard-K-of-N/`
+//! (that shard's staging) and `merge/` (a merge's staging, see `merge`).
 //! Temporary files of `run.json` and `manifest.jsonl` are written only under `folder.lock`,
 //! so any found while holding it are stale and removed.
 
@@ -20,7 +21,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 const RUN_JSON: &str = "run.json";
 const MANIFEST: &str = "manifest.jsonl";
-const STAGING: &str = ".partial";
+pub(super) const STAGING: &str = ".partial";
 const SAMPLES: &str = "samples";
 const FOLDER_LOCK: &str = "folder.lock";
 /// Differences between two datasets listed in an error, at most.
@@ -33,12 +34,12 @@ pub type Identity<'a> = &'a dyn Fn(Option<&Value>) -> Result<Vec<u8>>;
 /// A dataset's output folder, opened for one shard: `run.json`, `manifest.jsonl` and the
 /// committed samples, with a staging area for the samples this process is writing.
 pub struct DatasetFolder {
-    root: PathBuf,
-    shard: Option<ShardLease>,
+    pub(super) root: PathBuf,
+    pub(super) shard: Option<ShardLease>,
 }
 
 /// The lock on a shard and its staging folder.
-struct ShardLease {
+pub(super) struct ShardLease {
     lock: Lock,
     staging: PathBuf,
 }
@@ -190,9 +191,16 @@ impl DatasetFolder {
     }
 
     fn open_locked(&mut self, identity: Identity, force: bool, shard: (u64, u64)) -> Result<()> {
-        let root = self.root.clone();
-        let (holds, run_json) = survey(&root, identity)?;
-        refuse(&root, &holds, force)?;
+        self.take_for(identity, force)?;
+        self.lease_shard(shard)
+    }
+
+    /// Makes the folder (whose lock the caller holds) hold the dataset `identity`: kept if it
+    /// holds it, created if it holds nothing, replaced (`force`) or refused otherwise.
+    pub(super) fn take_for(&self, identity: Identity, force: bool) -> Result<()> {
+        let root = &self.root;
+        let (holds, run_json) = survey(root, identity)?;
+        refuse(root, &holds, force)?;
         match &holds {
             Holds::Same { rewrite: false } => {}
             Holds::Same { rewrite: true } | Holds::Nothing => self.write_run_json(&run_json)?,
@@ -214,9 +222,12 @@ impl DatasetFolder {
                 self.write_run_json(&run_json)?;
             }
         }
-        self.remove_stale_temporaries()?;
+        self.remove_stale_temporaries()
+    }
 
-        let (k, n) = shard;
+    /// Takes the lock of shard K/N and its staging folder, refused if another process holds it.
+    fn lease_shard(&mut self, (k, n): (u64, u64)) -> Result<()> {
+        let root = self.root.clone();
         let name = format!("shard-{k}-of-{n}");
         let lock_path = self.path(STAGING).join(format!("{name}.lock"));
         let Some(mut lock) = Lock::acquire(&lock_path, false)
@@ -242,7 +253,7 @@ impl DatasetFolder {
     }
 
     /// Takes the folder lock, saying so when another process holds it.
-    fn lock_folder(&self) -> Result<Lock> {
+    pub(super) fn lock_folder(&self) -> Result<Lock> {
         let path = self.path(STAGING).join(FOLDER_LOCK);
         let locking = |wait| {
             Lock::acquire(&path, wait).map_err(|e| io_error(e, "locking the folder", &self.root))
@@ -294,7 +305,7 @@ impl DatasetFolder {
 
     /// A crash can leave a manifest line without its newline; end it so that the next
     /// appended line stays parseable (the fragment itself is ignored).
-    fn terminate_torn_line(&self) -> Result<()> {
+    pub(super) fn terminate_torn_line(&self) -> Result<()> {
         let path = self.path(MANIFEST);
         if !path.exists() {
             return Ok(());
@@ -324,7 +335,7 @@ impl DatasetFolder {
         Ok(lock.expect("a blocking lock is taken"))
     }
 
-    fn path(&self, relative: &str) -> PathBuf {
+    pub(super) fn path(&self, relative: &str) -> PathBuf {
         self.root.join(relative)
     }
 
@@ -382,21 +393,7 @@ impl DatasetFolder {
 
     /// Moves the staged files into place, then records the sample in the manifest.
     pub fn commit(&self, stage: SampleStage, views: u32) -> Result<()> {
-        for (i, relative) in stage.files.iter().enumerate() {
-            let target = self.path(relative);
-            if let Some(parent) = target.parent() {
-                fs::create_dir_all(parent).map_err(|e| {
-                    io_error(
-                        e,
-                        format_args!("creating the folder of {relative}"),
-                        &self.root,
-                    )
-                })?;
-            }
-            fs::rename(stage.dir.join(i.to_string()), &target).map_err(|e| {
-                io_error(e, format_args!("moving {relative} into place"), &self.root)
-            })?;
-        }
+        self.move_into_place(&stage.dir, &stage.files)?;
         fault::check("commit")?;
         // Sorted by name whatever order the files were written in, and whichever map type
         // serde_json is built with: the line's bytes depend on the files' bytes alone.
@@ -411,15 +408,40 @@ impl DatasetFolder {
         });
         let mut line = serde_json::to_vec(&line)?;
         line.push(b'\n');
-        // One write of a whole line in append mode, under the manifest's lock: concurrent
-        // shards never interleave lines, even on a shared filesystem.
-        let lock = self.lock_manifest()?;
-        fault::write_through("append", &line, |b| lock.file().write_all(b))
-            .map_err(|e| io_error(e, "appending to manifest.jsonl", &self.root))?;
-        drop(lock);
+        self.append_line(&line)?;
         fault::check("committed")?;
         fs::remove_dir(&stage.dir)?;
         Ok(())
+    }
+
+    /// Renames the files staged in `dir` (named 0, 1, … in the order of `files`) to their
+    /// places `files` (relative to the root).
+    pub(super) fn move_into_place(&self, dir: &Path, files: &[String]) -> Result<()> {
+        for (i, relative) in files.iter().enumerate() {
+            let target = self.path(relative);
+            if let Some(parent) = target.parent() {
+                fs::create_dir_all(parent).map_err(|e| {
+                    io_error(
+                        e,
+                        format_args!("creating the folder of {relative}"),
+                        &self.root,
+                    )
+                })?;
+            }
+            fs::rename(dir.join(i.to_string()), &target).map_err(|e| {
+                io_error(e, format_args!("moving {relative} into place"), &self.root)
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Appends a whole manifest line (newline included) in one write in append mode, under
+    /// the manifest's lock: concurrent shards never interleave lines, even on a shared
+    /// filesystem.
+    pub(super) fn append_line(&self, line: &[u8]) -> Result<()> {
+        let lock = self.lock_manifest()?;
+        fault::write_through("append", line, |b| lock.file().write_all(b))
+            .map_err(|e| io_error(e, "appending to manifest.jsonl", &self.root))
     }
 
     /// Ends this process's work on the folder: releases its shard, then — once every sample
@@ -430,6 +452,15 @@ impl DatasetFolder {
     pub fn finish(mut self, total: u64) -> Result<bool> {
         self.release_shard()?;
         let setup = self.lock_folder()?;
+        let complete = self.tidy(total)?;
+        setup.remove()?;
+        let _ = fs::remove_dir(self.path(STAGING));
+        Ok(complete)
+    }
+
+    /// `finish`'s work once the folder lock is held: the manifest sorted if the dataset is
+    /// complete (returned), leftovers of interrupted runs and merges removed.
+    pub(super) fn tidy(&self, total: u64) -> Result<bool> {
         let complete = self.finalize_manifest(total)?;
         self.remove_stale_temporaries()?;
         // Shards no process holds: their lock files and staging go.
@@ -446,8 +477,6 @@ impl DatasetFolder {
                 remove_all(&self.path(STAGING).join(&name))?;
             }
         }
-        setup.remove()?;
-        let _ = fs::remove_dir(self.path(STAGING));
         Ok(complete)
     }
 
@@ -618,7 +647,7 @@ fn survey(root: &Path, identity: Identity) -> Result<(Holds, Vec<u8>)> {
                 let rewrite = ours != recorded;
                 (Holds::Same { rewrite }, ours)
             } else {
-                let why = differences(&value, &parsed);
+                let why = differences(&value, &parsed, "folder vs this run");
                 let finished = finished_samples(root)?;
                 (Holds::Other { why, finished }, ours)
             }
@@ -648,8 +677,9 @@ fn refuse(root: &Path, holds: &Holds, force: bool) -> Result<()> {
     }
 }
 
-/// What differs between a recorded run.json and this run's, field by field.
-fn differences(recorded: &Value, ours: &Value) -> String {
+/// What differs between two run.json, field by field; `sides` names them in that order
+/// ("folder vs this run").
+pub fn differences(recorded: &Value, ours: &Value, sides: &str) -> String {
     let mut found = Vec::new();
     differences_into("", recorded, ours, &mut found);
     if found.is_empty() {
@@ -657,7 +687,7 @@ fn differences(recorded: &Value, ours: &Value) -> String {
     }
     let more = found.len().saturating_sub(DIFFERENCES_SHOWN);
     found.truncate(DIFFERENCES_SHOWN);
-    let mut text = format!("{} (folder vs this run)", found.join("; "));
+    let mut text = format!("{} ({sides})", found.join("; "));
     if more > 0 {
         text += &format!(" and {more} more differences");
     }
@@ -775,7 +805,7 @@ fn entries(dir: &Path) -> Result<Vec<String>> {
 }
 
 /// Removes a file or a folder with its contents, if there.
-fn remove_all(path: &Path) -> Result<()> {
+pub(super) fn remove_all(path: &Path) -> Result<()> {
     let removed = match fs::symlink_metadata(path) {
         Ok(m) if m.is_dir() => fs::remove_dir_all(path),
         Ok(_) => fs::remove_file(path),

@@ -33,7 +33,8 @@ impl Holder {
 /// Refuses the output `out` (given as `flag`, e.g. `--json`) if it is or lies inside a dataset
 /// or an export, or inside `source` (the dataset the command reads). `run --out` passes
 /// `own_dataset`: its `out` may be a dataset (its own, resumed or replaced as `run` decides),
-/// but not an export, and not inside either.
+/// but not an export, and not inside either; never `source` itself (`merge OUT PART` passes
+/// each part as `source`).
 pub fn refuse_data_target(
     out: &Path,
     flag: &str,
@@ -46,12 +47,12 @@ pub fn refuse_data_target(
     let source_id = source.and_then(identity);
     for folder in existing.ancestors() {
         let itself = folder == existing && existing_is_out(out, &existing);
-        let holder = holder(folder).or_else(|| {
-            (source_id.is_some() && identity(folder) == source_id).then_some(Holder::Dataset)
-        });
+        let is_source = source_id.is_some() && identity(folder) == source_id;
+        let holder = holder(folder).or_else(|| is_source.then_some(Holder::Dataset));
         match holder {
             None => {}
-            Some(Holder::Dataset) if itself && own_dataset => {}
+            // A command may write onto its own dataset, never onto the one it reads.
+            Some(Holder::Dataset) if itself && own_dataset && !is_source => {}
             Some(holder) => {
                 let place = if itself { "is" } else { "lies inside" };
                 bail!(

@@ -17,6 +17,7 @@ mod fault;
 mod folder;
 mod guard;
 mod lock;
+mod merge;
 mod meshes;
 mod openexr;
 mod writers;
@@ -25,8 +26,9 @@ pub use encode::{
     DEPTH_CHANNEL, ExrChannels, FLOW_CHANNELS, MAX_SEGMENTATION_ID, SCALAR_CHANNELS,
     VECTOR_CHANNELS, depth_exr, grey16_png, id_png, mask_png, rgb_png, rgb16_png, vector_exr,
 };
-pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, write_atomic};
+pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, differences, write_atomic};
 pub use guard::refuse_data_target;
+pub use merge::{Arrival, MergeTarget, hard_link_opened};
 pub use meshes::{MeshLayer, PointLayer};
 pub use writers::{
     DEFAULT_OUTPUTS, Flow, SAMPLE_WRITERS, SampleLayers, SampleWriter, ViewLayers, WRITERS, Writer,
