@@ -189,13 +189,15 @@ fn locks_are_told_apart_running_stale_and_orphaned() {
     .map(|(s, st, p)| (s.to_string(), st.to_string(), p))
     .collect();
     assert_eq!(states, expected);
-    // The running shard is not to be resubmitted; the stale and orphaned ones are.
+    // Held locks (running or orphaned) are not to be resubmitted (a run of them would be
+    // refused); the stale one is.
     assert_eq!(json["shards"][2]["running"], true);
-    assert_eq!(u64s(&json["resubmit"]), vec![0, 3]);
+    assert_eq!(json["shards"][0]["running"], true);
+    assert_eq!(u64s(&json["resubmit"]), vec![3]);
     let text = stdout(&status(&out, &[]));
     assert!(text.contains("lock 3/4: stale"), "{text}");
     assert!(
-        text.contains(&format!("pid {dead} no longer exists")),
+        text.contains(&format!("pid {dead} does not exist")),
         "{text}"
     );
 }

@@ -95,7 +95,8 @@ pub struct LockStatus {
     /// "K/N", as the file name says.
     pub shard: String,
     /// `running` (held now), `stale` (left, held by nobody) or `orphaned` (held, but the pid
-    /// it records no longer exists on this host).
+    /// it records does not exist on this host). An orphaned lock is still held, so its shard
+    /// counts as running: a run of it would be refused.
     pub state: &'static str,
     /// The pid the holder recorded.
     pub pid: Option<u32>,
@@ -155,7 +156,7 @@ pub fn status(root: &Path, shards: Option<u64>) -> Result<Status> {
         .collect();
     let running_now: Vec<(u64, u64)> = locks
         .iter()
-        .filter(|l| l.state == "running")
+        .filter(|l| l.state != "stale")
         .filter_map(|l| parse_shard(&l.shard))
         .collect();
     let shard_count = match shards {
@@ -296,7 +297,7 @@ fn lock_states(root: &Path) -> Result<Vec<LockStatus>> {
             (true, Some(pid)) if here && !pid_exists(pid) => (
                 "orphaned",
                 format!(
-                    "held, but pid {pid} no longer exists on this host (a process it started may hold it)"
+                    "held, but pid {pid} does not exist on this host (another pid namespace, e.g. a container, or a process it started holds it)"
                 ),
             ),
             (true, _) if here => ("running", format!("{recorded} (alive)")),
