@@ -147,6 +147,20 @@ enum Command {
         #[arg(required = true)]
         parts: Vec<PathBuf>,
     },
+    /// How far a dataset folder is: samples done per shard, shards running now (host, pid)
+    /// or left stale, which to resubmit, samples/s and time left. Exit code: 0 complete,
+    /// 2 incomplete and nothing running (resubmit), 3 incomplete and running (wait), 1 error.
+    Status {
+        /// The dataset folder (`shmgen run --out`), finished or not.
+        dataset: PathBuf,
+        /// Print the status as JSON.
+        #[arg(long)]
+        json: bool,
+        /// List shards of N (default: the count of the shards running, else of the lock files
+        /// left, else 1).
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+        shards: Option<u64>,
+    },
     /// Score predictions against a finished dataset: depth metrics (AbsRel, SqRel, RMSE,
     /// RMSE log, δ), Chamfer distance and F-score of surfaces, flow and displacement EPE.
     Eval {
@@ -336,6 +350,11 @@ fn execute(command: Command) -> Result<()> {
         }
         Command::Verify { dataset } => verify(&dataset),
         Command::Merge { out, parts } => merge(&out, &parts),
+        Command::Status {
+            dataset,
+            json,
+            shards,
+        } => status(&dataset, json, shards),
         Command::Eval {
             dataset,
             predictions,
@@ -428,4 +447,101 @@ fn verify(dataset: &std::path::Path) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// `shmgen status`: prints the status, then exits with its code (0 complete, 2 incomplete,
+/// 3 running); an error returns, to exit 1 like every command's.
+fn status(dataset: &std::path::Path, json: bool, shards: Option<u64>) -> Result<()> {
+    use std::io::Write;
+    let status = pipeline::status(dataset, shards)?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&status)?);
+    } else {
+        print!("{}", status_text(dataset, &status));
+    }
+    std::io::stdout().flush()?;
+    match status.exit_code() {
+        0 => Ok(()),
+        code => std::process::exit(i32::from(code)),
+    }
+}
+
+/// The status for people.
+fn status_text(dataset: &std::path::Path, s: &pipeline::Status) -> String {
+    use std::fmt::Write;
+    let mut t = String::new();
+    let state = match s.exit_code() {
+        pipeline::EXIT_COMPLETE => "complete",
+        pipeline::EXIT_RUNNING => "incomplete, running",
+        _ => "incomplete, nothing running",
+    };
+    let _ = writeln!(
+        t,
+        "{}: dataset {} (seed {}): {} of {} samples ({state})",
+        dataset.display(),
+        s.name,
+        s.seed,
+        s.done,
+        s.samples
+    );
+    if !s.shard_counts_seen.is_empty() {
+        let counts: Vec<String> = s.shard_counts_seen.iter().map(u64::to_string).collect();
+        let _ = writeln!(
+            t,
+            "shard counts used (lock files and marks in .partial/): {}",
+            counts.join(", ")
+        );
+    }
+    let _ = writeln!(t, "shards of {}:", s.shard_count);
+    for shard in &s.shards {
+        let _ = writeln!(
+            t,
+            "  {}/{}: {} of {}{}",
+            shard.index,
+            s.shard_count,
+            shard.done,
+            shard.expected,
+            if shard.running { " (running)" } else { "" }
+        );
+    }
+    for lock in &s.locks {
+        let _ = writeln!(t, "lock {}: {}: {}", lock.shard, lock.state, lock.note);
+    }
+    if s.unreadable_lines > 0 {
+        let _ = writeln!(
+            t,
+            "manifest.jsonl: {} lines ignored (torn by a killed run, or not parsing)",
+            s.unreadable_lines
+        );
+    }
+    if !s.resubmit.is_empty() {
+        let shards: Vec<String> = s
+            .resubmit
+            .iter()
+            .map(|k| format!("--shard {k}/{}", s.shard_count))
+            .collect();
+        let _ = writeln!(t, "resubmit: {}", shards.join(" "));
+        let _ = writeln!(t, "slurm: --array={}", s.resubmit_array);
+    }
+    if let Some(p) = &s.progress {
+        let _ = writeln!(
+            t,
+            "progress: {:.2} samples/s over the latest {} samples (file times), {} left at that rate; last sample {} ago",
+            p.samples_per_second,
+            p.measured_over,
+            duration(p.seconds_left),
+            duration(p.seconds_since_last)
+        );
+    }
+    t
+}
+
+/// Seconds as "1 h 02 min", "3 min 05 s" or "12 s".
+fn duration(seconds: f64) -> String {
+    let s = seconds.max(0.0).round() as u64;
+    match (s / 3600, s / 60 % 60, s % 60) {
+        (0, 0, s) => format!("{s} s"),
+        (0, m, s) => format!("{m} min {s:02} s"),
+        (h, m, _) => format!("{h} h {m:02} min"),
+    }
 }

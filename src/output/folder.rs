@@ -9,7 +9,7 @@
 //! so any found while holding it are stale and removed.
 
 use super::fault::{self, Fault};
-use super::lock::{Lock, recorded_holder};
+use super::lock::{Lock, is_held, open_no_wait, recorded_holder};
 use anyhow::{Context, Result, bail};
 use serde_json::Value;
 use std::collections::{BTreeSet, HashSet};
@@ -19,11 +19,15 @@ use std::io::{self, BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-const RUN_JSON: &str = "run.json";
-const MANIFEST: &str = "manifest.jsonl";
+pub(super) const RUN_JSON: &str = "run.json";
+pub(super) const MANIFEST: &str = "manifest.jsonl";
 pub(super) const STAGING: &str = ".partial";
 const SAMPLES: &str = "samples";
 const FOLDER_LOCK: &str = "folder.lock";
+/// Extension of the empty file `.partial/shard-K-of-N.done` a shard leaves when it ends
+/// before the dataset is complete: the shard count in use, for `status` (removed with
+/// `.partial/` once the dataset is complete, so finished folders do not depend on it).
+const DONE: &str = "done";
 /// Differences between two datasets listed in an error, at most.
 const DIFFERENCES_SHOWN: usize = 6;
 
@@ -225,8 +229,10 @@ impl DatasetFolder {
         self.remove_stale_temporaries()
     }
 
-    /// Takes the lock of shard K/N and its staging folder, refused if another process holds it.
+    /// Takes the lock of shard K/N and its staging folder, refused if another process holds it
+    /// or a shard of another count is being written (called under the folder lock).
     fn lease_shard(&mut self, (k, n): (u64, u64)) -> Result<()> {
+        self.refuse_other_shard_counts((k, n))?;
         let root = self.root.clone();
         let name = format!("shard-{k}-of-{n}");
         let lock_path = self.path(STAGING).join(format!("{name}.lock"));
@@ -288,19 +294,31 @@ impl DatasetFolder {
         Ok(())
     }
 
+    /// Running two shard counts at once renders every sample twice (K/N and K'/N' own
+    /// overlapping samples), so a shard is refused while a shard of another count is being
+    /// written. Checked under the folder lock, so two starting shards cannot both pass. Lock
+    /// files of another count that no process holds are what a finished or dead run left:
+    /// resuming with a new count is legitimate and skips their finished samples.
+    fn refuse_other_shard_counts(&self, (k, n): (u64, u64)) -> Result<()> {
+        for (lock_path, shard) in self.shard_locks()? {
+            let other = parse_shard(&shard).map(|(_, count)| count);
+            if other.is_none_or(|count| count == n) || !is_held_now(&lock_path)? {
+                continue;
+            }
+            let other = other.expect("checked above");
+            bail!(
+                "shard {k}/{n} refused: {} is being written in {other} shards (shard {shard}, {}); running {n} and {other} shards at once would render samples twice. Wait for that run to end (`shmgen status {}` says when), or run the missing shards of {other} (--shard K/{other})",
+                self.root.display(),
+                recorded_holder(&lock_path),
+                self.root.display()
+            );
+        }
+        Ok(())
+    }
+
     /// The shard lock files in staging, with the shard each names ("K/N").
     fn shard_locks(&self) -> Result<Vec<(PathBuf, String)>> {
-        let mut locks = Vec::new();
-        for name in entries(&self.path(STAGING))? {
-            if let Some(shard) = name
-                .strip_prefix("shard-")
-                .and_then(|s| s.strip_suffix(".lock"))
-            {
-                let shard = shard.replacen("-of-", "/", 1);
-                locks.push((self.path(STAGING).join(&name), shard));
-            }
-        }
-        Ok(locks)
+        shard_lock_files(&self.root)
     }
 
     /// A crash can leave a manifest line without its newline; end it so that the next
@@ -450,9 +468,18 @@ impl DatasetFolder {
     /// runs left (temporary files, staging of shards no process holds). Returns whether the
     /// dataset is complete.
     pub fn finish(mut self, total: u64) -> Result<bool> {
+        let marker = self
+            .shard
+            .as_ref()
+            .map(|lease| lease.staging.with_extension(DONE));
         self.release_shard()?;
         let setup = self.lock_folder()?;
         let complete = self.tidy(total)?;
+        // Until the dataset is complete, `status` learns the shard count from these.
+        if let Some(marker) = marker.filter(|_| !complete) {
+            File::create(&marker)
+                .map_err(|e| io_error(e, "marking the shard finished", &self.root))?;
+        }
         setup.remove()?;
         let _ = fs::remove_dir(self.path(STAGING));
         Ok(complete)
@@ -473,7 +500,11 @@ impl DatasetFolder {
         }
         for name in entries(&self.path(STAGING))? {
             let stem = name.strip_suffix(".lock").unwrap_or(&name);
-            if name != FOLDER_LOCK && !held.iter().any(|h| h == stem) {
+            let marks_a_shard = name.ends_with(&format!(".{DONE}"));
+            if name != FOLDER_LOCK
+                && !held.iter().any(|h| h == stem)
+                && (complete || !marks_a_shard)
+            {
                 remove_all(&self.path(STAGING).join(&name))?;
             }
         }
@@ -558,7 +589,7 @@ const RECORD_BYTES: u64 = 16 << 20;
 /// `samples/` and its folders, `.partial/` and its locks): a dataset received from someone
 /// else could otherwise point them elsewhere, and resuming it would append, rename or lock
 /// files outside it. The folder itself may be a link: the user named it.
-fn refuse_links(root: &Path) -> Result<()> {
+pub(super) fn refuse_links(root: &Path) -> Result<()> {
     let mut places: Vec<PathBuf> = [RUN_JSON, MANIFEST, SAMPLES, STAGING]
         .iter()
         .map(|name| root.join(name))
@@ -751,33 +782,106 @@ fn completed_in(root: &Path, (index, count): (u64, u64), total: u64) -> Result<S
     Ok(done)
 }
 
+/// The longest manifest line read (a sample's file list with its hashes: a few kB): a
+/// received manifest without newlines is refused, never read whole.
+const MANIFEST_LINE: u64 = 1 << 20;
+
 /// Calls `each` for every line of the manifest at `path` (none if it is missing), streaming:
-/// with (sample, byte offset, length) for a complete line that parses, else None.
-fn scan_manifest(path: &Path, mut each: impl FnMut(Option<(u64, u64, usize)>)) -> Result<()> {
+/// with (sample, byte offset, length) for a complete line that parses, else None. The
+/// manifest must be a regular file (a FIFO is refused, not waited on, and a link is not
+/// followed) with lines of at most `MANIFEST_LINE` bytes.
+pub(super) fn scan_manifest(
+    path: &Path,
+    mut each: impl FnMut(Option<(u64, u64, usize)>),
+) -> Result<()> {
     #[derive(serde::Deserialize)]
     struct Line {
         sample: u64,
     }
-    let file = match File::open(path) {
-        Ok(f) => f,
-        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+    let Some(file) = open_manifest(path)? else {
+        return Ok(());
     };
     let mut reader = BufReader::new(file);
     let (mut line, mut offset) = (Vec::new(), 0u64);
-    loop {
+    for number in 1u64.. {
         line.clear();
-        let len = reader
+        let len = (&mut reader)
+            .take(MANIFEST_LINE + 1)
             .read_until(b'\n', &mut line)
             .with_context(|| format!("reading {}", path.display()))?;
         if len == 0 {
-            return Ok(());
+            break;
+        }
+        if len as u64 > MANIFEST_LINE {
+            bail!(
+                "{}: line {number} is longer than {MANIFEST_LINE} bytes; not a manifest shmgen wrote",
+                path.display()
+            );
         }
         let parsed = serde_json::from_slice::<Line>(&line)
             .ok()
             .filter(|_| line.ends_with(b"\n"));
         each(parsed.map(|l| (l.sample, offset, len)));
         offset += len as u64;
+    }
+    Ok(())
+}
+
+/// The manifest at `path` opened for reading, None if missing; refused unless a regular file.
+pub(super) fn open_manifest(path: &Path) -> Result<Option<File>> {
+    let file = match open_no_wait(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+    };
+    if !file.metadata()?.is_file() {
+        bail!(
+            "{}: not a regular file; not a manifest shmgen wrote",
+            path.display()
+        );
+    }
+    Ok(Some(file))
+}
+
+/// The shard lock files in the staging folder of `root`, with the shard each names ("K/N").
+pub(super) fn shard_lock_files(root: &Path) -> Result<Vec<(PathBuf, String)>> {
+    shard_files(root, ".lock")
+}
+
+/// The shards that ended before the dataset was complete ("K/N"), from their marks.
+pub(super) fn shards_finished(root: &Path) -> Result<Vec<String>> {
+    let marks = shard_files(root, &format!(".{DONE}"))?;
+    Ok(marks.into_iter().map(|(_, shard)| shard).collect())
+}
+
+/// The files `shard-K-of-N{suffix}` in the staging folder of `root`, with "K/N".
+fn shard_files(root: &Path, suffix: &str) -> Result<Vec<(PathBuf, String)>> {
+    let staging = root.join(STAGING);
+    let mut found = Vec::new();
+    for name in entries(&staging)? {
+        if let Some(shard) = name
+            .strip_prefix("shard-")
+            .and_then(|s| s.strip_suffix(suffix))
+        {
+            let shard = shard.replacen("-of-", "/", 1);
+            found.push((staging.join(&name), shard));
+        }
+    }
+    Ok(found)
+}
+
+/// (K, N) of a shard named "K/N", if it is one (0 ≤ K < N).
+pub(super) fn parse_shard(shard: &str) -> Option<(u64, u64)> {
+    let (k, n) = shard.split_once('/')?;
+    let (k, n) = (k.parse::<u64>().ok()?, n.parse::<u64>().ok()?);
+    (k < n).then_some((k, n))
+}
+
+/// Whether a process holds the lock file at `path` now (false once it is removed).
+pub(super) fn is_held_now(path: &Path) -> Result<bool> {
+    match is_held(path) {
+        Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(false),
+        held => held.with_context(|| format!("probing the lock {}", path.display())),
     }
 }
 

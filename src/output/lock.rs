@@ -84,25 +84,74 @@ impl Lock {
     }
 }
 
-/// Who holds the lock file at `path`, as its holder recorded it ("pid 123 on host h").
+/// The most of a lock file read for its holder (ours hold "pid P on host H").
+const HOLDER_BYTES: u64 = 4096;
+
+/// Who holds the lock file at `path`, as its holder recorded it ("pid 123 on host h"). A lock
+/// file of a received folder is untrusted: read only if it is a regular file, not through a
+/// link, and at most `HOLDER_BYTES` of it.
 pub fn recorded_holder(path: &Path) -> String {
     let mut text = String::new();
-    match File::open(path).and_then(|mut f| f.read_to_string(&mut text)) {
+    let read = open_no_wait(path).and_then(|f| {
+        if !f.metadata()?.is_file() {
+            return Err(io::Error::other("not a regular file"));
+        }
+        f.take(HOLDER_BYTES).read_to_string(&mut text)
+    });
+    match read {
         Ok(_) if !text.trim().is_empty() => text.trim().to_string(),
         _ => "pid unknown".to_string(),
     }
 }
 
+/// Opens `path` for reading without following a link or waiting on a FIFO.
+pub(super) fn open_no_wait(path: &Path) -> io::Result<File> {
+    let mut options = OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(
+        &mut options,
+        libc::O_NOFOLLOW | libc::O_NONBLOCK,
+    );
+    options.open(path)
+}
+
 /// This process, as a lock holder: "pid 123 on host h".
 fn holder() -> String {
-    let host = fs::read_to_string("/proc/sys/kernel/hostname")
+    match this_host() {
+        Some(host) => format!("pid {} on host {host}", std::process::id()),
+        None => format!("pid {}", std::process::id()),
+    }
+}
+
+/// The name of the host this process runs on, as lock holders record it.
+pub fn this_host() -> Option<String> {
+    fs::read_to_string("/proc/sys/kernel/hostname")
         .or_else(|_| fs::read_to_string("/etc/hostname"))
         .ok()
         .map(|h| h.trim().to_string())
-        .filter(|h| !h.is_empty());
-    match host {
-        Some(host) => format!("pid {} on host {host}", std::process::id()),
-        None => format!("pid {}", std::process::id()),
+        .filter(|h| !h.is_empty())
+}
+
+/// The pid and host a holder recorded ("pid 123 on host h"), each if it was recorded.
+pub fn parse_holder(recorded: &str) -> (Option<u32>, Option<&str>) {
+    let rest = recorded.strip_prefix("pid ").unwrap_or("");
+    let (pid, host) = match rest.split_once(" on host ") {
+        Some((pid, host)) => (pid, Some(host)),
+        None => (rest, None),
+    };
+    (pid.trim().parse().ok(), host.map(str::trim))
+}
+
+/// Whether some process holds the lock on the existing file `path` (never created here). It
+/// is found out by taking the lock for an instant, so a process trying to take it at that very
+/// instant is refused: callers outside `DatasetFolder`'s folder lock accept that.
+pub fn is_held(path: &Path) -> io::Result<bool> {
+    let file = open_no_wait(path)?;
+    match file.try_lock() {
+        Ok(()) => Ok(false),
+        Err(TryLockError::WouldBlock) => Ok(true),
+        Err(TryLockError::Error(e)) => Err(e),
     }
 }
 
@@ -134,6 +183,11 @@ mod tests {
         first.record_holder().unwrap();
         assert!(Lock::acquire(&path, false).unwrap().is_none());
         assert!(recorded_holder(&path).starts_with("pid "));
+        assert!(is_held(&path).unwrap());
+        let recorded = recorded_holder(&path);
+        let (pid, host) = parse_holder(&recorded);
+        assert_eq!(pid, Some(std::process::id()));
+        assert_eq!(host.map(str::to_string), this_host());
         // A process that opened the file before its holder removed it must not end up
         // holding a lock on the removed file.
         let stale = File::open(&path).unwrap();
@@ -141,5 +195,8 @@ mod tests {
         let second = Lock::acquire(&path, false).unwrap().unwrap();
         assert!(!is_at(&stale, &path));
         assert!(is_at(second.file(), &path));
+        drop(second);
+        assert!(!is_held(&path).unwrap());
+        assert_eq!(parse_holder("pid unknown"), (None, None));
     }
 }

@@ -8,7 +8,8 @@
 //! is written under a temporary name and renamed into place, so a killed run never leaves a
 //! truncated file under a final name, and a sample appears in the manifest only after all of
 //! its files are complete. File locks keep one process per shard and let shards share a
-//! folder; whatever a crash leaves is ignored, then removed (`folder`). `fault` injects
+//! folder; whatever a crash leaves is ignored, then removed (`folder`); `status` reads that
+//! state (samples done per shard, locks held or left) without writing. `fault` injects
 //! crashes and full disks for the robustness tests. `guard` refuses any output path that is
 //! or lies inside a dataset or an export, for every command that writes.
 
@@ -20,6 +21,7 @@ mod lock;
 mod merge;
 mod meshes;
 mod openexr;
+mod status;
 mod writers;
 
 pub use encode::{
@@ -30,6 +32,7 @@ pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, differences, w
 pub use guard::refuse_data_target;
 pub use merge::{Arrival, MergeTarget, hard_link_opened};
 pub use meshes::{MeshLayer, PointLayer};
+pub use status::{EXIT_COMPLETE, EXIT_INCOMPLETE, EXIT_RUNNING, Status, status};
 pub use writers::{
     DEFAULT_OUTPUTS, Flow, SAMPLE_WRITERS, SampleLayers, SampleWriter, ViewLayers, WRITERS, Writer,
     output_names,
