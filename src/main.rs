@@ -422,17 +422,18 @@ fn merge(out: &std::path::Path, parts: &[PathBuf]) -> Result<()> {
 fn verify(dataset: &std::path::Path) -> Result<()> {
     let started = std::time::Instant::now();
     let verified = shmgen::dataset::verify(dataset)?;
-    for failure in &verified.failed {
-        eprintln!("{failure}");
+    for line in verified.failed.iter().chain(&verified.extra) {
+        eprintln!("{line}");
     }
     let gb = verified.bytes as f64 / 1e9;
     let seconds = started.elapsed().as_secs_f64();
-    if !verified.failed.is_empty() {
+    if !verified.failed.is_empty() || !verified.extra.is_empty() {
         anyhow::bail!(
-            "{}: {} of {} files differ from what manifest.jsonl records (listed above)",
+            "{}: {} of {} files differ from what manifest.jsonl records, and {} entries it does not list are there (listed above)",
             dataset.display(),
             verified.failed.len(),
-            verified.files
+            verified.files,
+            verified.extra.len()
         );
     }
     if verified.unrecorded > 0 {

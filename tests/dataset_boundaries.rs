@@ -258,6 +258,53 @@ fn a_prediction_declaring_a_huge_image_is_refused_from_its_header() {
 }
 
 #[test]
+fn verify_names_every_entry_the_manifest_does_not_list() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=1", "views=1"]);
+    let d = s(&data);
+    common::ok(shmgen(&args(&["verify", &d])));
+    // A copy can gain files: a stray view, a note at the top, a link, a FIFO. None of them is
+    // part of the dataset, and a verified copy must be exactly the dataset.
+    fs::write(data.join("samples/0000/000000_07.rgb.png"), b"not ours").unwrap();
+    fs::write(data.join("notes.txt"), b"hello").unwrap();
+    symlink("/etc/passwd", data.join("samples/link.png")).unwrap();
+    let fifo = data.join("samples/0000/pipe");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    let with_fifo = made.is_ok_and(|status| status.success());
+    let extra = if with_fifo { 4 } else { 3 };
+    let err = refused(
+        &["verify", &d],
+        &[&format!(
+            "0 of 4 files differ from what manifest.jsonl records, and {extra} entries"
+        )],
+    );
+    for line in [
+        "samples/0000/000000_07.rgb.png: a file manifest.jsonl does not list",
+        "notes.txt: a file manifest.jsonl does not list",
+        "samples/link.png: a link (not followed)",
+    ] {
+        assert!(err.contains(line), "{line} missing from:\n{err}");
+    }
+    if with_fifo {
+        assert!(
+            err.contains("samples/0000/pipe: not a regular file"),
+            "{err}"
+        );
+    }
+    for name in [
+        "samples/0000/000000_07.rgb.png",
+        "notes.txt",
+        "samples/link.png",
+    ] {
+        fs::remove_file(data.join(name)).unwrap();
+    }
+    if with_fifo {
+        fs::remove_file(&fifo).unwrap();
+    }
+    common::ok(shmgen(&args(&["verify", &d])));
+}
+
+#[test]
 fn the_manifest_records_every_files_size_and_hash_and_verify_checks_them() {
     let dir = tempfile::tempdir().unwrap();
     let data = quickstart(dir.path(), "data", &["samples=2", "views=2"]);

@@ -133,6 +133,9 @@ pub struct Verified {
     pub unrecorded: u64,
     /// Each file that failed, with why.
     pub failed: Vec<String>,
+    /// Each entry of the folder the manifest does not list (a file no sample owns, a link,
+    /// a FIFO), with what it is.
+    pub extra: Vec<String>,
 }
 
 /// Reads every file the finished dataset at `root` lists, as an untrusted reader would, and
@@ -156,7 +159,10 @@ pub fn verify(root: &Path) -> Result<Verified> {
             }
         })
         .collect();
-    let mut verified = Verified::default();
+    let mut verified = Verified {
+        extra: unlisted_entries(root, &files)?,
+        ..Verified::default()
+    };
     for (len, unrecorded, failure) in results {
         verified.files += 1;
         verified.bytes += len;
@@ -164,4 +170,64 @@ pub fn verify(root: &Path) -> Result<Verified> {
         verified.failed.extend(failure);
     }
     Ok(verified)
+}
+
+/// Files `run` writes beside the samples; `.partial/` holds the work of unfinished shards.
+const OWN_FILES: [&str; 2] = ["run.json", "manifest.jsonl"];
+const UNFINISHED_WORK: &str = ".partial";
+/// How deep and how many entries the walk goes: a dataset has `samples/NNNN/file`, so
+/// anything deeper or larger than this is not one, and the walk stops rather than run on.
+const MAX_DEPTH: usize = 8;
+const MAX_ENTRIES: usize = 50_000_000;
+
+/// Every entry under `root` that is not a listed file, `run.json`, `manifest.jsonl` or in
+/// `.partial/`, with what it is. Links are reported, never followed.
+fn unlisted_entries(root: &Path, listed: &[&String]) -> Result<Vec<String>> {
+    let listed: std::collections::HashSet<&str> =
+        listed.iter().map(|f| f.as_str()).chain(OWN_FILES).collect();
+    let mut extra = Vec::new();
+    let mut pending = vec![(root.to_path_buf(), String::new(), 0)];
+    let mut seen = 0usize;
+    while let Some((folder, prefix, depth)) = pending.pop() {
+        let entries =
+            std::fs::read_dir(&folder).map_err(|e| anyhow::anyhow!("{}: {e}", folder.display()))?;
+        for entry in entries {
+            let entry = entry.map_err(|e| anyhow::anyhow!("{}: {e}", folder.display()))?;
+            seen += 1;
+            if seen > MAX_ENTRIES {
+                bail!(
+                    "{}: more than {MAX_ENTRIES} entries; not a dataset",
+                    root.display()
+                );
+            }
+            let name = entry.file_name().to_string_lossy().into_owned();
+            let relative = format!("{prefix}{name}");
+            // DirEntry's type is the entry's own (lstat): a link is a link here.
+            let kind = entry
+                .file_type()
+                .map_err(|e| anyhow::anyhow!("{relative}: {e}"))?;
+            if kind.is_dir() {
+                if depth == 0 && name == UNFINISHED_WORK {
+                    continue;
+                }
+                if depth + 1 >= MAX_DEPTH {
+                    extra.push(format!("{relative}/: a folder deeper than any dataset has"));
+                } else {
+                    pending.push((entry.path(), format!("{relative}/"), depth + 1));
+                }
+            } else if kind.is_symlink() {
+                extra.push(format!(
+                    "{relative}: a link (not followed), which no dataset has"
+                ));
+            } else if !kind.is_file() {
+                extra.push(format!(
+                    "{relative}: not a regular file (a FIFO, socket or device)"
+                ));
+            } else if !listed.contains(relative.as_str()) {
+                extra.push(format!("{relative}: a file manifest.jsonl does not list"));
+            }
+        }
+    }
+    extra.sort();
+    Ok(extra)
 }
