@@ -7,8 +7,8 @@
 //! (one thread), the material evaluations per sample (pixels that meet a surface, or the
 //! cache's lattice points: a count independent of the machine), and the RGB error
 //! against the reference over the structure's pixels (RMS and 99th percentile of the largest
-//! channel difference, 8-bit levels, the worst view); then whole runs (every default output
-//! written, every core) in pairs/s under `shading: "per_pixel"` and `"cached"`.
+//! channel difference, 8-bit levels, the worst view). Whole runs in pairs/s, every default
+//! output written, are the pipeline benchmark's rows (`cargo bench --bench pipeline`).
 //! Then the paper's seven prompts on the gallery beam and silo (scripts/prompt_gallery.rhai)
 //! with sun, sky, shadows and a sky backdrop, against the same scenes in a plain colour: the
 //! trace and RGB time per view and the share of pixels the structure covers. Asserts nothing.
@@ -18,12 +18,13 @@
 //!     SHMGEN_BENCH_SAMPLES=3 SHMGEN_BENCH_VIEWS=6 ...            (fewer samples and views)
 
 use shmgen::build::BuiltSample;
+use shmgen::materials::cache::RgbError;
 use shmgen::materials::{Material, Shader};
 use shmgen::output::ViewLayers;
-use shmgen::pipeline::{self, RunOptions, SampleRenderer, Shard, prepare};
+use shmgen::pipeline::{SampleRenderer, prepare};
 use shmgen::recipe::Recipe;
 use shmgen::render::NO_HIT;
-use shmgen::scene::{Shading, Structure};
+use shmgen::scene::Structure;
 use shmgen::seeds::{Scope, Stream};
 use std::path::Path;
 use std::time::Instant;
@@ -56,14 +57,13 @@ fn cache_table() {
     let scripts = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts");
     let samples = setting("SHMGEN_BENCH_SAMPLES", 6);
     let views = setting("SHMGEN_BENCH_VIEWS", 20) as u32;
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     println!(
-        "material cache: 960×960, {samples} samples × {views} views, trace + RGB per view on 1 thread; runs on {cores} threads"
+        "material cache: 960×960, {samples} samples × {views} views, trace + RGB per view on 1 thread"
     );
     println!(
-        "| job | texel bound | ms/view | evaluations/sample | RMS (worst view) | p99 (worst view) |"
+        "| job | texel bound | evaluations/sample | ms/view | views/s | RMS (worst view) | p99 (worst view) |"
     );
-    println!("|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|");
     let jobs = [
         ("A1", "a1_beams.rhai", samples.max(3)),
         ("A2", "a2_silo.rhai", samples.clamp(1, 3)),
@@ -90,7 +90,7 @@ fn cache_table() {
             for fraction in FRACTIONS {
                 let mut times = Vec::new();
                 let mut points = Vec::new();
-                let (mut rms, mut p99) = (0f64, 0f64);
+                let mut worst = RgbError::default();
                 for (k, (sample, truth)) in built.iter().zip(&reference).enumerate() {
                     let r = render_all(&recipe, sample, views, fraction);
                     if let (Ok(dir), Some(f)) = (std::env::var("SHMGEN_BENCH_IMAGES"), fraction) {
@@ -104,37 +104,23 @@ fn cache_table() {
                     times.extend(r.ms);
                     points.push(r.points as f64);
                     for ((image, want), hits) in r.images.iter().zip(truth).zip(&r.hits) {
-                        let (e_rms, e_99) = error(image, want, hits);
-                        rms = rms.max(e_rms);
-                        p99 = p99.max(e_99);
+                        worst = worst.worst(RgbError::of(image, want, hits));
                     }
                 }
                 let name = match fraction {
                     None => "per pixel (reference)".to_string(),
                     Some(f) => format!("{f}"),
                 };
+                let ms = median(times);
                 println!(
-                    "| {job} | {name} | {:.1} | {:.0} | {rms:.2} | {p99:.1} |",
-                    median(times),
-                    median(points)
+                    "| {job} | {name} | {:.0} | {ms:.1} | {:.1} | {:.2} | {} |",
+                    median(points),
+                    1e3 / ms,
+                    worst.rms,
+                    worst.p99
                 );
             }
         });
-        for shading in [Shading::PerPixel, Shading::Cached] {
-            let mut recipe = Recipe::load(&scripts.join(script), &sets).expect("recipe loads");
-            recipe.dataset.shading = shading;
-            let rates: Vec<f64> = (0..setting("SHMGEN_BENCH_RUNS", 3))
-                .map(|_| run_rate(&recipe, cores))
-                .collect();
-            println!(
-                "| {job} whole run, {cores} threads, shading: {} | {:.1} pairs/s |",
-                match shading {
-                    Shading::Cached => "\"cached\" (default)",
-                    Shading::PerPixel => "\"per_pixel\"",
-                },
-                median(rates)
-            );
-        }
     }
 }
 
@@ -153,20 +139,6 @@ fn save_comparison(dir: &Path, name: &str, reference: &[u8], cached: &[u8]) {
     std::fs::create_dir_all(dir).expect("image folder");
     out.save(dir.join(format!("{name}.png")))
         .expect("image written");
-}
-
-/// One whole run into a fresh folder: pairs per second.
-fn run_rate(recipe: &Recipe, threads: usize) -> f64 {
-    let dir = tempfile::tempdir().unwrap();
-    let options = RunOptions {
-        out: dir.path().join("ds"),
-        threads: Some(threads),
-        shard: Shard::WHOLE,
-        force: false,
-        quiet: true,
-    };
-    let summary = pipeline::run(recipe, &options).expect("run");
-    summary.pairs as f64 / summary.seconds
 }
 
 /// What rendering a sample's views gave.
@@ -214,24 +186,6 @@ fn render_all(
         Some(_) => renderer.cached_points(),
     };
     out
-}
-
-/// RMS and 99th percentile, over the pixels that see a surface, of the largest channel
-/// difference between two sRGB images, in 8-bit levels.
-fn error(a: &[u8], b: &[u8], hits: &[bool]) -> (f64, f64) {
-    let mut d: Vec<u8> = a
-        .chunks(3)
-        .zip(b.chunks(3))
-        .zip(hits)
-        .filter(|(_, hit)| **hit)
-        .map(|((p, q), _)| (0..3).map(|k| p[k].abs_diff(q[k])).max().unwrap_or(0))
-        .collect();
-    if d.is_empty() {
-        return (0.0, 0.0);
-    }
-    let rms = (d.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / d.len() as f64).sqrt();
-    d.sort_unstable();
-    (rms, f64::from(d[(d.len() * 99 / 100).min(d.len() - 1)]))
 }
 
 /// The paper's prompts on the gallery's structures, textured against plain.

@@ -344,6 +344,52 @@ impl FieldCache {
     }
 }
 
+/// How far an RGB image is from a reference over the pixels that see a surface: the largest
+/// channel difference of each pixel, in 8-bit levels.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RgbError {
+    /// Root mean square.
+    pub rms: f64,
+    /// 99th percentile.
+    pub p99: u8,
+    /// Pixels compared.
+    pub pixels: usize,
+}
+
+impl RgbError {
+    /// `image` against `reference` (sRGB, three bytes a pixel) where `seen` is true.
+    pub fn of(image: &[u8], reference: &[u8], seen: &[bool]) -> RgbError {
+        let mut d: Vec<u8> = image
+            .chunks(3)
+            .zip(reference.chunks(3))
+            .zip(seen)
+            .filter(|(_, seen)| **seen)
+            .map(|((p, q), _)| (0..3).map(|k| p[k].abs_diff(q[k])).max().unwrap_or(0))
+            .collect();
+        if d.is_empty() {
+            return RgbError::default();
+        }
+        let squares: f64 = d.iter().map(|&x| f64::from(x).powi(2)).sum();
+        d.sort_unstable();
+        // Nearest rank: the ⌈0.99 n⌉-th smallest.
+        let rank = (d.len() * 99).div_ceil(100);
+        RgbError {
+            rms: (squares / d.len() as f64).sqrt(),
+            p99: d[rank - 1],
+            pixels: d.len(),
+        }
+    }
+
+    /// The worse of two, measure by measure (the worst view of several).
+    pub fn worst(self, other: RgbError) -> RgbError {
+        RgbError {
+            rms: self.rms.max(other.rms),
+            p99: self.p99.max(other.p99),
+            pixels: self.pixels.min(other.pixels),
+        }
+    }
+}
+
 /// ⌊x⌋ and x − ⌊x⌋, by conversion (`f64::floor` is a library call on the x86-64 baseline);
 /// |x| stays far below 2⁶³ (lattice indices of a structure's surface).
 fn floor(x: f64) -> (i64, f64) {
@@ -511,6 +557,28 @@ mod tests {
         for bad in [0.0, -1.0, f64::NAN, f64::INFINITY, 1e300] {
             assert_eq!(cache.levels(&plane, bad), None, "{bad}");
         }
+    }
+
+    #[test]
+    fn rgb_error_is_the_largest_channel_difference_over_the_seen_pixels() {
+        // 100 seen pixels: 98 equal, one off by 3 in green, one by 10 in blue and 2 in red;
+        // an unseen pixel off by 200 does not count.
+        let reference = vec![50u8; 101 * 3];
+        let mut image = reference.clone();
+        image[3 * 7 + 1] += 3;
+        image[3 * 9] += 2;
+        image[3 * 9 + 2] += 10;
+        image[3 * 100] += 200;
+        let mut seen = vec![true; 101];
+        seen[100] = false;
+        let e = RgbError::of(&image, &reference, &seen);
+        assert_eq!(e.pixels, 100);
+        assert!((e.rms - ((9.0 + 100.0) / 100.0f64).sqrt()).abs() < 1e-12);
+        assert_eq!(e.p99, 3, "the 99th of 100 sorted differences");
+        // One pixel: every percentile is its difference.
+        let one = RgbError::of(&image[27..30], &reference[27..30], &[true]);
+        assert_eq!((one.p99, one.rms), (10, 10.0));
+        assert_eq!(RgbError::of(&reference, &reference, &seen).rms, 0.0);
     }
 
     #[test]
