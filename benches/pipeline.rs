@@ -242,6 +242,7 @@ fn surfaces_of(sample: &BuiltSample) -> SampleSurfaces<'_> {
         piece: &sample.piece,
         pieces: &sample.pieces,
         shaders: &sample.shaders,
+        cache: None,
     }
 }
 

@@ -960,6 +960,7 @@ fn edge_jumps(material: &Material) -> Jumps {
         piece: &piece,
         pieces: &pieces,
         shaders: &shaders,
+        cache: None,
     };
     let mut jumps = Jumps::default();
     for (t1, t2, a, b) in shared_edges(&built.mesh) {
@@ -1088,6 +1089,7 @@ fn texture_moves_with_the_material_when_the_beam_bends() {
             piece: &piece,
             pieces: &pieces,
             shaders: &shaders,
+            cache: None,
         };
         let straight_surfaces = SampleSurfaces {
             mesh: &straight.mesh,
@@ -1095,6 +1097,7 @@ fn texture_moves_with_the_material_when_the_beam_bends() {
             piece: &piece,
             pieces: &pieces,
             shaders: &shaders,
+            cache: None,
         };
         let (mut worst, mut swims) = (0.0f64, 0);
         for t in 0..bent.mesh.triangles.len() {

@@ -1074,6 +1074,7 @@ fn only_untextured_surfaces_without_gloss_are_matte() {
         piece: &[0, 1, 2],
         pieces: &pieces,
         shaders: &shaders,
+        cache: None,
     };
     assert!(surfaces.matte(0));
     assert!(!surfaces.matte(1), "a glint is not the same everywhere");

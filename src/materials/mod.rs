@@ -7,13 +7,15 @@
 //! *undeformed* surface, in metres, so textures move with the deformation and procedural
 //! patterns are continuous across every edge (moss, which prefers upward faces, and image
 //! textures, projected along the axis nearest each face, change at creases as real ones do);
-//! `image` samples textures made elsewhere; `light` holds the light and backdrops a surface is
+//! `cache` keeps a sample's evaluated fields in surface space for all its views; `image`
+//! samples textures made elsewhere; `light` holds the light and backdrops a surface is
 //! seen under, `environment` the maps of light from every direction.
 //!
 //! Owns: how things look — the material vocabulary, the generators, texture images, and the
 //! light and backdrop values shading uses. Must not touch: geometry, cameras, recipes or
 //! writing files.
 
+pub mod cache;
 pub mod environment;
 pub mod ground;
 pub mod image;

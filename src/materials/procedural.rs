@@ -266,7 +266,8 @@ impl Shader {
             }
             Texture::Procedural => at.base(m.base, base),
         };
-        if m.texture == Texture::Procedural {
+        // `matches!`, not `==`: comparing the enum compares an image's strings at every point.
+        if matches!(m.texture, Texture::Procedural) {
             at.exposure(&mut s);
         }
         let calm = m

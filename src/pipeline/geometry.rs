@@ -88,6 +88,8 @@ impl SampleGeometry<'_> {
             piece: &sample.piece,
             pieces: &sample.pieces,
             shaders: &sample.shaders,
+            // Points take their colours from the material itself, as they always have.
+            cache: None,
         };
         let spacing = (self.mesh.area() / drawn.len().max(1) as f64).sqrt();
         drawn

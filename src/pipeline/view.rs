@@ -8,6 +8,7 @@ use crate::augment::defocus_by_depth;
 use crate::build::{BackdropDraw, BuiltSample, draw_backdrop};
 use crate::cameras::{Camera, ViewDraw};
 use crate::materials::Backdrop;
+use crate::materials::cache::FieldCache;
 use crate::output::{Flow, ViewLayers};
 use crate::render::{
     Deformed, GBuffer, ImageVisibility, NO_HIT, SampleSurfaces, SecondaryRays, Shaded, TraceMesh,
@@ -112,7 +113,11 @@ pub struct SampleRenderer<'a> {
     dataset: &'a DatasetSpec,
     sample: &'a BuiltSample,
     trace_mesh: Arc<TraceMesh>,
-    surfaces: SampleSurfaces<'a>,
+    /// The material fields the views have asked for so far, when they are cached in surface
+    /// space (`with_texel_fraction`); dropped with the renderer, so with its sample. Runs
+    /// evaluate materials at every pixel under either `shading`: no texel bound made the
+    /// cache pay at an error worth having (docs/materials.md, "Caching material fields").
+    cache: Option<FieldCache>,
     rest: OnceLock<Traced>,
 }
 
@@ -176,14 +181,36 @@ impl<'a> SampleRenderer<'a> {
             dataset,
             sample,
             trace_mesh,
-            surfaces: SampleSurfaces {
-                mesh: &sample.mesh,
-                rest: &sample.rest,
-                piece: &sample.piece,
-                pieces: &sample.pieces,
-                shaders: &sample.shaders,
-            },
+            cache: None,
             rest: OnceLock::new(),
+        }
+    }
+
+    /// The same renderer with its materials cached in surface space at texel bound `fraction`
+    /// (see `FieldCache::new`), or evaluated at every pixel (None, what runs do): for the
+    /// benchmark and tests that measure the cache against the per-pixel reference.
+    pub fn with_texel_fraction(self, fraction: Option<f64>) -> Self {
+        SampleRenderer {
+            cache: fraction.map(FieldCache::new),
+            ..self
+        }
+    }
+
+    /// Lattice points of material fields the cache holds (0 per pixel).
+    pub fn cached_points(&self) -> usize {
+        self.cache.as_ref().map_or(0, FieldCache::points)
+    }
+
+    /// The surfaces of the loaded mesh, with the sample's cache.
+    fn surfaces(&self) -> SampleSurfaces<'_> {
+        let s = self.sample;
+        SampleSurfaces {
+            mesh: &s.mesh,
+            rest: &s.rest,
+            piece: &s.piece,
+            pieces: &s.pieces,
+            shaders: &s.shaders,
+            cache: self.cache.as_ref(),
         }
     }
 
@@ -397,7 +424,7 @@ impl ViewLayers for RenderedView<'_> {
             .rgb
             .get_or_init(|| {
                 let r = self.renderer;
-                self.shaded(&self.gbuffer, &r.trace_mesh, &r.surfaces)
+                self.shaded(&self.gbuffer, &r.trace_mesh, &r.surfaces())
             })
             .rgb
     }
@@ -425,7 +452,7 @@ impl ViewLayers for RenderedView<'_> {
     fn cracks(&self) -> &[u8] {
         self.cracks.get_or_init(|| {
             let r = self.renderer;
-            r.surfaces
+            r.surfaces()
                 .crack_mask(self.structure(), &self.camera, &r.trace_mesh)
         })
     }
@@ -485,7 +512,7 @@ impl ViewLayers for RenderedView<'_> {
                 // The same materials, read at the same undeformed points: only the shape differs.
                 let surfaces = SampleSurfaces {
                     mesh: &rest.mesh,
-                    ..r.surfaces
+                    ..r.surfaces()
                 };
                 self.shaded(self.rest_gbuffer(), &rest.trace_mesh, &surfaces)
             })

@@ -1,13 +1,15 @@
 //! The surfaces of a sample's mesh: from a hit on the deformed mesh back to the undeformed
 //! surface, where the structure's material is evaluated. Textures therefore stay attached to
 //! the material as the structure bends, and a shared edge reads the same point from either
-//! side.
+//! side. With a sample's `FieldCache`, the material is read from the fields it cached on the
+//! triangle's plane instead of evaluated at every pixel.
 
 use super::fields::carried;
 use super::shade::{Surfaces, hit_geometry};
 use super::trace::{GBuffer, NO_HIT, TraceMesh};
 use crate::cameras::Camera;
 use crate::geometry::Mesh;
+use crate::materials::cache::{FieldCache, Plane};
 use crate::materials::{Grain, Shader, Surface, SurfacePoint};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -24,6 +26,9 @@ pub struct SampleSurfaces<'a> {
     pub pieces: &'a [(u32, Grain)],
     /// The material of every structure, with the sample's random choices.
     pub shaders: &'a [Shader],
+    /// The sample's cached material fields; None evaluates the material at every point (the
+    /// per-pixel reference).
+    pub cache: Option<&'a FieldCache>,
 }
 
 impl SampleSurfaces<'_> {
@@ -83,7 +88,18 @@ impl Surfaces for SampleSurfaces<'_> {
             // A plain colour needs no point on the undeformed surface.
             return shader.untextured();
         }
-        shader.surface(&self.rest_point(tri, p, footprint), grain)
+        let point = self.rest_point(tri, p, footprint);
+        let plane = self.cache.and_then(|cache| {
+            let plane = cache.plane(tri, || {
+                let corner = self.rest[self.mesh.triangles[tri as usize][0] as usize];
+                Plane::new(self.piece[tri as usize], point.rest_normal, corner)
+            })?;
+            Some((cache, plane))
+        });
+        match plane {
+            Some((cache, plane)) => cache.surface(shader, grain, &plane, point.rest, footprint),
+            None => shader.surface(&point, grain),
+        }
     }
 
     fn flat(&self, tri: u32) -> [f64; 3] {

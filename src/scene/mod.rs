@@ -82,6 +82,10 @@ pub struct DatasetSpec {
     pub light: LightSpec,
     /// Anti-alias RGB where the image changes (silhouettes, creases); labels never are.
     pub antialias: bool,
+    /// How RGB evaluates what does not depend on the view: once per sample, shared by its views
+    /// (`cached`), or at every pixel (`per_pixel`, the reference). Materials are evaluated at
+    /// every pixel under either (measured in docs/materials.md). Labels are the same either way.
+    pub shading: Shading,
     /// Augmented copies of every view.
     pub augment: AugmentSpec,
     /// What the camera's sensor and lens do to every clean image (vignetting, noise, blur,
@@ -95,6 +99,35 @@ pub struct DatasetSpec {
     /// The ground the structures stand on, if any (none by default, as in the paper).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ground: Option<GroundSpec>,
+}
+
+/// How RGB evaluates the materials and the light that does not depend on the view (the
+/// recipe's `dataset.shading`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Shading {
+    /// What does not depend on the view once per sample, in surface space, shared by its views
+    /// and read back filtered; the materials still at every pixel, where a cache of their
+    /// fields was measured not to pay (docs/materials.md, "Caching material fields").
+    #[default]
+    Cached,
+    /// Everything at every pixel of every view: the reference the cached terms are measured
+    /// against.
+    PerPixel,
+}
+
+impl Shading {
+    /// The recipe's words for the values.
+    pub const NAMES: [&str; 2] = ["cached", "per_pixel"];
+
+    /// The value named `name` (one of `NAMES`).
+    pub fn named(name: &str) -> Option<Shading> {
+        match name {
+            "cached" => Some(Shading::Cached),
+            "per_pixel" => Some(Shading::PerPixel),
+            _ => None,
+        }
+    }
 }
 
 /// The axes surface normals are written in.
