@@ -15,12 +15,14 @@
 //! nodes exert on the member, in local axes, [N, Vy, Vz, T, My, Mz] at the start then the end.
 
 mod element;
+mod labels;
 mod results;
 mod section;
 mod solve;
 #[cfg(test)]
 mod tests;
 
+pub use labels::FrameLabels;
 pub use results::{FrameSolution, MemberResult, NodeResult, Reaction};
 pub use section::SpaceSection;
 pub use solve::{DENSE_MAX_DOFS, Solver};
