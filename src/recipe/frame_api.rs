@@ -55,6 +55,18 @@ fn frame_options(f: &mut FrameSpec, map: Map) -> OptResult<()> {
     o.finish()
 }
 
+/// Applies `change` to the frame, which now points errors found when analysing it at this
+/// call, and returns the frame (so calls chain).
+fn changed(
+    ctx: &NativeCallContext,
+    f: &mut FrameSpec,
+    change: impl FnOnce(&mut FrameSpec) -> OptResult<()>,
+) -> Fallible<FrameSpec> {
+    f.declared_at = Some(call_site(ctx));
+    change(f)?;
+    Ok(f.clone())
+}
+
 /// Node index `n` of `f`, checked.
 fn node(f: &FrameSpec, n: INT, what: &str) -> OptResult<usize> {
     usize::try_from(n)
@@ -197,58 +209,58 @@ fn register_structure(engine: &mut Engine) {
     engine.register_fn(
         "support",
         |ctx: NativeCallContext, f: &mut FrameSpec, n: INT, kind: ImmutableString| -> Fallible<FrameSpec> {
-            f.declared_at = Some(call_site(&ctx));
-            let n = node(f, n, "support")?;
-            let s = match kind.as_str() {
-                "fixed" => NodeSupport::fixed(n),
-                "pinned" => NodeSupport::pinned(n),
-                "roller" => NodeSupport::roller(n),
-                other => {
-                    return fail(format!(
+            changed(&ctx, f, |f| {
+                let n = node(f, n, "support")?;
+                f.model.supports.push(match kind.as_str() {
+                    "fixed" => NodeSupport::fixed(n),
+                    "pinned" => NodeSupport::pinned(n),
+                    "roller" => NodeSupport::roller(n),
+                    other => return Err(format!(
                         "support kind \"{other}\" is unknown (known: \"fixed\", \"pinned\", \"roller\" (uz held); springs: .spring(node, [kx, ky, kz, krx, kry, krz]))"
-                    ));
-                }
-            };
-            f.model.supports.push(s);
-            Ok(f.clone())
+                    )),
+                });
+                Ok(())
+            })
         },
     );
     engine.register_fn(
         "spring",
         |ctx: NativeCallContext, f: &mut FrameSpec, n: INT, k: Array| -> Fallible<FrameSpec> {
-            f.declared_at = Some(call_site(&ctx));
-            let n = node(f, n, "spring")?;
-            let [a, b, c, d, e, g] = k.as_slice() else {
-                return fail(format!(
-                    "spring stiffnesses must be [kx, ky, kz, krx, kry, krz] (N/m, N·m/rad), not {} values",
-                    k.len()
-                ));
-            };
-            let mut s = NodeSupport::new(n, "spring", [false; 6]);
-            for (i, v) in [a, b, c, d, e, g].into_iter().enumerate() {
-                let v = number(v, "spring stiffness")?;
-                if !(v >= 0.0) {
-                    return fail(format!("spring stiffness {v} must not be negative"));
+            changed(&ctx, f, |f| {
+                let n = node(f, n, "spring")?;
+                if k.len() != 6 {
+                    return Err(format!(
+                        "spring stiffnesses must be [kx, ky, kz, krx, kry, krz] (N/m, N·m/rad), not {} values",
+                        k.len()
+                    ));
                 }
-                s.springs[i] = v;
-            }
-            f.model.supports.push(s);
-            Ok(f.clone())
+                let mut s = NodeSupport::new(n, "spring", [false; 6]);
+                for (i, v) in k.iter().enumerate() {
+                    let v = number(v, "spring stiffness")?;
+                    if !(v >= 0.0) {
+                        return Err(format!("spring stiffness {v} must not be negative"));
+                    }
+                    s.springs[i] = v;
+                }
+                f.model.supports.push(s);
+                Ok(())
+            })
         },
     );
     engine.register_fn(
         "damage",
         |ctx: NativeCallContext, f: &mut FrameSpec, m: INT, factor: Dynamic| -> Fallible<FrameSpec> {
-            f.declared_at = Some(call_site(&ctx));
-            let m = member(f, m, "damage")?;
-            let factor = number(&factor, "damage stiffness factor")?;
-            if !(factor > 0.0 && factor <= 1.0) {
-                return fail(format!(
-                    "damage stiffness factor = {factor} must lie in (0, 1]: the share of E the member keeps"
-                ));
-            }
-            f.model.members[m].stiffness_factor = factor;
-            Ok(f.clone())
+            changed(&ctx, f, |f| {
+                let m = member(f, m, "damage")?;
+                let factor = number(&factor, "damage stiffness factor")?;
+                if !(factor > 0.0 && factor <= 1.0) {
+                    return Err(format!(
+                        "damage stiffness factor = {factor} must lie in (0, 1]: the share of E the member keeps"
+                    ));
+                }
+                f.model.members[m].stiffness_factor = factor;
+                Ok(())
+            })
         },
     );
     engine.register_fn("self_weight", |f: &mut FrameSpec, on: bool| {
@@ -276,70 +288,65 @@ fn member_load(
     load: Load,
     direction: [f64; 3],
 ) -> Fallible<FrameSpec> {
-    f.declared_at = Some(call_site(ctx));
-    let m = member(f, m, "member load")?;
-    let norm = direction.iter().map(|d| d * d).sum::<f64>().sqrt();
-    if !(norm > 0.0) {
-        return fail(format!("load direction {direction:?} must not be zero"));
-    }
-    f.model.members[m].loads.push(MemberLoad {
-        load,
-        direction: direction.map(|d| d / norm),
-        axes: Axes::Global,
-    });
-    Ok(f.clone())
+    changed(ctx, f, |f| {
+        let m = member(f, m, "member load")?;
+        let norm = direction.iter().map(|d| d * d).sum::<f64>().sqrt();
+        if !(norm > 0.0) {
+            return Err(format!("load direction {direction:?} must not be zero"));
+        }
+        f.model.members[m].loads.push(MemberLoad {
+            load,
+            direction: direction.map(|d| d / norm),
+            axes: Axes::Global,
+        });
+        Ok(())
+    })
 }
 
 const DOWN: [f64; 3] = [0.0, 0.0, -1.0];
 
+/// A force `[fx, fy, fz]` (N) and a moment `[mx, my, mz]` (N·m; empty for none) on node `n`.
+fn node_load(
+    ctx: &NativeCallContext,
+    f: &mut FrameSpec,
+    n: INT,
+    force: &Array,
+    moment: &Array,
+) -> Fallible<FrameSpec> {
+    changed(ctx, f, |f| {
+        let node = node(f, n, "node_load")?;
+        let force = triple(force, "node_load force")?;
+        let moment = if moment.is_empty() {
+            [0.0; 3]
+        } else {
+            triple(moment, "node_load moment")?
+        };
+        f.model.loads.push(NodalLoad {
+            node,
+            force,
+            moment,
+        });
+        Ok(())
+    })
+}
+
 fn register_loads(engine: &mut Engine) {
     engine.register_fn(
         "node_load",
-        |ctx: NativeCallContext, f: &mut FrameSpec, n: INT, force: Array| -> Fallible<FrameSpec> {
-            f.declared_at = Some(call_site(&ctx));
-            let node = node(f, n, "node_load")?;
-            let force = triple(&force, "node_load force")?;
-            f.model.loads.push(NodalLoad {
-                node,
-                force,
-                moment: [0.0; 3],
-            });
-            Ok(f.clone())
+        |ctx: NativeCallContext, f: &mut FrameSpec, n: INT, force: Array| {
+            node_load(&ctx, f, n, &force, &Array::new())
         },
     );
     engine.register_fn(
         "node_load",
-        |ctx: NativeCallContext,
-         f: &mut FrameSpec,
-         n: INT,
-         force: Array,
-         moment: Array|
-         -> Fallible<FrameSpec> {
-            f.declared_at = Some(call_site(&ctx));
-            let node = node(f, n, "node_load")?;
-            let force = triple(&force, "node_load force")?;
-            let moment = triple(&moment, "node_load moment")?;
-            f.model.loads.push(NodalLoad {
-                node,
-                force,
-                moment,
-            });
-            Ok(f.clone())
+        |ctx: NativeCallContext, f: &mut FrameSpec, n: INT, force: Array, moment: Array| {
+            node_load(&ctx, f, n, &force, &moment)
         },
     );
     engine.register_fn(
         "member_point_load",
-        |ctx: NativeCallContext,
-         f: &mut FrameSpec,
-         m: INT,
-         at: Dynamic,
-         force: Dynamic|
-         -> Fallible<FrameSpec> {
-            let load = Load::Point {
-                at: number(&at, "member_point_load position")?,
-                force: number(&force, "member_point_load force")?,
-            };
-            member_load(&ctx, f, m, load, DOWN)
+        |ctx: NativeCallContext, f: &mut FrameSpec, m: INT, at: Dynamic, force: Dynamic| {
+            member_load(&ctx, f, m, point(&at, &force)?, DOWN)
         },
     );
     engine.register_fn(
@@ -349,31 +356,16 @@ fn register_loads(engine: &mut Engine) {
          m: INT,
          at: Dynamic,
          force: Dynamic,
-         dir: Array|
-         -> Fallible<FrameSpec> {
-            let load = Load::Point {
-                at: number(&at, "member_point_load position")?,
-                force: number(&force, "member_point_load force")?,
-            };
-            member_load(
-                &ctx,
-                f,
-                m,
-                load,
-                triple(&dir, "member_point_load direction")?,
-            )
+         dir: Array| {
+            let dir = triple(&dir, "member_point_load direction")?;
+            member_load(&ctx, f, m, point(&at, &force)?, dir)
         },
     );
     engine.register_fn(
         "member_distributed_load",
-        |ctx: NativeCallContext, f: &mut FrameSpec, m: INT, q: Dynamic| -> Fallible<FrameSpec> {
-            let mi = member(f, m, "member_distributed_load")?;
-            let to = length_of(f, mi);
-            let load = Load::Distributed {
-                from: 0.0,
-                to,
-                intensity: number(&q, "member_distributed_load intensity")?,
-            };
+        |ctx: NativeCallContext, f: &mut FrameSpec, m: INT, q: Dynamic| {
+            let whole = length_of(f, member(f, m, "member_distributed_load")?);
+            let load = spread(&Dynamic::from_float(0.0), &Dynamic::from_float(whole), &q)?;
             member_load(&ctx, f, m, load, DOWN)
         },
     );
@@ -384,15 +376,7 @@ fn register_loads(engine: &mut Engine) {
          m: INT,
          from: Dynamic,
          to: Dynamic,
-         q: Dynamic|
-         -> Fallible<FrameSpec> {
-            let load = Load::Distributed {
-                from: number(&from, "member_distributed_load from")?,
-                to: number(&to, "member_distributed_load to")?,
-                intensity: number(&q, "member_distributed_load intensity")?,
-            };
-            member_load(&ctx, f, m, load, DOWN)
-        },
+         q: Dynamic| { member_load(&ctx, f, m, spread(&from, &to, &q)?, DOWN) },
     );
     engine.register_fn(
         "member_distributed_load",
@@ -402,22 +386,28 @@ fn register_loads(engine: &mut Engine) {
          from: Dynamic,
          to: Dynamic,
          q: Dynamic,
-         dir: Array|
-         -> Fallible<FrameSpec> {
-            let load = Load::Distributed {
-                from: number(&from, "member_distributed_load from")?,
-                to: number(&to, "member_distributed_load to")?,
-                intensity: number(&q, "member_distributed_load intensity")?,
-            };
-            member_load(
-                &ctx,
-                f,
-                m,
-                load,
-                triple(&dir, "member_distributed_load direction")?,
-            )
+         dir: Array| {
+            let dir = triple(&dir, "member_distributed_load direction")?;
+            member_load(&ctx, f, m, spread(&from, &to, &q)?, dir)
         },
     );
+}
+
+/// A point load `force` N at `at` metres from the member's start.
+fn point(at: &Dynamic, force: &Dynamic) -> OptResult<Load> {
+    Ok(Load::Point {
+        at: number(at, "member_point_load position")?,
+        force: number(force, "member_point_load force")?,
+    })
+}
+
+/// A uniform load `q` N/m from `from` to `to` metres along the member.
+fn spread(from: &Dynamic, to: &Dynamic, q: &Dynamic) -> OptResult<Load> {
+    Ok(Load::Distributed {
+        from: number(from, "member_distributed_load from")?,
+        to: number(to, "member_distributed_load to")?,
+        intensity: number(q, "member_distributed_load intensity")?,
+    })
 }
 
 /// Length of member `m`, metres.
