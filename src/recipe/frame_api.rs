@@ -35,7 +35,7 @@ pub fn register(engine: &mut Engine) {
     register_loads(engine);
 }
 
-/// `frame(name, #{ plane, self_weight, display_scale })`.
+/// `frame(name, #{ plane, self_weight, second_order, display_scale })`.
 fn frame_options(f: &mut FrameSpec, map: Map) -> OptResult<()> {
     let mut o = Options::new(map, "frame");
     f.model.plane = match o.choice("plane", &["space", "xz", "yz", "xy"], Some("space"))? {
@@ -45,6 +45,7 @@ fn frame_options(f: &mut FrameSpec, map: Map) -> OptResult<()> {
         _ => None,
     };
     f.model.self_weight = o.flag("self_weight", false)?;
+    f.model.second_order = o.flag("second_order", false)?;
     f.display_scale = o.number("display_scale", 1.0)?;
     if !(f.display_scale >= 0.0) {
         return Err(format!(

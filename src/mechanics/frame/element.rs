@@ -208,6 +208,15 @@ impl Element {
         })
     }
 
+    /// The member with the geometric stiffness of an axial force `tension` (N, tension
+    /// positive) added: the consistent matrix of a cubic deflection (Przemieniecki §15),
+    /// bending terms only.
+    pub fn with_axial_force(mut self, tension: f64) -> Element {
+        self.k_full += geometric_stiffness(tension, self.length);
+        (self.k, self.fixed) = condense(&self.k_full, &self.fixed_full, &self.released);
+        self
+    }
+
     /// The 12 × 12 rotation from world to local DOFs.
     pub fn transformation(&self) -> Mat12 {
         let mut t = Mat12::zeros();
@@ -404,6 +413,35 @@ fn local_stiffness(p: &SpaceSection, e: f64, g: f64, l: f64, phi_y: f64, phi_z: 
     put(4, 4, (4.0 + phi_z) * l * l * c);
     put(10, 10, (4.0 + phi_z) * l * l * c);
     put(4, 10, (2.0 - phi_z) * l * l * c);
+    k
+}
+
+/// Geometric stiffness of a member of length `l` carrying axial force `n` (tension positive).
+fn geometric_stiffness(n: f64, l: f64) -> Mat12 {
+    let mut k = Mat12::zeros();
+    let c = n / (30.0 * l);
+    // x–y plane (v, θz): DOFs 1, 5, 7, 11; x–z plane (w, θy): DOFs 2, 4, 8, 10, where
+    // θy = −dw/dx flips the coupling signs.
+    for ([v0, t0, v1, t1], s) in [([1, 5, 7, 11], 1.0), ([2, 4, 8, 10], -1.0)] {
+        let entries = [
+            (v0, v0, 36.0),
+            (v1, v1, 36.0),
+            (v0, v1, -36.0),
+            (v0, t0, 3.0 * l * s),
+            (v0, t1, 3.0 * l * s),
+            (t0, v1, -3.0 * l * s),
+            (v1, t1, -3.0 * l * s),
+            (t0, t0, 4.0 * l * l),
+            (t1, t1, 4.0 * l * l),
+            (t0, t1, -l * l),
+        ];
+        for (a, b, v) in entries {
+            k[(a, b)] += c * v;
+            if a != b {
+                k[(b, a)] += c * v;
+            }
+        }
+    }
     k
 }
 

@@ -7,7 +7,8 @@ use serde::Serialize;
 /// What the analysis of a frame found.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct FrameLabels {
-    /// "linear_static": first-order elastic analysis by the direct stiffness method.
+    /// "linear_static": first-order elastic analysis by the direct stiffness method;
+    /// "p_delta": second order, equilibrium in the displaced geometry.
     pub analysis: &'static str,
     /// Each node's displacement and rotation, world axes, in the order of `model.nodes`.
     pub nodes: Vec<NodeResult>,
@@ -36,7 +37,11 @@ impl FrameLabels {
         let (max_utilisation_member, max_utilisation) =
             argmax(solution.members.iter().map(|m| m.utilisation));
         FrameLabels {
-            analysis: "linear_static",
+            analysis: if solution.second_order {
+                "p_delta"
+            } else {
+                "linear_static"
+            },
             nodes: solution.nodes.clone(),
             reactions: solution.reactions.clone(),
             members: solution.members.clone(),

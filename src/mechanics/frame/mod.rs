@@ -35,6 +35,12 @@ pub const STEEL_DENSITY: f64 = 7850.0;
 /// Standard gravity, m/s², for self-weight.
 pub const GRAVITY: f64 = 9.80665;
 
+/// Largest change of any displacement between two P-Δ passes, as a fraction of the largest
+/// displacement, at which the iteration stops.
+pub const P_DELTA_TOLERANCE: f64 = 1e-10;
+/// Most P-Δ passes tried.
+const P_DELTA_PASSES: usize = 100;
+
 /// Names of the six DOFs of a node, in order: translations then rotations, world axes.
 pub const DOF_NAMES: [&str; 6] = ["ux", "uy", "uz", "rx", "ry", "rz"];
 
@@ -55,6 +61,10 @@ pub struct FrameModel {
     /// node (a plane frame or truss). Absent: a space structure.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub plane: Option<Plane>,
+    /// Second-order (P-Δ) analysis: equilibrium in the displaced geometry through the
+    /// members' geometric stiffness, iterated on their axial forces.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub second_order: bool,
 }
 
 /// A coordinate plane a plane structure lies in.
@@ -267,6 +277,7 @@ impl FrameModel {
             loads: Vec::new(),
             self_weight: false,
             plane: None,
+            second_order: false,
         }
     }
 
@@ -334,7 +345,59 @@ impl FrameModel {
             .map(|m| element::Element::new(self, m))
             .collect::<Result<Vec<_>, _>>()?;
         let displacements = solve::displacements(self, &elements, solver)?;
-        Ok(results::FrameSolution::new(self, elements, displacements))
+        let first = results::FrameSolution::new(self, elements, displacements);
+        if self.second_order {
+            return self.p_delta(first, solver);
+        }
+        Ok(first)
+    }
+
+    /// Iterates the analysis with each member's geometric stiffness for the axial force of the
+    /// previous pass until no displacement changes by more than [`P_DELTA_TOLERANCE`] of the
+    /// largest; refuses axial loads at or beyond the critical load (the stiffness loses
+    /// positive definiteness, or the iteration does not settle).
+    fn p_delta(
+        &self,
+        mut solution: FrameSolution,
+        solver: Solver,
+    ) -> Result<FrameSolution, String> {
+        let largest = |s: &FrameSolution| {
+            s.nodes
+                .iter()
+                .flat_map(|n| n.displacement)
+                .fold(0.0f64, |m, d| m.max(d.abs()))
+        };
+        for _ in 0..P_DELTA_PASSES {
+            let elements: Vec<element::Element> = self
+                .members
+                .iter()
+                .zip(&solution.members)
+                .map(|(m, r)| {
+                    element::Element::new(self, m).map(|e| e.with_axial_force(r.axial_force))
+                })
+                .collect::<Result<_, _>>()?;
+            let displacements = solve::displacements(self, &elements, solver).map_err(|e| {
+                format!("second-order analysis: the axial forces reach the critical (buckling) load: {e}")
+            })?;
+            let next = results::FrameSolution::new(self, elements, displacements);
+            let change = solution
+                .nodes
+                .iter()
+                .zip(&next.nodes)
+                .flat_map(|(a, b)| {
+                    (0..3).map(move |i| (a.displacement[i] - b.displacement[i]).abs())
+                })
+                .fold(0.0f64, f64::max);
+            let settled = change <= P_DELTA_TOLERANCE * largest(&next);
+            solution = next;
+            if settled {
+                solution.second_order = true;
+                return Ok(solution);
+            }
+        }
+        Err(format!(
+            "second-order analysis did not settle in {P_DELTA_PASSES} passes: the axial forces are at or near the critical (buckling) load"
+        ))
     }
 }
 

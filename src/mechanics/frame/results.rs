@@ -24,6 +24,8 @@ pub struct FrameSolution {
     pub reactions: Vec<Reaction>,
     /// Per member.
     pub members: Vec<MemberResult>,
+    /// Whether the geometric stiffness of the axial forces was included (P-Δ).
+    pub second_order: bool,
     elements: Vec<Element>,
     /// Local end displacements of every member (released rotations recovered).
     local: Vec<Vec12>,
@@ -108,6 +110,7 @@ impl FrameSolution {
             nodes,
             reactions,
             members,
+            second_order: false,
             elements,
             local,
         }

@@ -490,3 +490,44 @@ fn dense_and_sparse_solvers_agree_on_a_large_truss() {
         }
     }
 }
+
+#[test]
+fn p_delta_cantilever_column_matches_the_beam_column_closed_form() {
+    // A vertical cantilever under axial compression P and a tip force H: the exact tip
+    // deflection is H (tan kL − kL) / (P k), k = √(P / EI) (Timoshenko & Gere §1.11), against
+    // H L³ / (3 EI) at first order. Ten members (the cubic element's error falls as h⁴).
+    let (l, h, n) = (6.0, 1e3, 10);
+    let section = rect(0.2, 0.2);
+    let ei = E * 0.2f64.powi(4) / 12.0;
+    let critical = std::f64::consts::PI.powi(2) * ei / (4.0 * l * l);
+    let p = 0.5 * critical;
+    let mut m = FrameModel::new();
+    m.nodes = (0..=n)
+        .map(|i| [0.0, 0.0, l * i as f64 / n as f64])
+        .collect();
+    m.members = (0..n)
+        .map(|i| Member::new(i, i + 1, section.clone()))
+        .collect();
+    m.supports = vec![NodeSupport::fixed(0)];
+    m.plane = Some(Plane::Xz);
+    m.loads = vec![NodalLoad {
+        node: n,
+        force: [h, 0.0, -p],
+        moment: [0.0; 3],
+    }];
+    m.second_order = true;
+    let s = m.solve().unwrap();
+    let k = (p / ei).sqrt();
+    let exact = h * ((k * l).tan() - k * l) / (p * k);
+    let tip = s.nodes[n].displacement[0];
+    // Axial shortening (P L / EA) changes nothing sideways; the discretisation ~1e-6.
+    assert!(close(tip, exact, 1e-5), "{tip} vs {exact}");
+    assert!(
+        tip > 1.9 * h * l.powi(3) / (3.0 * ei),
+        "amplified about 1/(1 − P/Pcr) = 2"
+    );
+    // At 1.1 times the critical load the column is refused.
+    m.loads[0].force[2] = -1.1 * critical;
+    let e = m.solve().unwrap_err();
+    assert!(e.contains("critical"), "{e}");
+}
