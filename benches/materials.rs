@@ -223,6 +223,7 @@ fn gallery() {
             let structure = match &textured.scene.structures[0] {
                 Structure::Beam(_) => "beam",
                 Structure::Assembly(_) => "silo",
+                Structure::Frame(_) => "frame",
             };
             let prompt = textured.scene.structures[0]
                 .material()

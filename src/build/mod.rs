@@ -10,6 +10,7 @@
 
 mod assembly;
 mod beam;
+mod frame;
 mod ground;
 mod light;
 mod supports;
@@ -17,6 +18,7 @@ mod tessellation;
 
 pub use assembly::{BuiltShape, assembly_radius, mesh_assembly};
 pub use beam::{BuiltBeam, beam_radius, mesh_beam, problem, section_outline, stations};
+pub use frame::{BuiltFrame, frame_radius, mesh_frame};
 pub use ground::ground_square;
 pub use light::{BackdropDraw, LightDraw, SkyDraw, SunDraw, draw_backdrop, draw_light};
 pub use supports::{SupportMaterial, SupportPiece, drawn_supports};
@@ -37,6 +39,8 @@ pub struct BuiltSample {
     pub scene: SceneSpec,
     /// What building each structure found out (beams only; None for assemblies).
     pub beams: Vec<Option<BeamOutcome>>,
+    /// What the analysis of each frame found (None for other structures).
+    pub frames: Vec<Option<crate::mechanics::frame::FrameLabels>>,
     /// The deformed mesh of every structure, merged, world coordinates in metres.
     pub mesh: Mesh,
     /// Undeformed position of every vertex (where textures are evaluated).
@@ -142,11 +146,13 @@ pub fn build_sample(
         ..Assembled::default()
     };
     let mut beams = Vec::new();
+    let mut frames = Vec::new();
     for (i, structure) in scene.structures.iter().enumerate() {
         let failed = |m: String| BuildError {
             message: format!("structure {i}: {m}"),
             site: structure.declared_at().cloned(),
         };
+        let mut frame_labels = None;
         match structure {
             Structure::Beam(beam) => {
                 let footprint = dataset
@@ -192,7 +198,27 @@ pub fn build_sample(
                 }
                 beams.push(None);
             }
+            Structure::Frame(f) => {
+                let footprint = dataset
+                    .camera
+                    .nearest_pixel_footprint(DVec3::ZERO, frame_radius(f));
+                let built = mesh_frame(f, footprint).map_err(failed)?;
+                for shape in &built.members {
+                    within_range(&shape.mesh)
+                        .map_err(|m| failed(format!("part \"{}\": {m}", shape.part)))?;
+                    assembled.add(
+                        &shape.mesh,
+                        &shape.rest,
+                        i,
+                        shape.part,
+                        grain_of(&shape.rest),
+                    );
+                }
+                beams.push(None);
+                frame_labels = Some(built.labels);
+            }
         }
+        frames.push(frame_labels);
         if assembled.mesh.triangles.len() > MAX_TRIANGLES {
             return Err(failed(format!(
                 "the scene reaches {} triangles with this structure, over the budget of {MAX_TRIANGLES} a sample; coarsen the tessellation or split the scene",
@@ -266,6 +292,7 @@ pub fn build_sample(
         index,
         scene,
         beams,
+        frames,
         mesh,
         rest,
         piece,

@@ -6,13 +6,15 @@
 //! vibration mode shapes, the choice of theory by estimated error, the range each theory can
 //! represent, the derived labels (load, moment, stress, membrane force, plausibility), the
 //! mapping of section points onto the deformed axis, cross-section properties, and silo shell
-//! patterns with their plausible amplitudes. Must not touch: meshes, cameras or files; it works on plain
+//! patterns with their plausible amplitudes, and structures analysed as a whole (`frame`: space
+//! frames and trusses by the direct stiffness method). Must not touch: meshes, cameras or files; it works on plain
 //! numbers in the beam's own frame (axis along x from 0 to L, deflection v positive downward).
 //!
 //! Formulas, reference values, floating-point traps and the primary literature:
 //! `docs/mechanics.md`.
 
 mod elastica;
+pub mod frame;
 mod linear;
 mod mapping;
 mod membrane;

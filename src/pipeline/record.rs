@@ -462,6 +462,10 @@ pub struct StructureRecord<'a> {
     /// assemblies.
     #[serde(flatten)]
     pub beam: Option<BeamRecord<'a>>,
+    /// For a frame, what its analysis found: node displacements and rotations, reactions,
+    /// member end forces, peak stress and utilisation; absent for other structures.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub analysis: Option<&'a crate::mechanics::frame::FrameLabels>,
 }
 
 /// What the mechanics of a beam found.
@@ -617,18 +621,22 @@ impl<'a> SampleRecord<'a> {
             .iter()
             .zip(&sample.beams)
             .zip(&sample.shaders)
-            .map(|((structure, outcome), shader)| StructureRecord {
-                structure,
-                material_drawn: shader.drawn(),
-                beam: match (structure, outcome) {
-                    (Structure::Beam(b), Some(outcome)) => Some(BeamRecord {
-                        section_properties: b.section.properties(b.poisson),
-                        segments: outcome.segments,
-                        labels: &outcome.labels,
-                    }),
-                    _ => None,
+            .zip(&sample.frames)
+            .map(
+                |(((structure, outcome), shader), analysis)| StructureRecord {
+                    structure,
+                    material_drawn: shader.drawn(),
+                    beam: match (structure, outcome) {
+                        (Structure::Beam(b), Some(outcome)) => Some(BeamRecord {
+                            section_properties: b.section.properties(b.poisson),
+                            segments: outcome.segments,
+                            labels: &outcome.labels,
+                        }),
+                        _ => None,
+                    },
+                    analysis: analysis.as_ref(),
                 },
-            })
+            )
             .collect();
         let mut part_ids = vec!["background".to_string()];
         part_ids.extend(sample.parts.iter().cloned());
@@ -639,6 +647,10 @@ impl<'a> SampleRecord<'a> {
                 Structure::Assembly(a) => Instance::Assembly {
                     structure: i,
                     name: a.name.clone(),
+                },
+                Structure::Frame(f) => Instance::Assembly {
+                    structure: i,
+                    name: f.name.clone(),
                 },
             })
         }));

@@ -191,6 +191,7 @@ fn structure_sizes(sample: &BuiltSample) -> Vec<(String, (usize, usize))> {
             let kind = match structure {
                 Structure::Beam(_) => "beam".to_string(),
                 Structure::Assembly(a) => format!("assembly \"{}\"", a.name),
+                Structure::Frame(f) => format!("frame \"{}\"", f.name),
             };
             (kind, (v.len(), t))
         })

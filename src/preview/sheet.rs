@@ -212,6 +212,7 @@ impl SampleNames {
         instances.extend(structures.iter().enumerate().map(|(i, s)| match s {
             Structure::Beam(_) => format!("{} beam", i + 1),
             Structure::Assembly(a) => format!("{} {}", i + 1, a.name),
+            Structure::Frame(f) => format!("{} {}", i + 1, f.name),
         }));
         if sample.ground.is_some() {
             instances.push(format!("{} ground", structures.len() + 1));

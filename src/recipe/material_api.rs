@@ -38,6 +38,7 @@ pub struct MaterialContext {
 pub fn register(engine: &mut Engine, context: MaterialContext) {
     register_for::<BeamSpec>(engine, &context, |b| &mut b.material);
     register_for::<AssemblySpec>(engine, &context, |a| &mut a.material);
+    register_for::<crate::scene::FrameSpec>(engine, &context, |f| &mut f.material);
 }
 
 fn register_for<T: Clone + Send + Sync + 'static>(

@@ -17,6 +17,7 @@ mod diagnostics;
 mod engine;
 mod environment_api;
 mod files;
+mod frame_api;
 mod ground_api;
 mod material_api;
 mod memory;
@@ -30,7 +31,9 @@ pub use diagnostics::RecipeError;
 pub use engine::stdlib_dir;
 pub use memory::CountingAllocator;
 
-use crate::scene::{AssemblySpec, BeamSpec, DatasetSpec, SceneSpec, SourceSite, Structure};
+use crate::scene::{
+    AssemblySpec, BeamSpec, DatasetSpec, FrameSpec, SceneSpec, SourceSite, Structure,
+};
 use crate::seeds::{self, Scope as StreamScope, Stream};
 use api::{Dataset, Params, ScriptRng};
 use engine::{Resolver, Sources};
@@ -266,8 +269,12 @@ fn structures(value: Dynamic) -> Result<Vec<Structure>, String> {
                 Ok(beam) => return Ok(Structure::Beam(beam)),
                 Err(other) => other,
             };
+            let item = match item.try_cast_result::<FrameSpec>() {
+                Ok(frame) => return Ok(Structure::Frame(frame)),
+                Err(other) => other,
+            };
             item.try_cast::<AssemblySpec>().map(Structure::Assembly).ok_or(format!(
-                "the scene function must return structures (beams or assemblies), or a list of them, not {}",
+                "the scene function must return structures (beams, frames or assemblies), or a list of them, not {}",
                 if t == type_name { t } else { format!("a list containing {t}") }
             ))
         })

@@ -9,6 +9,7 @@
 mod assembly;
 mod augment;
 mod beam;
+mod frame;
 mod ground;
 mod light;
 
@@ -19,6 +20,7 @@ pub use augment::{
     WarpSpec, operation_path,
 };
 pub use beam::{BeamSpec, Tessellation};
+pub use frame::FrameSpec;
 pub use ground::{GROUND_PART, GroundSpec, ground_radius};
 pub use light::{
     Background, EnvironmentLightSpec, EnvironmentSpec, GroundBounceSpec, ImageRecord, LightSpec,
@@ -199,6 +201,8 @@ pub enum Structure {
     /// An assembly of placed primitives (silos, frames, imported meshes), optionally bent or
     /// shell-deformed shape by shape.
     Assembly(AssemblySpec),
+    /// Members analysed together (a frame, a truss, a continuous girder), each drawn deformed.
+    Frame(FrameSpec),
 }
 
 impl Structure {
@@ -207,6 +211,7 @@ impl Structure {
         match self {
             Structure::Beam(b) => &b.material,
             Structure::Assembly(a) => &a.material,
+            Structure::Frame(f) => &f.material,
         }
     }
 
@@ -215,6 +220,7 @@ impl Structure {
         match self {
             Structure::Beam(b) => b.declared_at.as_ref(),
             Structure::Assembly(a) => a.declared_at.as_ref(),
+            Structure::Frame(f) => f.declared_at.as_ref(),
         }
     }
 }

@@ -1,0 +1,44 @@
+//! Time of a frame analysis against model size: space trusses of 10 to 10⁵ members solved by
+//! the dense and the sparse Cholesky (dense only while it takes under a few seconds), and the
+//! size of the sparse factor. Prints a table; asserts nothing.
+//!
+//!     cargo bench --bench frames
+
+use shmgen::mechanics::frame::{Solver, space_truss};
+use std::time::Instant;
+
+fn best_of(runs: usize, f: impl Fn()) -> f64 {
+    (0..runs)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn main() {
+    println!("| members | free DOFs | dense (ms) | sparse (ms) |");
+    println!("|---:|---:|---:|---:|");
+    for panels in [1, 4, 11, 33, 111, 333, 1111, 11111] {
+        let model = space_truss(panels);
+        let dofs = 3 * model.nodes.len() - 6;
+        let runs = if panels > 1000 { 3 } else { 10 };
+        let dense = if dofs <= 3000 {
+            let t = best_of(runs, || {
+                model.solve_with(Solver::Dense).expect("a stable truss");
+            });
+            format!("{:.2}", t * 1e3)
+        } else {
+            "–".into()
+        };
+        let sparse = best_of(runs, || {
+            model.solve_with(Solver::Sparse).expect("a stable truss");
+        });
+        println!(
+            "| {} | {dofs} | {dense} | {:.2} |",
+            model.members.len(),
+            sparse * 1e3
+        );
+    }
+}
