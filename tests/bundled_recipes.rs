@@ -5,7 +5,9 @@
 
 mod common;
 
-use common::{bundled_rhai, ok, read_json, read_png, run, shmgen, stderr, write};
+use common::{
+    bundled_rhai, manifest_files as listed, ok, read_json, read_png, run, shmgen, stderr, write,
+};
 use std::ffi::OsStr;
 use std::path::Path;
 
@@ -21,23 +23,6 @@ fn quick_settings(recipe: &Path, extra: &[&str]) -> Vec<String> {
     sets.extend(extra.iter().map(|s| s.to_string()));
     sets.into_iter()
         .flat_map(|s| ["--set".to_string(), s])
-        .collect()
-}
-
-/// The files `manifest.jsonl` lists, every line.
-fn listed(out: &Path) -> Vec<String> {
-    std::fs::read_to_string(out.join("manifest.jsonl"))
-        .unwrap()
-        .lines()
-        .flat_map(|line| {
-            let v: serde_json::Value = serde_json::from_str(line).unwrap();
-            v["files"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|f| f.as_str().unwrap().to_string())
-                .collect::<Vec<_>>()
-        })
         .collect()
 }
 
@@ -116,10 +101,19 @@ fn a_list_parameter_is_set_as_comma_separated_names() {
     ok(run(&recipe, &out, &["--set", "outputs= rgb , mask"]));
     let files = listed(&out);
     assert!(files.iter().any(|f| f.ends_with(".mask.png")), "{files:?}");
-    assert!(!files.iter().any(|f| f.ends_with(".depth.exr")), "{files:?}");
+    assert!(
+        !files.iter().any(|f| f.ends_with(".depth.exr")),
+        "{files:?}"
+    );
     for (value, expected) in [
-        ("outputs=rgb,,depth", "expected a comma-separated list (an item is empty)"),
-        ("outputs=", "expected a comma-separated list (an item is empty)"),
+        (
+            "outputs=rgb,,depth",
+            "expected a comma-separated list (an item is empty)",
+        ),
+        (
+            "outputs=",
+            "expected a comma-separated list (an item is empty)",
+        ),
         ("outputs=rgb,dpeth", "unknown output \"dpeth\""),
     ] {
         let bad = dir.path().join("bad");
@@ -134,6 +128,10 @@ fn a_list_parameter_is_set_as_comma_separated_names() {
             OsStr::new(value),
         ]);
         assert!(!output.status.success(), "{value}");
-        assert!(stderr(&output).contains(expected), "{value}: {}", stderr(&output));
+        assert!(
+            stderr(&output).contains(expected),
+            "{value}: {}",
+            stderr(&output)
+        );
     }
 }
