@@ -171,7 +171,10 @@ fn list_override(text: &str) -> Result<Dynamic, &'static str> {
         return Err("an item is empty");
     }
     Ok(Dynamic::from_array(
-        items.into_iter().map(|item| Dynamic::from(item.to_string())).collect(),
+        items
+            .into_iter()
+            .map(|item| Dynamic::from(item.to_string()))
+            .collect(),
     ))
 }
 
