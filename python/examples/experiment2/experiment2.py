@@ -43,7 +43,7 @@ PAPER = {"pretrained (Yin et al.)": (0.2632, 5.2763), "custom-made (40K pairs)":
 
 #: Scales: samples × views of A1 beams, image side, held-out share, training epochs.
 SCALES = {
-    "laptop": dict(samples=120, views=20, size=128, fraction=0.05, epochs=12),
+    "laptop": dict(samples=120, views=20, size=128, fraction=0.05, epochs=4),
     "paper": dict(samples=2000, views=20, size=960, fraction=0.05, epochs=20),
     "ci": dict(samples=6, views=2, size=32, fraction=0.34, epochs=1),
 }
