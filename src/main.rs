@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
-use shmgen::eval::{self, Align, EvalOptions, Mask};
+use shmgen::eval::{self, Align, Condition, EvalOptions, Mask};
 use shmgen::export::{self, ExportOptions, Format};
 use shmgen::pipeline::{self, RunOptions, Shard};
 use shmgen::preview::{self, PreviewOptions, Size, WatchOptions};
@@ -163,6 +163,8 @@ enum Command {
     },
     /// Score predictions against a finished dataset: depth metrics (AbsRel, SqRel, RMSE,
     /// RMSE log, δ), Chamfer distance and F-score of surfaces, flow and displacement EPE.
+    /// Exit code: 0 every prediction asked for was scored, 2 some were not (missing
+    /// predictions, truth the dataset lacks, nothing to score: all listed), 1 an error.
     Eval {
         /// The dataset folder, finished.
         dataset: PathBuf,
@@ -183,6 +185,12 @@ enum Command {
         /// Points sampled on each mesh (true and predicted) for Chamfer distance and F-score.
         #[arg(long, value_name = "N", default_value_t = 100_000, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
         surface_samples: u64,
+        /// Score only the views whose JSON record has FIELD (a dotted path) equal to VALUE,
+        /// e.g. scene.structures.0.material.prompt="A photo of cracked timber for
+        /// construction"; repeatable: conditions on one field are alternatives (--where
+        /// sample=3 --where sample=7), conditions on different fields must all hold.
+        #[arg(long = "where", value_name = "FIELD=VALUE", value_parser = str::parse::<Condition>)]
+        selection: Vec<Condition>,
     },
 }
 
@@ -363,6 +371,7 @@ fn execute(command: Command) -> Result<()> {
             mask,
             fscore_threshold,
             surface_samples,
+            selection,
         } => {
             let report = eval::evaluate(
                 &dataset,
@@ -373,16 +382,22 @@ fn execute(command: Command) -> Result<()> {
                     fscore_threshold,
                     surface_samples: usize::try_from(surface_samples).unwrap_or(usize::MAX),
                     json: json.clone(),
+                    selection,
                 },
             )?;
             for warning in report.warnings() {
                 eprintln!("warning: {warning}");
             }
             print!("{}", report.text());
+            println!("{}", report.summary());
             if let Some(path) = json {
                 report.write_json(&path)?;
             }
-            Ok(())
+            if report.complete {
+                Ok(())
+            } else {
+                std::process::exit(i32::from(eval::EXIT_PARTIAL))
+            }
         }
     }
 }

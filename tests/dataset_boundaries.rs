@@ -120,7 +120,7 @@ fn no_command_writes_onto_or_inside_a_dataset_or_an_export_by_any_spelling() {
         "--json",
         &s(&report),
     ])));
-    assert_eq!(read_json(&report)["schema"], "shmgen.eval/1");
+    assert_eq!(read_json(&report)["schema"], "shmgen.eval/2");
 }
 
 #[test]

@@ -15,9 +15,18 @@ use common::{
     view_path,
 };
 
-/// `shmgen eval DATA PREDICTIONS --json … EXTRA`: what it printed and the JSON report.
+/// `shmgen eval DATA PREDICTIONS --json … EXTRA`, which must score everything (exit 0): what
+/// it printed and the JSON report.
 fn eval(data: &Path, predictions: &Path, extra: &[&str]) -> (Output, Value) {
+    let (output, report) = eval_any(data, predictions, extra);
+    (ok(output), report)
+}
+
+/// `shmgen eval DATA PREDICTIONS --json … EXTRA` whatever its exit code: what it printed
+/// and the JSON report.
+fn eval_any(data: &Path, predictions: &Path, extra: &[&str]) -> (Output, Value) {
     let json = predictions.with_extension("report.json");
+    let _ = std::fs::remove_file(&json);
     let mut args: Vec<&OsStr> = vec![
         OsStr::new("eval"),
         data.as_os_str(),
@@ -26,8 +35,19 @@ fn eval(data: &Path, predictions: &Path, extra: &[&str]) -> (Output, Value) {
         json.as_os_str(),
     ];
     args.extend(extra.iter().map(OsStr::new));
-    let output = ok(shmgen(&args));
-    let report = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let output = shmgen(&args);
+    let report = match std::fs::read(&json) {
+        Ok(bytes) => serde_json::from_slice(&bytes).unwrap(),
+        Err(_) => panic!("no report: {}", stderr(&output)),
+    };
+    (output, report)
+}
+
+/// `eval_any` of a partial evaluation: exit code 2.
+fn eval_partial(data: &Path, predictions: &Path, extra: &[&str]) -> (Output, Value) {
+    let (output, report) = eval_any(data, predictions, extra);
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert_eq!(report["complete"], false, "{report}");
     (output, report)
 }
 
@@ -288,10 +308,17 @@ fn depth_metrics_have_their_closed_forms() {
         }
         write_exr(&t.prediction(&holes, "depth.exr"), t.w, t.h, &[("Z", z)]);
     }
-    let (o, h) = eval(&data, &holes, &[]);
+    let (o, h) = eval_partial(&data, &holes, &[]);
     assert_eq!(h["depth_counts"]["missing"], 1);
     assert_eq!(h["depth_counts"]["excluded_pixels"], 21);
-    assert!(stderr(&o).contains("warning: depth: 1 views have no prediction"));
+    assert!(
+        stderr(&o).contains(&format!(
+            "warning: depth: 1 views not scored: no prediction (e.g. {})",
+            truths[0].stem
+        )),
+        "{}",
+        stderr(&o)
+    );
     assert!(stderr(&o).contains("warning: depth: 21 pixels left out (not predicted"));
 }
 
@@ -765,7 +792,7 @@ fn misnamed_predictions_are_reported_with_the_name_eval_reads() {
     write_file(&p.join("0000/.000000_00.depth.exr.swp.exr"), b"");
     let rgb = std::fs::read(data.join("samples/0000/000000_00.rgb.png")).unwrap();
     write_file(&p.join("0000/000000_00.rgb.png"), &rgb);
-    let (o, r) = eval(&data, &p, &[]);
+    let (o, r) = eval_partial(&data, &p, &[]);
     let warned = stderr(&o);
     assert!(
         warned.contains(&format!("warning: 7 files under {} look like", p.display())),
@@ -791,4 +818,229 @@ fn misnamed_predictions_are_reported_with_the_name_eval_reads() {
         r["depth_counts"]["images"], 1,
         "the well-named file is read"
     );
+}
+
+/// Every view of `data` given the true depth 1 + i/8 m at pixel i (all pixels, so `--mask
+/// valid` scores each): values an f32 EXR holds exactly. Returns the views' truths.
+fn known_depth(data: &Path) -> Vec<Truth> {
+    for t in truths(data) {
+        let depth: Vec<f32> = (0..t.depth.len()).map(|i| 1.0 + i as f32 / 8.0).collect();
+        let scratch = data.with_extension("scratch.exr");
+        write_exr(&scratch, t.w, t.h, &[("Y", depth)]);
+        let file = format!("samples/0000/{}.depth.exr", t.stem);
+        replace_in_dataset(data, &file, &std::fs::read(&scratch).unwrap());
+    }
+    truths(data)
+}
+
+/// `prediction` as a float64 `.npy` depth prediction of view `t`.
+fn write_depth_npy(predictions: &Path, t: &Truth, prediction: &[f64]) {
+    let bytes: Vec<u8> = prediction.iter().flat_map(|p| p.to_le_bytes()).collect();
+    write_npy(
+        &t.prediction(predictions, "depth.npy"),
+        "<f8",
+        &[t.h, t.w],
+        &bytes,
+    );
+}
+
+#[test]
+fn per_image_values_are_in_the_json_and_match_a_hand_computation() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=1", "views=2", "size=4"]);
+    let truths = known_depth(&data);
+    assert_eq!((truths.len(), truths[0].w, truths[0].h), (2, 4, 4));
+    let p = dir.path().join("p");
+    // View 0: 10 % too far on even pixels, exact on odd ones: AbsRel ½ · 0.1 = 0.05.
+    // View 1: twice the truth: AbsRel 1, RMSE √mean d*², δ1 0.
+    let t0: Vec<f64> = truths[0].depth.iter().map(|&d| f64::from(d)).collect();
+    let t1: Vec<f64> = truths[1].depth.iter().map(|&d| f64::from(d)).collect();
+    let p0: Vec<f64> = t0
+        .iter()
+        .enumerate()
+        .map(|(i, &d)| if i % 2 == 0 { 1.1 * d } else { d })
+        .collect();
+    let p1: Vec<f64> = t1.iter().map(|&d| 2.0 * d).collect();
+    write_depth_npy(&p, &truths[0], &p0);
+    write_depth_npy(&p, &truths[1], &p1);
+    let (o, r) = eval(&data, &p, &["--mask", "valid"]);
+    assert!(
+        String::from_utf8_lossy(&o.stdout)
+            .contains("complete: every prediction asked for was scored"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert_eq!(r["complete"], true);
+    let images = r["images"].as_array().unwrap();
+    assert_eq!(images.len(), 2, "{r}");
+    assert_eq!(images[0]["stem"], truths[0].stem.as_str());
+    assert_eq!(images[1]["view"], truths[1].view);
+    let d0 = &images[0]["depth"];
+    let d1 = &images[1]["depth"];
+    assert!((f(d0, "abs_rel") - 0.05).abs() < 1e-12, "{d0}");
+    assert!((f(d1, "abs_rel") - 1.0).abs() < 1e-12, "{d1}");
+    let rms1 = (t1.iter().map(|d| d * d).sum::<f64>() / 16.0).sqrt();
+    assert!((f(d1, "rmse") - rms1).abs() < 1e-12, "{d1} vs {rms1}");
+    assert_eq!((f(d0, "delta1"), f(d1, "delta1")), (1.0, 0.0));
+    assert_eq!(
+        (d0["pixels"].as_u64(), d0["excluded_pixels"].as_u64()),
+        (Some(16), Some(0))
+    );
+    assert_eq!(f(d0, "scale"), 1.0);
+    // The report's mean is the mean of the images'.
+    assert!((f(&r, "abs_rel") - 0.525).abs() < 1e-12, "{r}");
+}
+
+#[test]
+fn a_stray_surface_without_true_meshes_is_skipped_and_depth_still_scored() {
+    // A .ply beside the depth predictions, and a dataset without meshes: eval gave up
+    // (exit 1, "has a predicted surface but the dataset has no 000000.mesh.ply").
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=1", "views=2", "size=4"]);
+    let truths = known_depth(&data);
+    let p = dir.path().join("p");
+    for t in &truths {
+        let d: Vec<f64> = t.depth.iter().map(|&d| 1.25 * f64::from(d)).collect();
+        write_depth_npy(&p, t, &d);
+    }
+    let (vertices, faces) = grid(3, 0.0);
+    write_file(&p.join("samples/0000/000000.ply"), &ply(&vertices, &faces));
+    let (o, r) = eval_partial(&data, &p, &["--mask", "valid"]);
+    assert!((f(&r, "abs_rel") - 0.25).abs() < 1e-12, "{r}");
+    assert_eq!(r["depth_counts"]["images"], 2);
+    assert!(r["surface"].is_null());
+    let unscored = r["unscored"].as_array().unwrap();
+    assert_eq!(unscored.len(), 1, "{r}");
+    assert_eq!(unscored[0]["quantity"], "surface");
+    assert_eq!(unscored[0]["count"], 1);
+    assert_eq!(unscored[0]["first"][0], "sample 0");
+    let reason = unscored[0]["reason"].as_str().unwrap();
+    assert!(
+        reason.contains("no 000000.mesh.ply") && reason.contains("\"mesh\""),
+        "{reason}"
+    );
+    assert!(
+        stderr(&o)
+            .contains("warning: surface: 1 samples not scored: the dataset has no 000000.mesh.ply"),
+        "{}",
+        stderr(&o)
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("AbsRel") && stdout.contains("partial: 1 views or samples not scored"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn missing_predictions_are_counted_named_and_make_the_evaluation_partial() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = quickstart(dir.path(), "data", &["samples=2", "views=3", "size=4"]);
+    let truths = known_depth(&data);
+    let p = dir.path().join("p");
+    // Every view but the first two of sample 0 and the last of sample 1.
+    let missing = [0, 1, 5];
+    for (k, t) in truths.iter().enumerate() {
+        if !missing.contains(&k) {
+            let d: Vec<f64> = t.depth.iter().map(|&d| f64::from(d)).collect();
+            write_depth_npy(&p, t, &d);
+        }
+    }
+    let (o, r) = eval_partial(&data, &p, &["--mask", "valid"]);
+    assert_eq!(r["depth_counts"]["missing"], 3);
+    assert_eq!(r["depth_counts"]["images"], 3);
+    let names: Vec<&str> = missing.iter().map(|&k| truths[k].stem.as_str()).collect();
+    assert_eq!(r["unscored"][0]["first"], serde_json::json!(names));
+    assert_eq!(r["unscored"][0]["reason"], "no prediction");
+    assert!(
+        stderr(&o).contains(&format!(
+            "warning: depth: 3 views not scored: no prediction (e.g. {})",
+            names.join(", ")
+        )),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(r["images"].as_array().unwrap().len(), 3);
+    // The same predictions, all of them: complete, exit 0.
+    for &k in &missing {
+        let d: Vec<f64> = truths[k].depth.iter().map(|&d| f64::from(d)).collect();
+        write_depth_npy(&p, &truths[k], &d);
+    }
+    let (_, r) = eval(&data, &p, &["--mask", "valid"]);
+    assert_eq!(
+        (r["complete"].as_bool(), f(&r, "abs_rel")),
+        (Some(true), 0.0)
+    );
+}
+
+#[test]
+fn where_scores_the_views_whose_record_field_matches() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/a1_beams.rhai");
+    let data = dir.path().join("a1");
+    let sets = ["samples=3", "views=1", "size=8", "textures=false"];
+    let mut args = Vec::new();
+    for set in sets {
+        args.extend(["--set", set]);
+    }
+    ok(common::run(&recipe, &data, &args));
+    // a1_beams gives sample k the prompt k mod 3: sample 2 is the cracked timber.
+    let truths = truths(&data);
+    let p = dir.path().join("p");
+    for t in &truths {
+        let factor = if t.sample == 2 { 2.0 } else { 1.0 };
+        let d: Vec<f64> = t.depth.iter().map(|&d| factor * f64::from(d)).collect();
+        write_depth_npy(&p, t, &d);
+    }
+    let (_, all) = eval(&data, &p, &[]);
+    assert!((f(&all, "abs_rel") - 1.0 / 3.0).abs() < 1e-12, "{all}");
+    let timber = "scene.structures.0.material.prompt=A photo of cracked timber for construction";
+    let (_, r) = eval(&data, &p, &["--where", timber]);
+    assert_eq!(f(&r, "abs_rel"), 1.0, "{r}");
+    assert_eq!(r["selection"]["views"], 1);
+    assert_eq!(r["selection"]["dataset_views"], 3);
+    assert_eq!(r["selection"]["conditions"][0], timber);
+    assert_eq!(r["images"][0]["stem"], "000002_00");
+    // Two conditions, both must hold; a number matches by value.
+    let (_, r) = eval(&data, &p, &["--where", "sample=1.0", "--where", "view=0"]);
+    assert_eq!(
+        (f(&r, "abs_rel"), r["selection"]["views"].as_u64()),
+        (0.0, Some(1))
+    );
+    // Conditions on the same field are alternatives: samples 0 and 2, view 0.
+    let (_, r) = eval(
+        &data,
+        &p,
+        &[
+            "--where", "sample=0", "--where", "sample=2", "--where", "view=0",
+        ],
+    );
+    assert_eq!(r["selection"]["views"], 2);
+    assert!((f(&r, "abs_rel") - 0.5).abs() < 1e-12, "{r}");
+    // Views outside the selection are not missing: only the timber view predicted is complete.
+    let only = dir.path().join("only");
+    let t = &truths[2];
+    write_depth_npy(
+        &only,
+        t,
+        &t.depth.iter().map(|&d| f64::from(d)).collect::<Vec<_>>(),
+    );
+    let (_, r) = eval(&data, &only, &["--where", timber]);
+    assert_eq!(r["complete"], true);
+    // A field no view has is an error naming what the record has there.
+    let e = eval_err(
+        &data,
+        &p,
+        &["--where", "scene.structure.0.support=cantilever"],
+    );
+    assert!(
+        e.contains(
+            "no view's record has the field scene.structure.0.support; scene has: structures"
+        ),
+        "{e}"
+    );
+    let e = eval_err(&data, &p, &["--where", "sample=99"]);
+    assert!(e.contains("no view of the dataset matches"), "{e}");
+    let e = eval_err(&data, &p, &["--where", "sample"]);
+    assert!(e.contains("expected FIELD=VALUE"), "{e}");
 }

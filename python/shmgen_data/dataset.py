@@ -29,7 +29,7 @@ import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any, Callable, Iterator, Sequence, overload
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,6 +38,9 @@ from .camera import Camera
 from .files import DatasetError, DatasetFiles, Limits, check_relative, parse_hashes
 from .io import PNG_FORMATS, Ply, decode_exr, decode_png, parse_ply
 from .structures import Augmentation, Record, Structure, Structures
+
+if TYPE_CHECKING:
+    from .splits import Split
 
 __all__ = ["Dataset", "Sample", "View", "Mesh", "Points", "LAYERS", "MissingFileError",
            "DatasetError", "Limits", "Verification", "Structure", "Structures", "Augmentation"]
@@ -280,7 +283,8 @@ class View:
 
     Structures by name: ``structures`` (a :class:`Structures` mapping: ``view.structures["silo"]``
     gives its ``instance_id``, ``part_ids``, ``labels``…) and ``labels`` (each structure's
-    mechanics labels by name: ``view.labels["beam"]["max_deflection"]``; None for an assembly).
+    mechanics labels by name: ``view.labels["beam"]["max_deflection"]``; None for an assembly);
+    ``prompt`` (the first structure's texture prompt) and ``prompts`` (each structure's).
 
     Images (see :data:`LAYERS` for shapes and dtypes), read on first access and kept:
     ``rgb``, ``depth``, ``mask``, ``parts``, ``instances``, ``cracks``, ``erased``, ``valid``,
@@ -314,10 +318,10 @@ class View:
     def __init__(self, root: Path, sample: int, view: int, copy: int | None, stem: str,
                  files: dict[str, Path], source: DatasetFiles | None = None):
         self.root = root
-        self.sample = sample
-        self.view = view
-        self.copy = copy
-        self.stem = stem
+        self.sample: int = sample
+        self.view: int = view
+        self.copy: int | None = copy
+        self.stem: str = stem
         self.files = files
         self._source = source or DatasetFiles(root)
         self._images: dict[str, NDArray[Any]] = {}
@@ -412,6 +416,18 @@ class View:
         """Each structure's mechanics labels by name (``max_deflection``, ``loads``,
         ``theory``…), None for a structure without them (an assembly)."""
         return self.structures.labels
+
+    @property
+    def prompts(self) -> dict[str, str | None]:
+        """Each structure's texture prompt by name (``material.prompt`` of its record; None
+        for a structure given a plain colour)."""
+        return self.structures.prompts
+
+    @property
+    def prompt(self) -> str | None:
+        """The texture prompt of the view's first structure (the only one in the paper's
+        recipes): ``"A photo of cracked timber for construction"``; None without one."""
+        return next(iter(self.prompts.values()), None)
 
     def structure_mask(self, name: str) -> NDArray[np.bool_]:
         """Where the view's ``instances`` image shows the structure ``name``."""
@@ -683,6 +699,15 @@ class Dataset(Sequence[View]):
 
     def __repr__(self) -> str:
         return f"Dataset({str(self.root)!r}, samples={len(self.samples)}, views={len(self)})"
+
+    def split(self, by: str | Callable[[View], Any] = "sample", *, holdout: Any = None,
+              fraction: float | None = None, seed: int = 0) -> Split:
+        """The views in two parts, train and test, whole groups at a time: see
+        :func:`shmgen_data.splits.split` (``by`` a key name, a dotted record path or a
+        function; ``holdout`` the key values held out, or ``fraction`` of the groups drawn
+        deterministically)."""
+        from .splits import split
+        return split(self, by, holdout=holdout, fraction=fraction, seed=seed)
 
     def sample(self, index: int) -> Sample:
         """The sample with index ``index`` (its number, not its position)."""

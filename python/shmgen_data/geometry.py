@@ -5,15 +5,26 @@ sees the camera-frame point ``z · (x, y, 1)``, where ``(x, y)`` are the undisto
 normalised coordinates of its centre ``(u, v) = (j + 0.5, i + 0.5)``: ``K⁻¹ (u, v, 1)``, and
 for a distorting lens that undone with OpenCV's Brown–Conrady model
 (:func:`shmgen_data.camera.undistort`). The world point is ``c2w · (X_cam, 1)``.
+
+The depth back-projected is the view's own (``view.depth``) or, given ``depth=``, any map of
+the view's size in the same convention: a network's prediction back-projects through the
+view's camera exactly as the truth does (pixels with depth ≤ 0 or not finite give no point).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any, Union
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .dataset import Sample, View
+
+#: The depth maps :func:`fuse` back-projects instead of the views' own: by view stem, or a
+#: function of the view (a network's forward pass, say).
+Depths = Union[Mapping[str, ArrayLike], Callable[[View], ArrayLike]]
 
 __all__ = ["Cloud", "backproject", "fuse"]
 
@@ -34,17 +45,24 @@ class Cloud:
         return len(self.points)
 
 
-def backproject(view: View, *, rest: bool = False, where: np.ndarray | None = None) -> Cloud:
+def backproject(view: View, *, rest: bool = False, where: np.ndarray | None = None,
+                depth: ArrayLike | None = None) -> Cloud:
     """The world points a view's depth sees, with their colours.
 
     Every pixel with depth > 0 (and ``where`` True, if given: an ``(H, W)`` bool mask such as
     ``view.valid`` or ``view.flow_valid``) gives one point. ``rest=True`` back-projects the
     unloaded structure (``rest_depth``, coloured by ``rest_rgb``) through the same camera.
-    Colours are None when the view has no RGB file.
+    ``depth``, if given, is back-projected instead of the view's file: an ``(H, W)`` map of
+    planar depth in metres, such as a network's prediction (NaN, ±inf and values ≤ 0 give no
+    point). Colours are None when the view has no RGB file.
     """
-    depth = view.rest_depth if rest else view.depth
     camera = view.camera
-    keep = depth > 0
+    if depth is None:
+        depth = view.rest_depth if rest else view.depth
+    else:
+        depth = checked_depth(depth, view)
+    with np.errstate(invalid="ignore"):
+        keep = np.isfinite(depth) & (depth > 0)
     if where is not None:
         where = np.asarray(where, dtype=bool)
         if where.shape != depth.shape:
@@ -62,7 +80,34 @@ def backproject(view: View, *, rest: bool = False, where: np.ndarray | None = No
     return Cloud(points, colours, pixels, np.zeros(len(points), dtype=np.int64))
 
 
-def fuse(sample: Sample, *, copies: bool = False, rest: bool = False) -> Cloud:
+def checked_depth(depth: ArrayLike, view: View) -> NDArray[np.float64]:
+    """``depth`` as a float64 ``(H, W)`` array of the view's size; ``ValueError`` naming the
+    view and the shape otherwise."""
+    array = np.asarray(depth)
+    if array.ndim == 3 and array.shape[-1] == 1:
+        array = array[..., 0]
+    size = (view.camera.height, view.camera.width)
+    if array.shape != size:
+        raise ValueError(f"a depth map for view {view.stem} has shape {array.shape}; the view is "
+                         f"{size[0]} × {size[1]} (H, W)")
+    if not np.issubdtype(array.dtype, np.number) or np.iscomplexobj(array):
+        raise ValueError(f"a depth map for view {view.stem} holds {array.dtype}, not real numbers")
+    return array.astype(np.float64)
+
+
+def _depth_of(depths: Depths, view: View) -> Any:
+    """The depth map ``depths`` gives for ``view``: ``KeyError`` naming the view if a mapping
+    has none for it."""
+    if callable(depths):
+        return depths(view)
+    try:
+        return depths[view.stem]
+    except KeyError:
+        raise KeyError(f"no depth map given for view {view.stem}") from None
+
+
+def fuse(sample: Sample, *, copies: bool = False, rest: bool = False,
+         depths: Depths | None = None) -> Cloud:
     """The fused cloud of a sample: every view's :func:`backproject` in one cloud.
 
     Clean views only by default (an exact augmented copy sees the same surface again);
@@ -70,6 +115,8 @@ def fuse(sample: Sample, *, copies: bool = False, rest: bool = False) -> Cloud:
     they have that mask. ``Cloud.views`` gives each point's position in ``sample.views``
     (or in ``sample.clean_views()`` without copies). Raises ``ValueError`` for a sample with
     no view to fuse (all clean views left out by ``keep_clean: false``: pass ``copies=True``).
+    ``depths`` fuses other depth maps than the views' own: by view stem (``{"000003_01": map}``)
+    or a function of the :class:`View` (each map as ``backproject``'s ``depth``).
     """
     views = sample.views if copies else sample.clean_views()
     if not views:
@@ -77,7 +124,8 @@ def fuse(sample: Sample, *, copies: bool = False, rest: bool = False) -> Cloud:
             f"sample {sample.index} has no clean views to fuse (the dataset keeps only augmented "
             "copies); pass copies=True"
         )
-    clouds = [backproject(v, rest=rest, where=v.valid if v.has("valid") else None) for v in views]
+    clouds = [backproject(v, rest=rest, where=v.valid if v.has("valid") else None,
+                          depth=None if depths is None else _depth_of(depths, v)) for v in views]
     colours = None
     if all(c.colours is not None for c in clouds):
         colours = np.concatenate([c.colours for c in clouds])

@@ -51,6 +51,15 @@ class Structure:
     labels: Record | None
     record: Record
 
+    @property
+    def prompt(self) -> str | None:
+        """The texture prompt the structure was painted from (``material.prompt`` of its
+        record: ``"A photo of cracked timber for construction"``); None for a structure
+        given a plain colour."""
+        material = self.record.get("material")
+        prompt = material.get("prompt") if isinstance(material, dict) else None
+        return prompt if isinstance(prompt, str) else None
+
     def mask(self, instances: NDArray[np.integer[Any]]) -> NDArray[np.bool_]:
         """Where an ``instances`` image (``view.instances``) shows this structure."""
         return np.asarray(instances == self.instance_id)
@@ -109,6 +118,11 @@ class Structures(Mapping[str, Structure]):
     def labels(self) -> dict[str, Record | None]:
         """Each structure's labels by name (None for an assembly)."""
         return {name: structure.labels for name, structure in self.items()}
+
+    @property
+    def prompts(self) -> dict[str, str | None]:
+        """Each structure's texture prompt by name (None for a plain colour)."""
+        return {name: structure.prompt for name, structure in self.items()}
 
 
 def _own_name(entry: Record) -> str:

@@ -8,24 +8,40 @@
 //! averaged over images with equal weight, as Marigold and Depth Anything evaluate; images are
 //! scored in parallel and summed in dataset order, so the report has the same bytes on any
 //! number of threads.
+//!
+//! What is scored: the views chosen by `--where` (all by default, see `select`), and for each
+//! quantity predicted anywhere, every chosen view (sample) that has a prediction and the truth
+//! to score it against. What is not (no prediction, no truth, nothing to score) is counted and
+//! named in text and JSON (`outcome`); the report says whether the evaluation is complete, and
+//! `shmgen eval` exits [`EXIT_PARTIAL`] when it is not. Per-image (per-sample) values are in the
+//! JSON beside the means.
 
 mod depth;
 mod epe;
 mod misnamed;
 mod nearest;
 mod npy;
+mod outcome;
 mod predictions;
+mod select;
 mod stats;
 mod surface;
 
 pub use depth::Align;
 pub use misnamed::{Misnamed, Suggestion};
+pub use outcome::Unscored;
+pub use select::Condition;
+
+/// The exit code of `shmgen eval` when something asked for was not scored (see [`outcome`]);
+/// 0 is complete, 1 an error.
+pub const EXIT_PARTIAL: u8 = 2;
 
 use crate::dataset::{Dataset, View};
 use crate::geometry::import::{import_mesh, import_surface};
 use crate::output::refuse_data_target;
 use crate::output::write_atomic;
 use anyhow::{Context, Result, bail};
+use outcome::{Outcome, Tallied, tally};
 use predictions::Quantity;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -77,6 +93,8 @@ pub struct EvalOptions {
     /// Where the report's JSON will be written, if anywhere: refused before scoring, which
     /// may take minutes, if it is or lies inside a dataset or an export.
     pub json: Option<PathBuf>,
+    /// `--where` conditions: only the views for which all hold are scored.
+    pub selection: Vec<Condition>,
 }
 
 /// The report, as `--json` writes it.
@@ -85,20 +103,16 @@ pub struct Report {
     schema: &'static str,
     dataset: Value,
     settings: Settings,
-    /// Depth: mean over images of each image's AbsRel.
-    pub abs_rel: Option<f64>,
-    /// SqRel.
-    pub sq_rel: Option<f64>,
-    /// RMSE, metres.
-    pub rmse: Option<f64>,
-    /// RMSE of ln depth.
-    pub rmse_log: Option<f64>,
-    /// δ < 1.25.
-    pub delta1: Option<f64>,
-    /// δ < 1.25².
-    pub delta2: Option<f64>,
-    /// δ < 1.25³.
-    pub delta3: Option<f64>,
+    /// The views scored: all, or those `--where` chose.
+    pub selection: Selection,
+    /// Whether every selected view (sample) had a prediction of each quantity predicted
+    /// anywhere, and each was scored (`unscored` is empty).
+    pub complete: bool,
+    /// What was not scored and why, by quantity and reason.
+    pub unscored: Vec<Unscored>,
+    /// Depth: the mean over images of each image's metrics.
+    #[serde(flatten)]
+    pub depth: DepthMetrics,
     /// The mean over images of the alignment's scale (None without alignment).
     pub align_scale: Option<f64>,
     /// The mean over images of the alignment's shift, metres (`lstsq_shift` only).
@@ -113,6 +127,166 @@ pub struct Report {
     pub displacement: Option<EpeReport>,
     /// Files under PREDICTIONS that look like predictions but that no view or sample reads.
     pub misnamed_files: Misnamed,
+    /// Each scored view's values, in dataset order.
+    pub images: Vec<ImageResult>,
+    /// Each scored sample's surface values, in dataset order.
+    pub samples: Vec<SampleResult>,
+}
+
+/// Which views were scored.
+#[derive(Clone, Debug, Serialize)]
+pub struct Selection {
+    /// The `--where` conditions, as given (FIELD=VALUE).
+    pub conditions: Vec<String>,
+    /// Views chosen, of the dataset's.
+    pub views: usize,
+    /// Views of the dataset.
+    pub dataset_views: usize,
+    /// Samples with a chosen view, of the dataset's.
+    pub samples: usize,
+    /// Samples of the dataset.
+    pub dataset_samples: usize,
+}
+
+/// One view's values (None: that quantity was not scored for it).
+#[derive(Clone, Debug, Serialize)]
+pub struct ImageResult {
+    /// The view's file stem (`000003_01`, or `000003_01a0` for an augmented copy).
+    pub stem: String,
+    /// The sample index.
+    pub sample: u64,
+    /// The view index.
+    pub view: u32,
+    /// The augmented copy's index (None for a clean view).
+    pub copy: Option<u32>,
+    /// Depth metrics.
+    pub depth: Option<DepthResult>,
+    /// Optical flow EPE, pixels.
+    pub flow: Option<EpeResult>,
+    /// Displacement EPE, metres.
+    pub displacement: Option<EpeResult>,
+}
+
+/// The depth metrics of one image, or their means over images (None where nothing was
+/// scored).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct DepthMetrics {
+    /// Mean |d − d*| / d*.
+    pub abs_rel: Option<f64>,
+    /// Mean (d − d*)² / d*.
+    pub sq_rel: Option<f64>,
+    /// √mean (d − d*)², metres.
+    pub rmse: Option<f64>,
+    /// √mean (ln d − ln d*)².
+    pub rmse_log: Option<f64>,
+    /// δ < 1.25.
+    pub delta1: Option<f64>,
+    /// δ < 1.25².
+    pub delta2: Option<f64>,
+    /// δ < 1.25³.
+    pub delta3: Option<f64>,
+}
+
+impl DepthMetrics {
+    /// The first seven of `values` (AbsRel, SqRel, RMSE, RMSE log, δ1, δ2, δ3), if any.
+    fn from_values(values: Option<&[f64]>) -> DepthMetrics {
+        let m = |i: usize| values.map(|v| v[i]);
+        DepthMetrics {
+            abs_rel: m(0),
+            sq_rel: m(1),
+            rmse: m(2),
+            rmse_log: m(3),
+            delta1: m(4),
+            delta2: m(5),
+            delta3: m(6),
+        }
+    }
+}
+
+/// One image's depth metrics (None where it had nothing to score).
+#[derive(Clone, Debug, Serialize)]
+pub struct DepthResult {
+    /// Its metrics.
+    #[serde(flatten)]
+    pub metrics: DepthMetrics,
+    /// Pixels scored.
+    pub pixels: u64,
+    /// Pixels left out (see `settings.excluded`).
+    pub excluded_pixels: u64,
+    /// The alignment's scale (1 without alignment; None when undefined).
+    pub scale: Option<f64>,
+    /// The alignment's shift, metres (0 without a fitted shift; None when undefined).
+    pub shift: Option<f64>,
+}
+
+/// One image's end-point error.
+#[derive(Clone, Debug, Serialize)]
+pub struct EpeResult {
+    /// The image's mean end-point error.
+    pub epe_mean: Option<f64>,
+    /// The image's median end-point error.
+    pub epe_median: Option<f64>,
+    /// Pixels scored.
+    pub pixels: u64,
+    /// Pixels left out (not predicted).
+    pub excluded_pixels: u64,
+}
+
+/// One sample's surface metrics.
+#[derive(Clone, Debug, Serialize)]
+pub struct SampleResult {
+    /// The sample's index.
+    pub sample: u64,
+    /// Its metrics.
+    #[serde(flatten)]
+    pub metrics: SurfaceMetrics,
+}
+
+/// Surface metrics of one sample, or their means over samples.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct SurfaceMetrics {
+    /// ½ (accuracy + completeness), metres.
+    pub chamfer_l1: f64,
+    /// Mean squared accuracy + mean squared completeness, m².
+    pub chamfer_l2: f64,
+    /// Mean distance of predicted points to the true surface, metres.
+    pub accuracy: f64,
+    /// Mean distance of true surface points to the prediction, metres.
+    pub completeness: f64,
+    /// Share of predicted points within τ of the truth.
+    pub precision: f64,
+    /// Share of true points within τ of the prediction.
+    pub recall: f64,
+    /// 2PR / (P + R) (per sample, then averaged).
+    pub fscore: f64,
+}
+
+impl SurfaceMetrics {
+    /// The metrics from the values [`SurfaceMetrics::values`] gives, or their means.
+    fn from_values(m: [f64; 7]) -> SurfaceMetrics {
+        SurfaceMetrics {
+            chamfer_l1: m[0],
+            chamfer_l2: m[1],
+            accuracy: m[2],
+            completeness: m[3],
+            precision: m[4],
+            recall: m[5],
+            fscore: m[6],
+        }
+    }
+
+    /// A sample's metrics as values to average.
+    fn values(s: &surface::SurfaceScore) -> [f64; 7] {
+        [
+            s.chamfer_l1(),
+            s.chamfer_l2(),
+            s.accuracy,
+            s.completeness,
+            s.precision,
+            s.recall,
+            s.fscore(),
+        ]
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -132,6 +306,8 @@ pub struct Counts {
     pub images: usize,
     /// Views of the dataset with no prediction (while others have one).
     pub missing: usize,
+    /// Views with a prediction whose truth the dataset lacks (listed in `unscored`).
+    pub no_truth: usize,
     /// Images with a prediction but nothing to score (no pixel left, alignment undefined).
     pub skipped: usize,
     /// Pixels scored, over all images.
@@ -144,24 +320,15 @@ pub struct Counts {
 /// Surface metrics, means over samples.
 #[derive(Clone, Debug, Serialize)]
 pub struct SurfaceReport {
-    /// ½ (accuracy + completeness), metres.
-    pub chamfer_l1: f64,
-    /// Mean squared accuracy + mean squared completeness, m².
-    pub chamfer_l2: f64,
-    /// Mean distance of predicted points to the true surface, metres.
-    pub accuracy: f64,
-    /// Mean distance of true surface points to the prediction, metres.
-    pub completeness: f64,
-    /// Share of predicted points within τ of the truth.
-    pub precision: f64,
-    /// Share of true points within τ of the prediction.
-    pub recall: f64,
-    /// 2PR / (P + R) per sample, averaged.
-    pub fscore: f64,
+    /// Means over the samples scored.
+    #[serde(flatten)]
+    pub metrics: SurfaceMetrics,
     /// Samples scored and missing.
     pub samples: usize,
     /// Samples of the dataset with no predicted surface.
     pub missing: usize,
+    /// Samples with a predicted surface but no true mesh (listed in `unscored`).
+    pub no_truth: usize,
 }
 
 /// End-point error, means over images of each image's mean and median.
@@ -175,12 +342,38 @@ pub struct EpeReport {
     pub counts: Counts,
 }
 
-/// What one view's predictions gave (None: no prediction of that quantity).
-#[derive(Default)]
+/// What one view's predictions gave.
 struct ViewScores {
-    depth: Option<depth::ImageDepth>,
-    flow: Option<epe::ImageEpe>,
-    displacement: Option<epe::ImageEpe>,
+    depth: Outcome<depth::ImageDepth>,
+    flow: Outcome<epe::ImageEpe>,
+    displacement: Outcome<epe::ImageEpe>,
+}
+
+impl Tallied for depth::ImageDepth {
+    fn has_metrics(&self) -> bool {
+        self.metrics.is_some()
+    }
+    fn pixels(&self) -> (u64, u64) {
+        (self.pixels, self.excluded)
+    }
+}
+
+impl Tallied for epe::ImageEpe {
+    fn has_metrics(&self) -> bool {
+        self.mean_median.is_some()
+    }
+    fn pixels(&self) -> (u64, u64) {
+        (self.pixels, self.excluded)
+    }
+}
+
+impl Tallied for surface::SurfaceScore {
+    fn has_metrics(&self) -> bool {
+        true
+    }
+    fn pixels(&self) -> (u64, u64) {
+        (0, 0)
+    }
 }
 
 /// Evaluates the predictions in `predictions` against the finished dataset at `root`.
@@ -199,42 +392,48 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
     }
     let dataset = Dataset::open(root)?;
     let samples = predictions::samples_folder(predictions)?;
-    let views: Vec<&View> = dataset.views().collect();
+    let views = select::select(&dataset, &options.selection)?;
+    if views.is_empty() {
+        bail!(
+            "--where {}: no view of the dataset matches",
+            conditions_shown(&options.selection).join(" --where ")
+        );
+    }
     let scores = views
         .par_iter()
         .map(|view| score_view(&dataset, &samples, view, options))
         .collect::<Result<Vec<_>>>()?;
-    let surfaces = surfaces(&dataset, &samples, options)?;
+    let chosen_samples: Vec<&crate::dataset::Sample> = dataset
+        .samples
+        .iter()
+        .filter(|s| views.iter().any(|v| v.sample == s.index))
+        .collect();
+    let surfaces = chosen_samples
+        .iter()
+        .map(|sample| score_surface(&dataset, &samples, sample, options))
+        .collect::<Result<Vec<_>>>()?;
     let misnamed_files = misnamed::misnamed(predictions, &samples, &dataset)?;
 
-    let mut depth_mean = Mean::<9>::default();
-    let mut counts = Counts::default();
-    for s in &scores {
-        match &s.depth {
-            None => counts.missing += 1,
-            Some(d) => {
-                counts.pixels += d.pixels;
-                counts.excluded_pixels += d.excluded;
-                match d.metrics {
-                    Some(m) => {
-                        depth_mean.add([m[0], m[1], m[2], m[3], m[4], m[5], m[6], d.scale, d.shift])
-                    }
-                    None => counts.skipped += 1,
-                }
-            }
-        }
-    }
-    counts.images = depth_mean.count();
-    if counts.images + counts.skipped == 0 {
-        counts.missing = 0;
-    }
-    let flow = epe_report(scores.iter().map(|s| s.flow));
-    let displacement = epe_report(scores.iter().map(|s| s.displacement));
-    if counts.images + counts.skipped == 0
-        && surfaces.is_none()
-        && flow.is_none()
-        && displacement.is_none()
-    {
+    let (depth_counts, mut unscored) = tally("depth", &named(&views, &scores, |s| &s.depth));
+    let (flow, flow_unscored) = epe_report("flow", &named(&views, &scores, |s| &s.flow));
+    let (displacement, displacement_unscored) =
+        epe_report("displacement", &named(&views, &scores, |s| &s.displacement));
+    let sample_items: Vec<(String, &Outcome<surface::SurfaceScore>)> = chosen_samples
+        .iter()
+        .zip(&surfaces)
+        .map(|(s, o)| (format!("sample {}", s.index), o))
+        .collect();
+    let (surface_counts, surface_unscored) = tally("surface", &sample_items);
+    unscored.extend(flow_unscored);
+    unscored.extend(displacement_unscored);
+    unscored.extend(surface_unscored);
+    let surface = surface_report(&surfaces, &surface_counts);
+
+    let anything_predicted = scores
+        .iter()
+        .any(|s| s.depth.predicted() || s.flow.predicted() || s.displacement.predicted())
+        || surfaces.iter().any(Outcome::predicted);
+    if !anything_predicted {
         let expected = views.first().map_or(String::new(), |v| {
             format!(
                 "; eval reads {}",
@@ -249,10 +448,16 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
             predictions.display()
         );
     }
+    let mut depth_mean = Mean::<9>::default();
+    for d in scores.iter().filter_map(|s| s.depth.scored()) {
+        if let Some(m) = d.metrics {
+            depth_mean.add([m[0], m[1], m[2], m[3], m[4], m[5], m[6], d.scale, d.shift]);
+        }
+    }
     let m = depth_mean.get();
     let pick = |i: usize| m.map(|m| m[i]);
     Ok(Report {
-        schema: "shmgen.eval/1",
+        schema: "shmgen.eval/2",
         dataset: dataset.identity(),
         settings: Settings {
             align: options.align.name(),
@@ -262,21 +467,93 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
             surface_samples: options.surface_samples,
             excluded: "pixels not predicted (NaN or ±inf; 0 in a millimetre PNG), or (depth) not positive after alignment, are left out of the fit and the metrics, and counted",
         },
-        abs_rel: pick(0),
-        sq_rel: pick(1),
-        rmse: pick(2),
-        rmse_log: pick(3),
-        delta1: pick(4),
-        delta2: pick(5),
-        delta3: pick(6),
+        selection: Selection {
+            conditions: conditions_shown(&options.selection),
+            views: views.len(),
+            dataset_views: dataset.views().count(),
+            samples: chosen_samples.len(),
+            dataset_samples: dataset.samples.len(),
+        },
+        complete: unscored.is_empty(),
+        unscored,
+        depth: DepthMetrics::from_values(m.as_ref().map(|m| &m[..])),
         align_scale: pick(7).filter(|_| options.align != Align::None),
         align_shift: pick(8).filter(|_| options.align == Align::LstsqShift),
-        depth_counts: counts,
-        surface: surfaces,
+        depth_counts,
+        surface,
         flow,
         displacement,
         misnamed_files,
+        images: image_results(&views, &scores, options.align),
+        samples: chosen_samples
+            .iter()
+            .zip(&surfaces)
+            .filter_map(|(sample, o)| o.scored().map(|s| sample_result(sample.index, s)))
+            .collect(),
     })
+}
+
+/// One quantity's outcome per view, named by the view's stem.
+fn named<'a, T>(
+    views: &[&View],
+    scores: &'a [ViewScores],
+    pick: fn(&ViewScores) -> &Outcome<T>,
+) -> Vec<(String, &'a Outcome<T>)> {
+    views
+        .iter()
+        .zip(scores)
+        .map(|(v, s)| (v.stem.clone(), pick(s)))
+        .collect()
+}
+
+fn conditions_shown(conditions: &[Condition]) -> Vec<String> {
+    conditions.iter().map(Condition::to_string).collect()
+}
+
+/// The per-image values of the views that had anything scored.
+fn image_results(views: &[&View], scores: &[ViewScores], align: Align) -> Vec<ImageResult> {
+    let epe = |e: &epe::ImageEpe| EpeResult {
+        epe_mean: e.mean_median.map(|m| m.0),
+        epe_median: e.mean_median.map(|m| m.1),
+        pixels: e.pixels,
+        excluded_pixels: e.excluded,
+    };
+    views
+        .iter()
+        .zip(scores)
+        .filter(|(_, s)| {
+            s.depth.scored().is_some()
+                || s.flow.scored().is_some()
+                || s.displacement.scored().is_some()
+        })
+        .map(|(v, s)| ImageResult {
+            stem: v.stem.clone(),
+            sample: v.sample,
+            view: v.view,
+            copy: v.copy,
+            depth: s.depth.scored().map(|d| depth_result(d, align)),
+            flow: s.flow.scored().map(epe),
+            displacement: s.displacement.scored().map(epe),
+        })
+        .collect()
+}
+
+fn depth_result(d: &depth::ImageDepth, align: Align) -> DepthResult {
+    let fitted = d.metrics.is_some() || align == Align::None;
+    DepthResult {
+        metrics: DepthMetrics::from_values(d.metrics.as_ref().map(|m| &m[..])),
+        pixels: d.pixels,
+        excluded_pixels: d.excluded,
+        scale: fitted.then_some(if align == Align::None { 1.0 } else { d.scale }),
+        shift: fitted.then_some(if align == Align::None { 0.0 } else { d.shift }),
+    }
+}
+
+fn sample_result(sample: u64, s: &surface::SurfaceScore) -> SampleResult {
+    SampleResult {
+        sample,
+        metrics: SurfaceMetrics::from_values(SurfaceMetrics::values(s)),
+    }
 }
 
 fn score_view(
@@ -285,60 +562,94 @@ fn score_view(
     view: &View,
     options: &EvalOptions,
 ) -> Result<ViewScores> {
-    let mut out = ViewScores::default();
-    let depth_prediction = predictions::find(samples, view, Quantity::Depth)?;
-    let flow_prediction = predictions::find(samples, view, Quantity::Flow)?;
-    let displacement_prediction = predictions::find(samples, view, Quantity::Displacement)?;
-    if depth_prediction.is_none() && flow_prediction.is_none() && displacement_prediction.is_none()
-    {
+    let depth_file = predictions::find(samples, view, Quantity::Depth)?;
+    let flow_file = predictions::find(samples, view, Quantity::Flow)?;
+    let displacement_file = predictions::find(samples, view, Quantity::Displacement)?;
+    let mut out = ViewScores {
+        depth: Outcome::Missing,
+        flow: Outcome::Missing,
+        displacement: Outcome::Missing,
+    };
+    if depth_file.is_none() && flow_file.is_none() && displacement_file.is_none() {
         return Ok(out);
     }
-    truth(view, "depth.exr", "depth")?;
-    let depth_layer = dataset.layer(view, "depth.exr", &Quantity::Depth.channels().sets())?;
-    let (w, h) = (depth_layer.width, depth_layer.height);
-    let depth = &depth_layer.channels[0];
-    if let Some(path) = depth_prediction {
-        let predicted = predictions::read(&path, Quantity::Depth, w, h)?;
-        let kind = match options.mask {
-            Mask::Structure => "mask.png",
-            Mask::Valid => "valid.png",
+    // Every quantity is scored where the view sees a surface or inside its masks: the true
+    // depth is read once, if the dataset has it.
+    let depth_layer = match view.file("depth.exr") {
+        Some(_) => Some(dataset.layer(view, "depth.exr", &Quantity::Depth.channels().sets())?),
+        None => None,
+    };
+    if let Some(path) = depth_file {
+        out.depth = match &depth_layer {
+            Some(layer) => Outcome::Scored(score_depth(dataset, view, layer, &path, options)?),
+            None => Outcome::NoTruth(lacks(view, &[("depth.exr", "depth")]).unwrap_or_default()),
         };
-        let inside = match view.file(kind) {
-            Some(_) => positive(dataset, view, kind)?,
-            None => vec![true; w * h],
+    }
+    if let Some(path) = flow_file {
+        out.flow = match lacks(view, &[("flow.exr", "flow"), ("flow_valid.png", "flow")]) {
+            Some(reason) => Outcome::NoTruth(reason),
+            None => {
+                let truth = dataset.layer(view, "flow.exr", &Quantity::Flow.channels().sets())?;
+                let valid = positive(dataset, view, "flow_valid.png")?;
+                let predicted =
+                    predictions::read(&path, Quantity::Flow, truth.width, truth.height)?;
+                Outcome::Scored(epe::score(&truth.channels, &predicted, &valid))
+            }
         };
-        out.depth = Some(depth::score(depth, &predicted[0], &inside, options.align));
     }
-    if let Some(path) = flow_prediction {
-        truth(view, "flow.exr", "flow")?;
-        let truth_flow = dataset.layer(view, "flow.exr", &Quantity::Flow.channels().sets())?;
-        truth(view, "flow_valid.png", "flow")?;
-        let valid = positive(dataset, view, "flow_valid.png")?;
-        let predicted = predictions::read(&path, Quantity::Flow, w, h)?;
-        out.flow = Some(epe::score(&truth_flow.channels, &predicted, &valid));
-    }
-    if let Some(path) = displacement_prediction {
-        truth(view, "displacement.exr", "displacement")?;
-        let truth_displacement = dataset.layer(
-            view,
-            "displacement.exr",
-            &Quantity::Displacement.channels().sets(),
-        )?;
-        // Displacement is that of the surface point the pixel sees: defined where it sees one.
-        let valid: Vec<bool> = depth.iter().map(|&d| d > 0.0).collect();
-        let predicted = predictions::read(&path, Quantity::Displacement, w, h)?;
-        out.displacement = Some(epe::score(&truth_displacement.channels, &predicted, &valid));
+    if let Some(path) = displacement_file {
+        let needed = [("displacement.exr", "displacement"), ("depth.exr", "depth")];
+        out.displacement = match (&depth_layer, lacks(view, &needed)) {
+            (Some(layer), None) => {
+                let truth = dataset.layer(
+                    view,
+                    "displacement.exr",
+                    &Quantity::Displacement.channels().sets(),
+                )?;
+                // Displacement is that of the surface point the pixel sees: defined where it
+                // sees one.
+                let valid: Vec<bool> = layer.channels[0].iter().map(|&d| d > 0.0).collect();
+                let predicted =
+                    predictions::read(&path, Quantity::Displacement, layer.width, layer.height)?;
+                Outcome::Scored(epe::score(&truth.channels, &predicted, &valid))
+            }
+            (_, reason) => Outcome::NoTruth(reason.unwrap_or_default()),
+        };
     }
     Ok(out)
 }
 
-/// The dataset's file of `kind` for `view`, or an error naming the output it lacks.
-fn truth<'a>(view: &'a View, kind: &str, output: &str) -> Result<&'a str> {
-    view.file(kind).with_context(|| {
-        format!(
-            "view {} has a prediction but the dataset has no {kind} for it (the \"{output}\" output)",
-            view.stem
-        )
+/// The depth metrics of the prediction at `path` against the view's true depth `layer`.
+fn score_depth(
+    dataset: &Dataset,
+    view: &View,
+    layer: &crate::dataset::Layer,
+    path: &Path,
+    options: &EvalOptions,
+) -> Result<depth::ImageDepth> {
+    let (w, h) = (layer.width, layer.height);
+    let predicted = predictions::read(path, Quantity::Depth, w, h)?;
+    let kind = match options.mask {
+        Mask::Structure => "mask.png",
+        Mask::Valid => "valid.png",
+    };
+    let inside = match view.file(kind) {
+        Some(_) => positive(dataset, view, kind)?,
+        None => vec![true; w * h],
+    };
+    Ok(depth::score(
+        &layer.channels[0],
+        &predicted[0],
+        &inside,
+        options.align,
+    ))
+}
+
+/// Why a prediction of the view cannot be scored: the first of the dataset files `needed`
+/// (kind, the output that writes it) the view lacks; None when it has them all.
+fn lacks(view: &View, needed: &[(&str, &str)]) -> Option<String> {
+    needed.iter().find(|(kind, _)| view.file(kind).is_none()).map(|(kind, output)| {
+        format!("the dataset has no {kind} to score it against (add \"{output}\" to the recipe's outputs)")
     })
 }
 
@@ -348,91 +659,83 @@ fn positive(dataset: &Dataset, view: &View, kind: &str) -> Result<Vec<bool>> {
     Ok(image.values.iter().map(|&v| v > 0).collect())
 }
 
-fn epe_report(images: impl Iterator<Item = Option<epe::ImageEpe>>) -> Option<EpeReport> {
+/// The EPE report of one vector quantity over the selected views (None where predicted
+/// nowhere), and what of it was not scored.
+fn epe_report(
+    quantity: &'static str,
+    items: &[(String, &Outcome<epe::ImageEpe>)],
+) -> (Option<EpeReport>, Vec<Unscored>) {
+    let (counts, unscored) = tally(quantity, items);
     let mut mean = Mean::<2>::default();
-    let mut counts = Counts::default();
-    for image in images {
-        match image {
-            None => counts.missing += 1,
-            Some(e) => {
-                counts.pixels += e.pixels;
-                counts.excluded_pixels += e.excluded;
-                match e.mean_median {
-                    Some((a, b)) => mean.add([a, b]),
-                    None => counts.skipped += 1,
-                }
-            }
+    for e in items.iter().filter_map(|(_, o)| o.scored()) {
+        if let Some((a, b)) = e.mean_median {
+            mean.add([a, b]);
         }
     }
-    counts.images = mean.count();
-    if counts.images + counts.skipped == 0 {
-        return None;
+    if counts.images + counts.skipped + counts.no_truth == 0 {
+        return (None, unscored);
     }
     let m = mean.get();
-    Some(EpeReport {
+    let report = EpeReport {
         epe_mean: m.map(|m| m[0]),
         epe_median: m.map(|m| m[1]),
         counts,
-    })
+    };
+    (Some(report), unscored)
 }
 
-/// Surface metrics over the samples that have a predicted surface; None when none has.
-fn surfaces(
+/// The surface of one sample: scored against its true mesh, or why not.
+fn score_surface(
     dataset: &Dataset,
     samples: &Path,
+    sample: &crate::dataset::Sample,
     options: &EvalOptions,
-) -> Result<Option<SurfaceReport>> {
+) -> Result<Outcome<surface::SurfaceScore>> {
+    let Some(first) = sample.views.first() else {
+        return Ok(Outcome::Missing);
+    };
+    let Some(path) = predictions::find_surface(samples, first.folder(), sample.index)? else {
+        return Ok(Outcome::Missing);
+    };
+    let Some(truth_file) = sample.file("mesh.ply") else {
+        return Ok(Outcome::NoTruth(format!(
+            "the dataset has no {:06}.mesh.ply to score {} against (add \"mesh\" to the recipe's outputs)",
+            sample.index,
+            path.file_name().unwrap_or_default().to_string_lossy()
+        )));
+    };
+    // Checked as every file of an untrusted dataset is (no link, regular, its recorded
+    // size and hash) before the importer reads it.
+    dataset.verify_file(truth_file)?;
+    let truth = import_mesh(&dataset.path(truth_file), Default::default())
+        .map_err(anyhow::Error::msg)?
+        .mesh;
+    let predicted = import_surface(&path).map_err(anyhow::Error::msg)?;
+    let score = surface::score(
+        &predicted,
+        &truth,
+        options.surface_samples,
+        options.fscore_threshold,
+    )
+    .with_context(|| format!("{}", path.display()))?;
+    Ok(Outcome::Scored(score))
+}
+
+/// Surface metrics, means over the samples scored; None when none was.
+fn surface_report(
+    surfaces: &[Outcome<surface::SurfaceScore>],
+    counts: &Counts,
+) -> Option<SurfaceReport> {
     let mut mean = Mean::<7>::default();
-    let mut missing = 0;
-    for sample in &dataset.samples {
-        let Some(first) = sample.views.first() else {
-            continue;
-        };
-        let Some(path) = predictions::find_surface(samples, first.folder(), sample.index)? else {
-            missing += 1;
-            continue;
-        };
-        let truth_file = sample.file("mesh.ply").with_context(|| {
-            format!(
-                "sample {} has a predicted surface but the dataset has no {:06}.mesh.ply",
-                sample.index, sample.index
-            )
-        })?;
-        // Checked as every file of an untrusted dataset is (no link, regular, its recorded
-        // size and hash) before the importer reads it.
-        dataset.verify_file(truth_file)?;
-        let truth = import_mesh(&dataset.path(truth_file), Default::default())
-            .map_err(anyhow::Error::msg)?
-            .mesh;
-        let predicted = import_surface(&path).map_err(anyhow::Error::msg)?;
-        let s = surface::score(
-            &predicted,
-            &truth,
-            options.surface_samples,
-            options.fscore_threshold,
-        )
-        .with_context(|| format!("{}", path.display()))?;
-        mean.add([
-            s.chamfer_l1(),
-            s.chamfer_l2(),
-            s.accuracy,
-            s.completeness,
-            s.precision,
-            s.recall,
-            s.fscore(),
-        ]);
+    for s in surfaces.iter().filter_map(Outcome::scored) {
+        mean.add(SurfaceMetrics::values(s));
     }
-    Ok(mean.get().map(|m| SurfaceReport {
-        chamfer_l1: m[0],
-        chamfer_l2: m[1],
-        accuracy: m[2],
-        completeness: m[3],
-        precision: m[4],
-        recall: m[5],
-        fscore: m[6],
+    mean.get().map(|m| SurfaceReport {
+        metrics: SurfaceMetrics::from_values(m),
         samples: mean.count(),
-        missing,
-    }))
+        missing: counts.missing,
+        no_truth: counts.no_truth,
+    })
 }
 
 impl Report {
@@ -458,13 +761,13 @@ impl Report {
             out += "  AbsRel   SqRel    RMSE     RMSE log δ<1.25   δ<1.25²  δ<1.25³\n";
             out += &format!(
                 "  {:<8} {:<8} {:<8} {:<8} {:<8} {:<8} {}\n",
-                f(self.abs_rel),
-                f(self.sq_rel),
-                f(self.rmse),
-                f(self.rmse_log),
-                f(self.delta1),
-                f(self.delta2),
-                f(self.delta3)
+                f(self.depth.abs_rel),
+                f(self.depth.sq_rel),
+                f(self.depth.rmse),
+                f(self.depth.rmse_log),
+                f(self.depth.delta1),
+                f(self.depth.delta2),
+                f(self.depth.delta3)
             );
         }
         if let Some(s) = &self.surface {
@@ -473,13 +776,13 @@ impl Report {
                 s.samples,
                 self.settings.surface_samples,
                 self.settings.fscore_threshold,
-                s.chamfer_l1,
-                s.accuracy,
-                s.completeness,
-                s.chamfer_l2,
-                s.fscore,
-                s.precision,
-                s.recall
+                s.metrics.chamfer_l1,
+                s.metrics.accuracy,
+                s.metrics.completeness,
+                s.metrics.chamfer_l2,
+                s.metrics.fscore,
+                s.metrics.precision,
+                s.metrics.recall
             );
         }
         for (name, unit, report) in [
@@ -499,19 +802,11 @@ impl Report {
         out
     }
 
-    /// What a person should know about what was not scored.
+    /// What a person should know about what was not scored: each group of views (samples)
+    /// not scored with its reason and first names, pixels left out, misnamed files.
     pub fn warnings(&self) -> Vec<String> {
-        let mut out = Vec::new();
-        let mut counted = |what: &str, c: &Counts, left_out: &str| {
-            if c.missing > 0 {
-                out.push(format!("{what}: {} views have no prediction", c.missing));
-            }
-            if c.skipped > 0 {
-                out.push(format!(
-                    "{what}: {} images had nothing to score (no pixel left, or the alignment is undefined)",
-                    c.skipped
-                ));
-            }
+        let mut out: Vec<String> = self.unscored.iter().map(Unscored::describe).collect();
+        let mut excluded = |what: &str, c: &Counts, left_out: &str| {
             if c.excluded_pixels > 0 {
                 out.push(format!(
                     "{what}: {} pixels left out ({left_out})",
@@ -519,24 +814,44 @@ impl Report {
                 ));
             }
         };
-        counted(
+        excluded(
             "depth",
             &self.depth_counts,
             "not predicted: NaN or ±inf, or 0 in a millimetre PNG; or not positive after alignment",
         );
         let vectors = "not predicted: NaN or ±inf";
         if let Some(r) = &self.flow {
-            counted("flow", &r.counts, vectors);
+            excluded("flow", &r.counts, vectors);
         }
         if let Some(r) = &self.displacement {
-            counted("displacement", &r.counts, vectors);
-        }
-        if let Some(s) = &self.surface
-            && s.missing > 0
-        {
-            out.push(format!("surface: {} samples have no prediction", s.missing));
+            excluded("displacement", &r.counts, vectors);
         }
         out.extend(self.misnamed_files.describe());
         out
+    }
+
+    /// One line saying whether everything asked for was scored, and what was chosen.
+    pub fn summary(&self) -> String {
+        let s = &self.selection;
+        let chosen = if s.conditions.is_empty() {
+            format!("all {} views", s.views)
+        } else {
+            format!(
+                "{} of {} views, {} of {} samples (--where {})",
+                s.views,
+                s.dataset_views,
+                s.samples,
+                s.dataset_samples,
+                s.conditions.join(" --where ")
+            )
+        };
+        if self.complete {
+            format!("complete: every prediction asked for was scored; {chosen}")
+        } else {
+            let not: usize = self.unscored.iter().map(|u| u.count).sum();
+            format!(
+                "partial: {not} views or samples not scored (listed above; exit code {EXIT_PARTIAL}); {chosen}"
+            )
+        }
     }
 }

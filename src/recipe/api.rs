@@ -98,9 +98,11 @@ fn param(params: &Params, name: &str, default: Dynamic) -> Fallible<Dynamic> {
         serde_json::json!(b)
     } else if value.is_string() {
         serde_json::json!(value.to_string())
+    } else if let Some(words) = string_list(&value) {
+        serde_json::json!(words)
     } else {
         return fail(format!(
-            "param \"{name}\": the default must be a number, a bool or a string, not {}",
+            "param \"{name}\": the default must be a number, a bool, a string or a list of strings, not {}",
             default.type_name()
         ));
     };
@@ -146,9 +148,35 @@ fn parse_override(name: &str, text: &str, default: &Dynamic) -> Fallible<Dynamic
             .parse::<bool>()
             .map(Dynamic::from)
             .map_err(|_| bad("true or false").into())
+    } else if string_list(default).is_some() {
+        list_override(text).map_err(|why| bad(&format!("a comma-separated list ({why})")).into())
     } else {
         Ok(Dynamic::from(text.to_string()))
     }
+}
+
+/// The strings of a list whose every item is a string (`["rgb", "depth"]`); None otherwise.
+fn string_list(value: &Dynamic) -> Option<Vec<String>> {
+    let list = value.read_lock::<Array>()?;
+    list.iter()
+        .map(|item| item.is_string().then(|| item.to_string()))
+        .collect()
+}
+
+/// `--set outputs=rgb,depth,mesh` for a parameter whose default is a list of strings: the
+/// items, trimmed; an empty item (`rgb,,depth`, or nothing at all) is refused rather than
+/// read as a name.
+fn list_override(text: &str) -> Result<Dynamic, &'static str> {
+    let items: Vec<&str> = text.split(',').map(str::trim).collect();
+    if items.iter().any(|item| item.is_empty()) {
+        return Err("an item is empty");
+    }
+    Ok(Dynamic::from_array(
+        items
+            .into_iter()
+            .map(|item| Dynamic::from(item.to_string()))
+            .collect(),
+    ))
 }
 
 fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset> {
