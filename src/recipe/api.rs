@@ -10,8 +10,8 @@ use crate::cameras::{
 use crate::output::{DEFAULT_OUTPUTS, output_names};
 use crate::scene::{
     AugmentSpec, Background, DEFAULT_POINTS, DatasetSpec, GeometryMode, GroundBounceSpec,
-    ImageRecord, LightSpec, NormalsFrame, OUTDOOR_AMBIENT, Operation, Outputs, SkyGradient,
-    SkySpec, SourceSite, SunSpec, Tone,
+    ImageRecord, LightSpec, NormalsFrame, OUTDOOR_AMBIENT, Operation, Outputs, Shading,
+    SkyGradient, SkySpec, SourceSite, SunSpec, Tone,
 };
 use crate::seeds::Stream;
 use crate::words::number as number_shown;
@@ -162,6 +162,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
         None => LightSpec::default(),
     };
     let antialias = o.flag("antialias", true)?;
+    let shading = Shading::parse(&o.string("shading", "cached")?)?;
     let ground = super::ground_api::ground(o.take("ground"))?;
     let augment = super::augment_api::augment(o.take("augment"))?;
     let sensor = super::augment_api::sensor(o.take("sensor"))?;
@@ -195,6 +196,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
             background,
             light,
             antialias,
+            shading,
             augment,
             sensor,
             normals,

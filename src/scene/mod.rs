@@ -82,6 +82,9 @@ pub struct DatasetSpec {
     pub light: LightSpec,
     /// Anti-alias RGB where the image changes (silhouettes, creases); labels never are.
     pub antialias: bool,
+    /// Where the light's shadow and occlusion rays are traced: a per-sample cache or every
+    /// pixel. Only RGB depends on it.
+    pub shading: Shading,
     /// Augmented copies of every view.
     pub augment: AugmentSpec,
     /// What the camera's sensor and lens do to every clean image (vignetting, noise, blur,
@@ -95,6 +98,32 @@ pub struct DatasetSpec {
     /// The ground the structures stand on, if any (none by default, as in the paper).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ground: Option<GroundSpec>,
+}
+
+/// How the RGB image's lighting is computed (`dataset.shading`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Shading {
+    /// What changes slowly over a surface (sun visibility with its penumbra, sky occlusion,
+    /// ground bounce) traced once per sample where it changes and shared by its views.
+    #[default]
+    Cached,
+    /// Every pixel traces its own shadow and occlusion rays: the reference.
+    PerPixel,
+}
+
+impl Shading {
+    /// The recipe's word for it, or an error naming the words it may be.
+    pub fn parse(word: &str) -> Result<Self, String> {
+        match word {
+            "cached" => Ok(Shading::Cached),
+            "per_pixel" => Ok(Shading::PerPixel),
+            other => Err(format!(
+                "dataset.shading = \"{}\": expected \"cached\" (light traced once per sample where it changes, shared by the views) or \"per_pixel\" (every pixel traces its own light rays: the reference)",
+                other.chars().take(80).collect::<String>()
+            )),
+        }
+    }
 }
 
 /// The axes surface normals are written in.
