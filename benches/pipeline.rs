@@ -247,6 +247,20 @@ fn surfaces_of(sample: &BuiltSample) -> SampleSurfaces<'_> {
     }
 }
 
+/// The anti-aliased RGB of a view `(camera, g)` of `sample` under its light, on a black
+/// backdrop, with the lighting cache `cache` (None: per pixel).
+fn shade_on_black(
+    sample: &BuiltSample,
+    mesh: &TraceMesh,
+    (camera, g): (&Camera, &GBuffer),
+    surfaces: &SampleSurfaces,
+    cache: Option<&shmgen::render::LightCache>,
+) -> Vec<u8> {
+    let black = Backdrop::Colour([0, 0, 0]);
+    let lit = (&sample.lighting, cache);
+    shade(g, mesh, camera, lit, surfaces, &black, true).rgb
+}
+
 /// The stages of one view of a built sample, timed.
 fn view_stages(
     sample: &BuiltSample,
@@ -260,18 +274,8 @@ fn view_stages(
     // whichever path the run took; the hits are the same.
     stages.time("centre rays traced", || mesh.trace_rays(camera));
     let surfaces = surfaces_of(sample);
-    let black = Backdrop::Colour([0, 0, 0]);
     let rgb = stages.time("shade (anti-aliased)", || {
-        shade(
-            &g,
-            mesh,
-            camera,
-            (&sample.lighting, None),
-            &surfaces,
-            &black,
-            true,
-        )
-        .rgb
+        shade_on_black(sample, mesh, (camera, &g), &surfaces, None)
     });
     let png = stages.time("RGB PNG", || rgb_png(g.width, g.height, &rgb));
     let exr = stages.time("depth EXR", || depth_exr(g.width, g.height, &g.depth));
@@ -559,28 +563,28 @@ fn light_cache_table(size: u32) {
     let base = CacheSettings::default();
     let settings = [
         (
-            "tolerance 0.05, finest 1 px, sky rays ×4",
-            CacheSettings {
-                tolerance: 0.05,
-                finest_pixels: 1.0,
-                sky_ray_factor: 4,
-                ..base
-            },
-        ),
-        (
             "tolerance 0.05, finest 1 px",
             CacheSettings {
                 tolerance: 0.05,
                 finest_pixels: 1.0,
+                sky_finest_pixels: 1.0,
                 ..base
             },
         ),
         ("default: tolerance 0.1, finest 2 px", base),
         (
+            "tolerance 0.1, finest 2 px, sky's 8 px",
+            CacheSettings {
+                sky_finest_pixels: 8.0,
+                ..base
+            },
+        ),
+        (
             "tolerance 0.2, finest 4 px",
             CacheSettings {
                 tolerance: 0.2,
                 finest_pixels: 4.0,
+                sky_finest_pixels: 4.0,
                 ..base
             },
         ),
@@ -589,6 +593,7 @@ fn light_cache_table(size: u32) {
             CacheSettings {
                 tolerance: 0.2,
                 finest_pixels: 4.0,
+                sky_finest_pixels: 4.0,
                 coarsest: 0.5,
                 sky_ray_factor: 1,
                 ..base
@@ -599,7 +604,6 @@ fn light_cache_table(size: u32) {
         .num_threads(1)
         .build()
         .unwrap();
-    let black = Backdrop::Colour([0, 0, 0]);
     let mut reference_ms = Vec::new();
     let mut rows: Vec<(f64, f64, Vec<f64>, Vec<f64>)> =
         vec![(0.0, 0.0, Vec::new(), Vec::new()); settings.len()];
@@ -619,18 +623,7 @@ fn light_cache_table(size: u32) {
             let start = Instant::now();
             let reference: Vec<Vec<u8>> = views
                 .iter()
-                .map(|(camera, g)| {
-                    shade(
-                        g,
-                        &mesh,
-                        camera,
-                        (&sample.lighting, None),
-                        &surfaces,
-                        &black,
-                        true,
-                    )
-                    .rgb
-                })
+                .map(|(camera, g)| shade_on_black(&sample, &mesh, (camera, g), &surfaces, None))
                 .collect();
             reference_ms.push(1e3 * start.elapsed().as_secs_f64());
             for (row, (_, setting)) in rows.iter_mut().zip(&settings) {
@@ -639,8 +632,7 @@ fn light_cache_table(size: u32) {
                 let images: Vec<Vec<u8>> = views
                     .iter()
                     .map(|(camera, g)| {
-                        let lit = (&sample.lighting, Some(&cache));
-                        shade(g, &mesh, camera, lit, &surfaces, &black, true).rgb
+                        shade_on_black(&sample, &mesh, (camera, g), &surfaces, Some(&cache))
                     })
                     .collect();
                 row.2.push(1e3 * start.elapsed().as_secs_f64());

@@ -32,8 +32,12 @@ pub struct CacheSettings {
     /// Side of the coarsest cells (metres) where pixels are small: a shadow or contact
     /// narrower than this can hide between four corners that agree.
     pub coarsest: f64,
-    /// Side of the finest cells, in pixels of the view looking up: splitting stops there.
+    /// Side of the finest cells of the sun's lattice, in pixels of the view looking up:
+    /// splitting stops there.
     pub finest_pixels: f64,
+    /// The same for the sky's lattice (occlusion changes more gently than a shadow's edge).
+    pub sky_finest_pixels: f64,
+
     /// Shadow rays per corner, as a multiple of the recipe's per-pixel count.
     pub sun_ray_factor: u32,
     /// Hemisphere rays per corner, as a multiple of the recipe's per-pixel count: every
@@ -44,13 +48,15 @@ pub struct CacheSettings {
 }
 
 impl Default for CacheSettings {
-    /// The default sits where the outdoor recipe's error against the per-pixel reference stops
-    /// falling with a finer cache (docs/daylight.md, "Speed against error").
+    /// The default sits at the knee of outdoor.rhai's error against the per-pixel reference
+    /// and its time: finer doubles the time, coarser doubles the error (docs/daylight.md,
+    /// "Speed against error").
     fn default() -> Self {
         CacheSettings {
             tolerance: 0.1,
             coarsest: 0.25,
             finest_pixels: 2.0,
+            sky_finest_pixels: 2.0,
             sun_ray_factor: 1,
             sky_ray_factor: 2,
         }
@@ -66,7 +72,7 @@ const COARSE_CELL_PIXELS: f64 = 8.0;
 const PLANE_STEPS: f64 = (1u64 << 20) as f64;
 
 /// How far a corner is lifted off its plane, in cells (see `Corner::point`).
-const CORNER_LIFT: f64 = 1.0 / 16.0;
+const CORNER_LIFT: f64 = 1.0 / 64.0;
 
 /// Stores the corner values in this many independently locked maps, so threads rarely wait.
 const SHARDS: usize = 16;
@@ -145,12 +151,13 @@ impl LightCache {
         let mut open = Openness::OPEN;
         let plane = PlaneKey::of(p, n);
         let at = plane.in_plane(p);
-        let levels = self.levels(footprint);
         let seen = (p, n);
         if rays.traces_sun(n) {
+            let levels = self.levels(footprint, self.settings.finest_pixels);
             open.sun = self.lookup(&rays, Term::Sun, (plane, levels, at), seen)[0];
         }
         if rays.traces_sky() {
+            let levels = self.levels(footprint, self.settings.sky_finest_pixels);
             [open.up, open.down, open.all] =
                 self.lookup(&rays, Term::Sky, (plane, levels, at), seen);
         }
@@ -158,8 +165,8 @@ impl LightCache {
     }
 
     /// The `term` at in-plane point `at` of `plane`: from the coarsest cell of `levels`
-    /// down, the first whose valid corners agree within the tolerance (or the finest),
-    /// interpolated over its valid corners. Where even the finest cell has none, the term
+    /// down, the first whose corners are all valid and agree within the tolerance (or the
+    /// finest), interpolated over its valid corners. Where even the finest cell has none, the term
     /// is traced at the point `seen` itself (position and facing).
     fn lookup(
         &self,
@@ -194,7 +201,11 @@ impl LightCache {
                 cell,
                 corners,
             };
-            let agree = spread(&corners).is_some_and(|s| s <= self.settings.tolerance);
+            // A cell with a corner inside the structure is split down to the finest: its valid
+            // corners may lie off the face, in the open (a face in a slot between two plates
+            // would read the light outside the slot).
+            let all_valid = corners.iter().all(|c| c[3] == VALID);
+            let agree = all_valid && spread(&corners).is_some_and(|s| s <= self.settings.tolerance);
             let ends = level == levels.1 || agree;
             if let Some(found) = ends.then(|| leaf.interpolate(at)).flatten() {
                 LAST_LEAVES.with(|last| last.borrow_mut()[term as usize] = Some(leaf));
@@ -206,11 +217,11 @@ impl LightCache {
     }
 
     /// The levels a lookup with pixels `footprint` wide descends through: from cells of at
-    /// least `coarsest` metres and `COARSE_CELL_PIXELS` pixels down to `finest_pixels`.
-    fn levels(&self, footprint: f64) -> (i32, i32) {
+    /// least `coarsest` metres and `COARSE_CELL_PIXELS` pixels down to `finest` pixels.
+    fn levels(&self, footprint: f64, finest: f64) -> (i32, i32) {
         let s = &self.settings;
         let coarse = level_within(s.coarsest.max(COARSE_CELL_PIXELS * footprint));
-        let fine = level_within(s.finest_pixels * footprint);
+        let fine = level_within(finest * footprint);
         (coarse, fine.max(coarse))
     }
 
@@ -475,5 +486,75 @@ impl Hasher for MixedKeyHasher {
 
     fn write_u64(&mut self, word: u64) {
         self.0 = word;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Mesh;
+    use crate::materials::Sun;
+
+    #[test]
+    fn a_level_holds_the_largest_power_of_two_within_a_size() {
+        for size in [1e-6, 0.003, 0.25, 0.3, 0.5, 0.75, 1.0, 1.5, 7.0, 1e5] {
+            let cell = libm::scalbn(1.0, -level_within(size));
+            assert!(cell <= size && size < 2.0 * cell, "{size}: cell {cell}");
+        }
+    }
+
+    /// A horizontal plate over x < 0 at height H under an overhead sun of angular diameter θ:
+    /// on the ground the share of the disk seen at x is one minus the circular segment the
+    /// plate's edge cuts off the disk's image of radius H·tan(θ/2). Read from the cache at a
+    /// 1 mm footprint, the penumbra keeps that shape: the cells split down to the edge.
+    #[test]
+    fn the_cached_penumbra_follows_the_circular_segment() {
+        let height = 2.0;
+        let mesh = TraceMesh::build(&Mesh {
+            positions: vec![
+                DVec3::new(-50.0, -50.0, height),
+                DVec3::new(0.0, -50.0, height),
+                DVec3::new(0.0, 50.0, height),
+                DVec3::new(-50.0, 50.0, height),
+            ],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        });
+        let theta = 2.0_f64.to_radians();
+        let lighting = Lighting {
+            ambient: 0.0,
+            studio: None,
+            sun: Some(Sun {
+                direction: DVec3::Z,
+                colour: [1.0; 3],
+                angular_diameter: theta,
+                shadow_rays: 256,
+            }),
+            sky: None,
+            environment: None,
+            shadows: true,
+            ground: None,
+            film: Default::default(),
+        };
+        let cache = LightCache::new(&lighting, CacheSettings::default());
+        let r = height * (0.5 * theta).tan();
+        for step in -40..=40 {
+            let x = f64::from(step) * r / 30.0;
+            let p = DVec3::new(x, 0.3, 0.0);
+            let seen = cache.openness(&mesh, &lighting, p, DVec3::Z, 1e-3).sun;
+            let expected = if x >= r {
+                1.0
+            } else if x <= -r {
+                0.0
+            } else {
+                let h = r - x;
+                let segment = r * r * (1.0 - h / r).acos() - (r - h) * (2.0 * r * h - h * h).sqrt();
+                1.0 - segment / (std::f64::consts::PI * r * r)
+            };
+            assert!(
+                (seen - expected).abs() < 0.05,
+                "x = {x:.4} m: the cache gives {seen:.3}, the segment {expected:.3}"
+            );
+        }
+        assert!(cache.corners() > 0);
     }
 }
