@@ -98,6 +98,8 @@ def renderer(opts):
         scene.eevee.use_gtao = True
     scene.render.resolution_x = scene.render.resolution_y = opts.size
     scene.render.resolution_percentage = 100
+    # Keeps the scene (and the sky's importance map) between the views, as the beams' script.
+    scene.render.use_persistent_data = True
     scene.render.image_settings.file_format = "PNG"
     scene.view_layers[0].use_pass_z = True
     scene.use_nodes = True
