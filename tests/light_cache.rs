@@ -48,8 +48,8 @@ fn difference(a: &[u8], b: &[u8]) -> (f64, f64) {
 
 /// The error bound of the default cache against the reference on these renders (worst
 /// view), docs/daylight.md "Speed against error".
-const MAX_RMS: f64 = 4.0;
-const MAX_P99: f64 = 16.0;
+const MAX_RMS: f64 = 1.5;
+const MAX_P99: f64 = 5.0;
 
 /// Every file of a dataset but its images, the run record (which names the shading) and the
 /// manifest (which hashes the images).

@@ -165,9 +165,11 @@ impl LightCache {
     }
 
     /// The `term` at in-plane point `at` of `plane`: from the coarsest cell of `levels`
-    /// down, the first whose corners are all valid and agree within the tolerance (or the
-    /// finest), interpolated over its valid corners. Where even the finest cell has none, the term
-    /// is traced at the point `seen` itself (position and facing).
+    /// down, the first whose corners are all valid and agree within the tolerance,
+    /// interpolated. Where even the finest cell's corners disagree (a shadow's edge, a
+    /// contact, a corner inside the structure), interpolating would blur what changes within
+    /// it: the term is traced at the point `seen` itself (position and facing), as the
+    /// per-pixel path does, so edges stay as sharp as the reference's.
     fn lookup(
         &self,
         rays: &LightRays,
@@ -206,8 +208,7 @@ impl LightCache {
             // would read the light outside the slot).
             let all_valid = corners.iter().all(|c| c[3] == VALID);
             let agree = all_valid && spread(&corners).is_some_and(|s| s <= self.settings.tolerance);
-            let ends = level == levels.1 || agree;
-            if let Some(found) = ends.then(|| leaf.interpolate(at)).flatten() {
+            if agree && let Some(found) = leaf.interpolate(at) {
                 LAST_LEAVES.with(|last| last.borrow_mut()[term as usize] = Some(leaf));
                 return found;
             }
