@@ -13,7 +13,9 @@
 //! views at growing sample counts (throughput and peak resident memory, each count in its own
 //! process), and the time per pair at 3840×3840 against 960×960. Then the cost per view of
 //! each daylight and camera effect, on and off (`SHMGEN_BENCH_ONLY=daylight`: only that;
-//! `SHMGEN_BENCH_ONLY=breakdown`: only the per-stage breakdown; any other text: only the
+//! `SHMGEN_BENCH_ONLY=breakdown`: only the per-stage breakdown; `SHMGEN_BENCH_ONLY="light cache"`:
+//! only the lighting cache's speed against error on outdoor.rhai, at `SHMGEN_BENCH_SIZE`²
+//! (960 unless set); any other text: only the
 //! table's rows whose name holds it, e.g. `SHMGEN_BENCH_ONLY=quickstart`).
 
 use shmgen::build::BuiltSample;
@@ -246,6 +248,20 @@ fn surfaces_of(sample: &BuiltSample) -> SampleSurfaces<'_> {
     }
 }
 
+/// The anti-aliased RGB of a view `(camera, g)` of `sample` under its light, on a black
+/// backdrop, with the lighting cache `cache` (None: per pixel).
+fn shade_on_black(
+    sample: &BuiltSample,
+    mesh: &TraceMesh,
+    (camera, g): (&Camera, &GBuffer),
+    surfaces: &SampleSurfaces,
+    cache: Option<&shmgen::render::LightCache>,
+) -> Vec<u8> {
+    let black = Backdrop::Colour([0, 0, 0]);
+    let lit = (&sample.lighting, cache);
+    shade(g, mesh, camera, lit, surfaces, &black, true).rgb
+}
+
 /// The stages of one view of a built sample, timed.
 fn view_stages(
     sample: &BuiltSample,
@@ -259,9 +275,8 @@ fn view_stages(
     // whichever path the run took; the hits are the same.
     stages.time("centre rays traced", || mesh.trace_rays(camera));
     let surfaces = surfaces_of(sample);
-    let black = Backdrop::Colour([0, 0, 0]);
     let rgb = stages.time("shade (anti-aliased)", || {
-        shade(&g, mesh, camera, &sample.lighting, &surfaces, &black, true).rgb
+        shade_on_black(sample, mesh, (camera, &g), &surfaces, None)
     });
     let png = stages.time("RGB PNG", || rgb_png(g.width, g.height, &rgb));
     let exr = stages.time("depth EXR", || depth_exr(g.width, g.height, &g.depth));
@@ -460,7 +475,16 @@ fn daylight_costs(views: u32) {
             let mut rgb = Vec::new();
             for (k, (_, lighting, backdrop)) in lightings.iter().enumerate() {
                 let start = Instant::now();
-                rgb = shade(&g, &mesh, &camera, lighting, &surfaces, backdrop, true).rgb;
+                rgb = shade(
+                    &g,
+                    &mesh,
+                    &camera,
+                    (lighting, None),
+                    &surfaces,
+                    backdrop,
+                    true,
+                )
+                .rgb;
                 shade_ms[k].push(1e3 * start.elapsed().as_secs_f64());
             }
             let (w, h) = (g.width as usize, g.height as usize);
@@ -517,6 +541,128 @@ fn daylight_costs(views: u32) {
     }
 }
 
+/// RMS and 99th percentile of the absolute difference of two 8-bit images, in levels, over
+/// every channel of every pixel (sky pixels included: they never differ).
+fn image_error(a: &[u8], b: &[u8]) -> (f64, f64) {
+    let mut d: Vec<u8> = a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).collect();
+    let rms = (d.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / d.len() as f64).sqrt();
+    d.sort_unstable();
+    (rms, f64::from(d[d.len() * 99 / 100]))
+}
+
+/// The lighting cache's speed against its error on `outdoor.rhai` at `size`² (its beam, silo
+/// and girder samples, both views, one thread, anti-aliased, a black backdrop): for each
+/// setting, the worst view's RMS and 99th percentile difference from the per-pixel reference
+/// in 8-bit levels, the median shading time per pair (the cache filled by the pair's views
+/// included) and the corners traced per sample.
+fn light_cache_table(size: u32) {
+    use shmgen::render::{CacheSettings, LightCache};
+    let recipe = load(
+        &scripts().join("outdoor.rhai"),
+        &[("size", &size.to_string())],
+    );
+    let base = CacheSettings::default();
+    let settings = [
+        (
+            "tolerance 0.05, finest 1 px",
+            CacheSettings {
+                tolerance: 0.05,
+                finest_pixels: 1.0,
+                sky_finest_pixels: 1.0,
+                ..base
+            },
+        ),
+        ("default: tolerance 0.1, finest 2 px", base),
+        (
+            "tolerance 0.1, finest 2 px, sky's 8 px",
+            CacheSettings {
+                sky_finest_pixels: 8.0,
+                ..base
+            },
+        ),
+        (
+            "tolerance 0.2, finest 4 px",
+            CacheSettings {
+                tolerance: 0.2,
+                finest_pixels: 4.0,
+                sky_finest_pixels: 4.0,
+                ..base
+            },
+        ),
+        (
+            "tolerance 0.2, finest 4 px, coarsest 0.5 m, sky rays ×1",
+            CacheSettings {
+                tolerance: 0.2,
+                finest_pixels: 4.0,
+                sky_finest_pixels: 4.0,
+                coarsest: 0.5,
+                sky_ray_factor: 1,
+                ..base
+            },
+        ),
+    ];
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let mut reference_ms = Vec::new();
+    let mut rows: Vec<(f64, f64, Vec<f64>, Vec<f64>)> =
+        vec![(0.0, 0.0, Vec::new(), Vec::new()); settings.len()];
+    pool.install(|| {
+        for s in [0, 7, 14] {
+            let sample = prepare(&recipe, s).unwrap();
+            let mesh = TraceMesh::build_with_core(&sample.mesh, sample.structure_triangles());
+            mesh.build_bvh();
+            let surfaces = surfaces_of(&sample);
+            let views: Vec<(Camera, GBuffer)> = (0..recipe.dataset.views)
+                .map(|view| {
+                    let camera = view_camera(&recipe.dataset, &sample, view).unwrap().camera;
+                    let g = mesh.trace(&camera);
+                    (camera, g)
+                })
+                .collect();
+            let start = Instant::now();
+            let reference: Vec<Vec<u8>> = views
+                .iter()
+                .map(|(camera, g)| shade_on_black(&sample, &mesh, (camera, g), &surfaces, None))
+                .collect();
+            reference_ms.push(1e3 * start.elapsed().as_secs_f64());
+            for (row, (_, setting)) in rows.iter_mut().zip(&settings) {
+                let start = Instant::now();
+                let cache = LightCache::new(&sample.lighting, *setting);
+                let images: Vec<Vec<u8>> = views
+                    .iter()
+                    .map(|(camera, g)| {
+                        shade_on_black(&sample, &mesh, (camera, g), &surfaces, Some(&cache))
+                    })
+                    .collect();
+                row.2.push(1e3 * start.elapsed().as_secs_f64());
+                row.3.push(cache.corners() as f64);
+                for (image, truth) in images.iter().zip(&reference) {
+                    let (rms, p99) = image_error(image, truth);
+                    (row.0, row.1) = (row.0.max(rms), row.1.max(p99));
+                }
+            }
+        }
+    });
+    println!(
+        "lighting cache on outdoor.rhai at {size}² (beam, silo, girder; 2 views each; 1 thread):"
+    );
+    println!("| setting | worst RMS | worst p99 | shading ms/pair | corners/sample |");
+    let per_pair = |ms: Vec<f64>| median(ms) / f64::from(recipe.dataset.views);
+    println!(
+        "| per_pixel (the reference) | 0 | 0 | {:.0} | — |",
+        per_pair(reference_ms)
+    );
+    for ((name, _), (rms, p99, ms, corners)) in settings.iter().zip(rows) {
+        println!(
+            "| {name} | {rms:.2} | {p99:.0} | {:.0} | {:.0} |",
+            per_pair(ms),
+            median(corners)
+        );
+    }
+}
+
 fn main() {
     if let Ok(samples) = std::env::var(CHILD) {
         return stream_child(&samples);
@@ -524,6 +670,9 @@ fn main() {
     let only = std::env::var("SHMGEN_BENCH_ONLY").unwrap_or_default();
     if only == "daylight" {
         return daylight_costs(setting("SHMGEN_BENCH_VIEWS", 10) as u32);
+    }
+    if only == "light cache" {
+        return light_cache_table(setting("SHMGEN_BENCH_SIZE", 960) as u32);
     }
     let runs = setting("SHMGEN_BENCH_RUNS", 3);
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -569,6 +718,14 @@ fn main() {
             ),
         ),
         (
+            "outdoor.rhai (15 samples × 2 views: beams, silos, a girder on a ground), cached",
+            load(&scripts().join("outdoor.rhai"), &[]),
+        ),
+        (
+            "outdoor.rhai, shading=per_pixel (the reference)",
+            load(&scripts().join("outdoor.rhai"), &[("shading", "per_pixel")]),
+        ),
+        (
             "imported mesh, 1,000,000 triangles (2 × 10 views)",
             million_recipe(million_dir.path(), &[]),
         ),
@@ -595,4 +752,5 @@ fn main() {
     streaming(setting("SHMGEN_BENCH_STREAM", 100_000));
     stage_breakdowns(staged);
     daylight_costs(setting("SHMGEN_BENCH_VIEWS", 10) as u32);
+    light_cache_table(setting("SHMGEN_BENCH_SIZE", 960) as u32);
 }

@@ -552,7 +552,7 @@ fn shaded_on_black(
         &g,
         mesh,
         cam,
-        &Lighting::default(),
+        (&Lighting::default(), None),
         surfaces,
         &black,
         antialias,

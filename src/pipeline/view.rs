@@ -11,10 +11,11 @@ use crate::materials::Backdrop;
 use crate::materials::cache::FieldCache;
 use crate::output::{Flow, ViewLayers};
 use crate::render::{
-    Deformed, GBuffer, ImageVisibility, NO_HIT, SampleSurfaces, SecondaryRays, Shaded, TraceMesh,
-    Traced, ViewVisibility, displacement, flow, normals, ray_distance, shade,
+    CacheSettings, Deformed, GBuffer, ImageVisibility, LightCache, NO_HIT, SampleSurfaces,
+    SecondaryRays, Shaded, TraceMesh, Traced, ViewVisibility, displacement, flow, normals,
+    ray_distance, shade,
 };
-use crate::scene::{DatasetSpec, NormalsFrame};
+use crate::scene::{DatasetSpec, NormalsFrame, Shading};
 use crate::seeds::{self, Scope, Stream};
 use anyhow::{Result, anyhow};
 use serde::Serialize;
@@ -119,6 +120,9 @@ pub struct SampleRenderer<'a> {
     /// cache pay at an error worth having (docs/materials.md, "Caching material fields").
     cache: Option<FieldCache>,
     rest: OnceLock<Traced>,
+    /// The lighting caches of the loaded and the unloaded mesh, made on first use (none with
+    /// `shading: "per_pixel"`), shared by every view and dropped with the sample.
+    light_caches: [OnceLock<LightCache>; 2],
 }
 
 /// One view of a sample: its camera and centre-ray trace, with the other layers rendered on
@@ -183,6 +187,7 @@ impl<'a> SampleRenderer<'a> {
             trace_mesh,
             cache: None,
             rest: OnceLock::new(),
+            light_caches: Default::default(),
         }
     }
 
@@ -212,6 +217,16 @@ impl<'a> SampleRenderer<'a> {
             shaders: &s.shaders,
             cache: self.cache.as_ref(),
         }
+    }
+
+    /// The lighting cache of the loaded (`rest` false) or unloaded mesh, None when the
+    /// dataset shades per pixel.
+    fn light_cache(&self, rest: bool) -> Option<&LightCache> {
+        let lighting = &self.sample.lighting;
+        (self.dataset.shading == Shading::Cached).then(|| {
+            self.light_caches[usize::from(rest)]
+                .get_or_init(|| LightCache::new(lighting, CacheSettings::default()))
+        })
     }
 
     /// The unloaded structure ready for tracing, prepared on first use: the loaded mesh's
@@ -362,13 +377,19 @@ impl RenderedView<'_> {
 
     /// RGB of what `g` saw through this view's camera in `mesh`, with the sample's
     /// light and this view's backdrop, through the sensor.
-    fn shaded(&self, g: &GBuffer, mesh: &TraceMesh, surfaces: &SampleSurfaces) -> Shaded {
+    fn shaded(
+        &self,
+        g: &GBuffer,
+        mesh: &TraceMesh,
+        surfaces: &SampleSurfaces,
+        cache: Option<&LightCache>,
+    ) -> Shaded {
         let r = self.renderer;
         let mut shaded = shade(
             g,
             mesh,
             &self.camera,
-            &r.sample.lighting,
+            (&r.sample.lighting, cache),
             surfaces,
             &self.backdrop,
             r.dataset.antialias,
@@ -424,7 +445,12 @@ impl ViewLayers for RenderedView<'_> {
             .rgb
             .get_or_init(|| {
                 let r = self.renderer;
-                self.shaded(&self.gbuffer, &r.trace_mesh, &r.surfaces())
+                self.shaded(
+                    &self.gbuffer,
+                    &r.trace_mesh,
+                    &r.surfaces(),
+                    r.light_cache(false),
+                )
             })
             .rgb
     }
@@ -514,7 +540,8 @@ impl ViewLayers for RenderedView<'_> {
                     mesh: &rest.mesh,
                     ..r.surfaces()
                 };
-                self.shaded(self.rest_gbuffer(), &rest.trace_mesh, &surfaces)
+                let cache = r.light_cache(true);
+                self.shaded(self.rest_gbuffer(), &rest.trace_mesh, &surfaces, cache)
             })
             .rgb
     }

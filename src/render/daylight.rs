@@ -51,7 +51,12 @@ impl DiskPattern {
 /// (cos, sin) of an angle hashed from the image point (u, v): the same pixel and sub-pixel
 /// sample always turn the pattern alike.
 pub(super) fn pixel_turn(u: f64, v: f64) -> (f64, f64) {
-    let mut h = u.to_bits() ^ v.to_bits().rotate_left(29) ^ 0x9e37_79b9_7f4a_7c15;
+    hashed_turn(u.to_bits() ^ v.to_bits().rotate_left(29))
+}
+
+/// (cos, sin) of an angle hashed from `key`: a fixed, well-spread turn for each key.
+pub(super) fn hashed_turn(key: u64) -> (f64, f64) {
+    let mut h = key ^ 0x9e37_79b9_7f4a_7c15;
     // splitmix64's finaliser (Steele, Lea & Flood 2014).
     h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
@@ -121,51 +126,128 @@ fn ground_exitance(lighting: &Lighting, ground: Option<GroundBounce>, p: DVec3) 
     }
 }
 
+/// What a shaded point sees of the lights, each a share in [0, 1]: of the sun's disk, of the
+/// upward and of the downward cosine-weighted hemisphere rays, and of all of them. 1 where
+/// nothing was traced (no shadows, a face turned from the sun, no occlusion rays): the light
+/// then reaches the point whole, and multiplying by 1 leaves its bits as they were.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Openness {
+    pub sun: f64,
+    pub up: f64,
+    pub down: f64,
+    pub all: f64,
+}
+
+impl Openness {
+    /// Nothing blocks any light.
+    pub const OPEN: Openness = Openness {
+        sun: 1.0,
+        up: 1.0,
+        down: 1.0,
+        all: 1.0,
+    };
+}
+
+/// The rays a shaded point casts towards the lights: the mesh they may meet, the light, and
+/// the patterns over the sun's disk and the hemisphere.
+pub(super) struct LightRays<'a> {
+    pub mesh: &'a TraceMesh,
+    pub lighting: &'a Lighting,
+    pub sun_disk: &'a DiskPattern,
+    pub hemisphere: &'a DiskPattern,
+}
+
+impl LightRays<'_> {
+    /// The `Openness` of point `p` with facing `n`, the patterns turned by `turn()`.
+    pub fn openness(&self, p: DVec3, n: DVec3, turn: impl Fn() -> (f64, f64)) -> Openness {
+        let mut open = Openness::OPEN;
+        if self.traces_sun(n) {
+            open.sun = self.sun_share(p, n, turn());
+        }
+        if self.traces_sky() {
+            [open.up, open.down, open.all] = self.sky_shares(p, n, turn());
+        }
+        open
+    }
+
+    /// Whether a face turned to `n` traces shadow rays: when the sun casts shadows and the
+    /// face is turned to it (a face turned away is unlit either way).
+    pub fn traces_sun(&self, n: DVec3) -> bool {
+        let l = self.lighting;
+        l.shadows && l.sun.is_some_and(|sun| n.dot(sun.direction) > 0.0)
+    }
+
+    /// Whether points trace hemisphere rays: when a sky, ground or environment lights them
+    /// and the pattern has rays.
+    pub fn traces_sky(&self) -> bool {
+        let l = self.lighting;
+        let surrounding = l.environment.is_some() || l.sky.is_some() || l.ground.is_some();
+        surrounding && !self.hemisphere.is_empty()
+    }
+
+    /// The share of the sun's disk `p` sees (1 without a sun).
+    pub fn sun_share(&self, p: DVec3, n: DVec3, turn: (f64, f64)) -> f64 {
+        self.lighting.sun.map_or(1.0, |sun| {
+            sun_visibility(self.mesh, p, n, &sun, self.sun_disk, turn)
+        })
+    }
+
+    /// Whether `p` looks enclosed: a ray along `n` and eight rays 80° from it, nearly along
+    /// the face, all meet the mesh. A point on a visible face sees out along one of them
+    /// unless it lies deep in a crevice (even under a beam, or in the corner of a wall and a
+    /// floor, a ray along the floor escapes); a point inside a solid (a lattice corner on a
+    /// face's plane extended into a neighbouring part) sees out along none.
+    pub fn enclosed(&self, p: DVec3, n: DVec3) -> bool {
+        let (t, b) = frame(n);
+        let (along, lift) = (80f64.to_radians().sin(), 80f64.to_radians().cos());
+        let sideways = (0..8).map(|k| {
+            let a = f64::from(k) * std::f64::consts::FRAC_PI_4;
+            (libm::cos(a) * t + libm::sin(a) * b) * along + n * lift
+        });
+        std::iter::once(n)
+            .chain(sideways)
+            .all(|d| self.mesh.occluded(p, n, d.normalize()))
+    }
+
+    /// The shares of the upward, the downward and all hemisphere rays that leave `p`.
+    pub fn sky_shares(&self, p: DVec3, n: DVec3, turn: (f64, f64)) -> [f64; 3] {
+        let ground = self.lighting.ground;
+        let ((up, down), all) =
+            hemisphere_visibility(self.mesh, ground, p, n, self.hemisphere, turn);
+        [up, down, all]
+    }
+}
+
 /// Light from the sky above and the ground below on a face with normal `n` at `p`: the
 /// hemispherical model (sky weighted by (1 + n_z)/2, ground by (1 − n_z)/2) with each half
-/// scaled by the share of its cosine-weighted directions that escape the mesh (rays from
-/// `hemisphere`); a ray down only counts as blocked when it meets the mesh above the ground
-/// plane. Returns (occluded, unoccluded) irradiance.
+/// scaled by the share of its cosine-weighted directions that escape the mesh (`open.up`,
+/// `open.down`; a ray down only counts as blocked when it meets the mesh above the ground
+/// plane). Returns (occluded, unoccluded) irradiance.
 pub(super) fn sky_light(
-    mesh: &TraceMesh,
     lighting: &Lighting,
     p: DVec3,
     n: DVec3,
-    hemisphere: &DiskPattern,
-    turn: impl FnOnce() -> (f64, f64),
+    open: Openness,
 ) -> ([f64; 3], [f64; 3]) {
     let sky = lighting.sky.map_or([0.0; 3], |s: Sky| s.sky);
     let ground = ground_exitance(lighting, lighting.ground, p);
     let up = 0.5 * (1.0 + n.z);
-    let open: [f64; 3] = std::array::from_fn(|k| sky[k] * up + ground[k] * (1.0 - up));
-    if hemisphere.0.is_empty() {
-        return (open, open);
-    }
-    let ((above, below), _) =
-        hemisphere_visibility(mesh, lighting.ground, p, n, hemisphere, turn());
-    let seen = std::array::from_fn(|k| sky[k] * up * above + ground[k] * (1.0 - up) * below);
-    (seen, open)
+    let unoccluded: [f64; 3] = std::array::from_fn(|k| sky[k] * up + ground[k] * (1.0 - up));
+    let seen = std::array::from_fn(|k| sky[k] * up * open.up + ground[k] * (1.0 - up) * open.down);
+    (seen, unoccluded)
 }
 
-/// Light from an environment map on a face with normal `n` at `p`: its order-2 SH irradiance,
-/// scaled by the share of all the cosine-weighted directions of `hemisphere` that escape the
+/// Light from an environment map on a face with normal `n`: its order-2 SH irradiance, scaled
+/// by the share `open.all` of all the cosine-weighted hemisphere directions that escape the
 /// mesh (a ray down stops short of the ground plane, which the map already shows). Returns
 /// (occluded, unoccluded).
 pub(super) fn environment_light(
-    mesh: &TraceMesh,
-    lighting: &Lighting,
     environment: &EnvironmentLight,
-    p: DVec3,
     n: DVec3,
-    hemisphere: &DiskPattern,
-    turn: impl FnOnce() -> (f64, f64),
+    open: Openness,
 ) -> ([f64; 3], [f64; 3]) {
-    let open = environment.diffuse(n);
-    if hemisphere.0.is_empty() {
-        return (open, open);
-    }
-    let (_, all) = hemisphere_visibility(mesh, lighting.ground, p, n, hemisphere, turn());
-    (open.map(|c| c * all), open)
+    let unoccluded = environment.diffuse(n);
+    (unoccluded.map(|c| c * open.all), unoccluded)
 }
 
 /// Shares of the upward and of the downward rays of a cosine-weighted hemisphere about `n`
@@ -341,7 +423,6 @@ mod tests {
     /// hemisphere filled by the plane. Sideways it receives half; facing up, none.
     #[test]
     fn a_lit_ground_bounces_albedo_times_its_irradiance() {
-        let mesh = quads(&[([-0.5, -0.5, 1.0], [0.5, 0.5, 1.0])]);
         let elevation: f64 = 0.6;
         let lighting = Lighting {
             ambient: 0.0,
@@ -361,23 +442,20 @@ mod tests {
             }),
             film: Default::default(),
         };
-        let none = DiskPattern::new(0);
         let e = 2.0 * elevation.sin();
         for (n, share) in [(-DVec3::Z, 1.0), (DVec3::X, 0.5), (DVec3::Z, 0.0)] {
             let p = DVec3::new(3.0, 0.0, 1.0);
-            let (got, _) = sky_light(&mesh, &lighting, p, n, &none, || (1.0, 0.0));
+            let (got, _) = sky_light(&lighting, p, n, Openness::OPEN);
             for (k, rho) in [0.3, 0.2, 0.1].into_iter().enumerate() {
                 assert!((got[k] - rho * e * share).abs() < 1e-12, "{n}: {got:?}");
             }
         }
         // Below the ground nothing bounces up.
         let under = sky_light(
-            &mesh,
             &lighting,
             DVec3::new(0.0, 0.0, -1.0),
             -DVec3::Z,
-            &none,
-            || (1.0, 0.0),
+            Openness::OPEN,
         );
         assert_eq!(under.0, [0.0; 3]);
     }

@@ -9,6 +9,7 @@
 //! from the unloaded structure, optical flow from its image), texture lookup on
 //! the undeformed surface (through `materials`), shading into RGB with sun, sky, studio lights
 //! and shadows (soft over the sun's disk), sky occlusion and a ground's bounce (`daylight`),
+//! traced per pixel or read from a per-sample lighting cache (`light_cache`),
 //! exposure and tone curve, anti-aliased with fixed sub-pixel rays only where the image
 //! changes, and backdrops. Must not touch: recipes, scenes, mechanics or files;
 //! it sees meshes, cameras and materials only. One centre ray per pixel for every geometric
@@ -17,6 +18,7 @@
 mod daylight;
 mod fields;
 mod gloss;
+mod light_cache;
 mod raster;
 mod shade;
 mod shared_meshes;
@@ -27,6 +29,7 @@ mod visibility;
 mod watertight;
 
 pub use fields::{Deformed, displacement, flow, normals, ray_distance};
+pub use light_cache::{CacheSettings, LightCache};
 pub use shade::{Shaded, Surfaces, shade};
 pub use shared_meshes::SharedTraceMeshes;
 pub use surfaces::SampleSurfaces;

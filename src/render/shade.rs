@@ -13,8 +13,9 @@
 //! each textured face's material evaluated once, at the pixel's centre (see `edge_pixel`).
 //! Texture detail is filtered by the materials themselves, so it never triggers extra rays.
 
-use super::daylight::{DiskPattern, environment_light, pixel_turn, sky_light, sun_visibility};
+use super::daylight::{DiskPattern, LightRays, Openness, environment_light, pixel_turn, sky_light};
 use super::gloss::Lobe;
+use super::light_cache::LightCache;
 use super::trace::{GBuffer, NO_HIT, PixelSet, TraceMesh};
 use super::visibility::{SecondaryRays, Visibility};
 use crate::cameras::Camera;
@@ -113,6 +114,8 @@ struct Shading<'a, S: Surfaces> {
     /// The camera-axes x of each column's centre ray, when the lens does not distort: x then
     /// depends on the column alone (the same bits as `ray_through`, divided once per column).
     pinhole_columns: Option<Vec<f64>>,
+    /// The sample's lighting cache, or None to trace every pixel's light rays.
+    cache: Option<&'a LightCache>,
 }
 
 /// What the sub-rays of one edge pixel found, by the triangle they found it on: one entry per
@@ -188,17 +191,19 @@ pub struct Shaded {
     pub secondary: Vec<SecondaryRays>,
 }
 
-/// RGB8 image (sRGB) of the G-buffer.
+/// RGB8 image (sRGB) of the G-buffer, under `lighting` with the sample's lighting cache (None:
+/// every pixel traces its own light rays, `shading: "per_pixel"`).
 pub fn shade(
     g: &GBuffer,
     mesh: &TraceMesh,
     camera: &Camera,
-    lighting: &Lighting,
+    (lighting, cache): (&Lighting, Option<&LightCache>),
     surfaces: &impl Surfaces,
     backdrop: &Backdrop,
     antialias: bool,
 ) -> Shaded {
     let s = Shading {
+        cache,
         mesh,
         camera,
         lighting,
@@ -548,21 +553,20 @@ impl<S: Surfaces> Shading<'_, S> {
         let (point, normal, footprint) =
             hit_geometry(self.camera, self.mesh, tri, view, f64::from(depth));
         let surface = given.unwrap_or_else(|| self.surfaces.at(tri, point, footprint));
-        let light = self.light(view, &surface, point, normal, pixel);
+        let light = self.light(view, &surface, (point, normal, footprint), pixel);
         let film = &self.lighting.film;
         let radiance = reflected(film, surface.albedo, light.diffuse, light.specular);
         (radiance, light.unshadowed)
     }
 
-    /// The light a surface at `point` with facing `n` receives along `view`, seen through
-    /// image point `pixel`: diffuse irradiance with and without the sun's shadow and the
-    /// sky's occlusion, and the glossy reflection.
+    /// The light a surface at `point` with facing `n` (seen with pixels `footprint` metres
+    /// wide) receives along `view`, seen through image point `pixel`: diffuse irradiance with
+    /// and without the sun's shadow and the sky's occlusion, and the glossy reflection.
     fn light(
         &self,
         view: DVec3,
         surface: &Surface,
-        point: DVec3,
-        n: DVec3,
+        (point, n, footprint): (DVec3, DVec3, f64),
         pixel: (f64, f64),
     ) -> Light {
         let l = self.lighting;
@@ -605,30 +609,16 @@ impl<S: Surfaces> Shading<'_, S> {
                 add(*direction, [*intensity; 3], 1.0);
             }
         }
-        let turn = || pixel_turn(pixel.0, pixel.1);
+        let open = self.openness(point, n, pixel, footprint);
         if let Some(sun) = &l.sun {
-            // A face turned away from the sun needs no shadow ray: it is unlit either way.
-            let seen = if l.shadows && n.dot(sun.direction) > 0.0 {
-                sun_visibility(self.mesh, point, n, sun, &self.sun_disk, turn())
-            } else {
-                1.0
-            };
-            add(sun.direction, sun.colour, seen);
+            add(sun.direction, sun.colour, open.sun);
         }
         let surrounding = if let Some(environment) = &l.environment {
             // The map's light replaces the sky's: SH irradiance, scaled by the open share.
-            Some(environment_light(
-                self.mesh,
-                l,
-                environment,
-                point,
-                n,
-                &self.hemisphere,
-                turn,
-            ))
+            Some(environment_light(environment, n, open))
         } else if l.sky.is_some() || l.ground.is_some() {
             // Irradiance of a sky dome and a ground below, for a surface tilted by n.z.
-            Some(sky_light(self.mesh, l, point, n, &self.hemisphere, turn))
+            Some(sky_light(l, point, n, open))
         } else {
             None
         };
@@ -639,6 +629,21 @@ impl<S: Surfaces> Shading<'_, S> {
             }
         }
         light
+    }
+
+    /// What `point` (facing `n`, pixels `footprint` wide) sees of the lights: looked up in the
+    /// sample's lighting cache, or traced from this pixel (`shading: "per_pixel"`).
+    fn openness(&self, point: DVec3, n: DVec3, pixel: (f64, f64), footprint: f64) -> Openness {
+        let rays = LightRays {
+            mesh: self.mesh,
+            lighting: self.lighting,
+            sun_disk: &self.sun_disk,
+            hemisphere: &self.hemisphere,
+        };
+        match self.cache {
+            Some(cache) => cache.openness(self.mesh, self.lighting, point, n, footprint),
+            None => rays.openness(point, n, || pixel_turn(pixel.0, pixel.1)),
+        }
     }
 
     fn backdrop(&self, view: DVec3, u: f64, v: f64) -> [f64; 3] {

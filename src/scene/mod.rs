@@ -84,9 +84,10 @@ pub struct DatasetSpec {
     pub light: LightSpec,
     /// Anti-alias RGB where the image changes (silhouettes, creases); labels never are.
     pub antialias: bool,
-    /// How RGB evaluates what does not depend on the view: once per sample, shared by its views
-    /// (`cached`), or at every pixel (`per_pixel`, the reference). Materials are evaluated at
-    /// every pixel under either (measured in docs/materials.md). Labels are the same either way.
+    /// How RGB evaluates what does not depend on the view: the light's shadow and occlusion
+    /// rays once per sample where the light changes, shared by its views (`cached`), or at
+    /// every pixel (`per_pixel`, the reference). Materials are evaluated at every pixel under
+    /// either (measured in docs/materials.md). Labels are the same either way.
     pub shading: Shading,
     /// Augmented copies of every view.
     pub augment: AugmentSpec,
@@ -103,18 +104,19 @@ pub struct DatasetSpec {
     pub ground: Option<GroundSpec>,
 }
 
-/// How RGB evaluates the materials and the light that does not depend on the view (the
-/// recipe's `dataset.shading`).
+/// How RGB evaluates the light that does not depend on the view (the recipe's
+/// `dataset.shading`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Shading {
-    /// What does not depend on the view once per sample, in surface space, shared by its views
-    /// and read back filtered; the materials still at every pixel, where a cache of their
-    /// fields was measured not to pay (docs/materials.md, "Caching material fields").
+    /// What changes slowly over a surface (sun visibility with its penumbra, sky occlusion,
+    /// ground bounce) traced once per sample where it changes, shared by its views
+    /// (docs/daylight.md, "The lighting cache"); the materials still at every pixel, where a
+    /// cache of their fields was measured not to pay (docs/materials.md).
     #[default]
     Cached,
-    /// Everything at every pixel of every view: the reference the cached terms are measured
-    /// against.
+    /// Every pixel traces its own shadow and occlusion rays: the reference the cache is
+    /// measured against.
     PerPixel,
 }
 

@@ -1,0 +1,561 @@
+//! The lighting cache of one sample's mesh: what a surface point sees of the sun's disk and of
+//! its hemisphere (`daylight::Openness`), traced only at the corners of a lattice laid on each
+//! plane of the mesh, refined where a cell's corners disagree (shadow edges, penumbrae,
+//! contacts), and read between corners bilinearly. Built lazily by the sample's views, shared
+//! by all of them (and by their threads), dropped with the sample.
+//!
+//! Owns: the lattice (levels, cells, corners), the refinement test, the bilinear lookup and the
+//! concurrent store of corner values. Must not touch: colours, materials or images; the corner
+//! values come from `daylight::LightRays`. Every corner's value is a function of its key alone
+//! (its plane, level and lattice position; the ray patterns are turned by an angle hashed from
+//! the key), and which cell a lookup ends in is a function of the point and the pixel's
+//! footprint, so what a view reads does not depend on which view or thread traced a corner
+//! first: the bytes are the same on any thread count, shard or resume. See docs/daylight.md,
+//! "The lighting cache".
+
+use super::daylight::{DiskPattern, LightRays, Openness, hashed_turn};
+use super::trace::TraceMesh;
+use crate::materials::Lighting;
+use glam::DVec3;
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hash, Hasher};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// How finely the cache samples the light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CacheSettings {
+    /// Largest difference in any share (sun, sky above, ground below, all) between a cell's
+    /// corners for the cell to be read by interpolation rather than split in four.
+    pub tolerance: f64,
+    /// Side of the coarsest cells (metres) where pixels are small: a shadow or contact
+    /// narrower than this can hide between four corners that agree.
+    pub coarsest: f64,
+    /// Side of the finest cells of the sun's lattice, in pixels of the view looking up:
+    /// splitting stops there.
+    pub finest_pixels: f64,
+    /// The same for the sky's lattice (occlusion changes more gently than a shadow's edge).
+    pub sky_finest_pixels: f64,
+
+    /// Shadow rays per corner, as a multiple of the recipe's per-pixel count.
+    pub sun_ray_factor: u32,
+    /// Hemisphere rays per corner, as a multiple of the recipe's per-pixel count: every
+    /// corner of a plane casts the same directions, so each ray's fate draws its own sharp
+    /// outline across the plane, and the share steps by one over the ray count there; more
+    /// rays make the steps too small to see.
+    pub sky_ray_factor: u32,
+}
+
+impl Default for CacheSettings {
+    /// The default sits at the knee of outdoor.rhai's error against the per-pixel reference
+    /// and its time: finer doubles the time, coarser doubles the error (docs/daylight.md,
+    /// "Speed against error").
+    fn default() -> Self {
+        CacheSettings {
+            tolerance: 0.1,
+            coarsest: 0.25,
+            finest_pixels: 2.0,
+            sky_finest_pixels: 2.0,
+            sun_ray_factor: 1,
+            sky_ray_factor: 2,
+        }
+    }
+}
+
+/// A coarse cell spans at least this many pixels, so its four corners serve many pixels even
+/// far from the camera (the ground towards the horizon).
+const COARSE_CELL_PIXELS: f64 = 8.0;
+
+/// Steps of the quantised plane of a corner key (2⁻²⁰ ≈ 10⁻⁶ of a unit normal, or of a metre):
+/// the triangles of one flat face fall on one plane, and share its corners.
+const PLANE_STEPS: f64 = (1u64 << 20) as f64;
+
+/// How far a corner is lifted off its plane, in cells (see `Corner::point`).
+const CORNER_LIFT: f64 = 1.0 / 64.0;
+
+/// Stores the corner values in this many independently locked maps, so threads rarely wait.
+const SHARDS: usize = 16;
+
+/// The corner values of one mesh under one lighting, filled as views look them up.
+pub struct LightCache {
+    settings: CacheSettings,
+    sun_disk: DiskPattern,
+    hemisphere: DiskPattern,
+    shards: Box<[Mutex<CornerMap>]>,
+    /// Tells this cache's entries in a thread's `LAST_LEAVES` from another's.
+    serial: u64,
+}
+
+type CornerMap = HashMap<Corner, Record, BuildHasherDefault<MixedKeyHasher>>;
+
+/// What a corner holds: its `Shares`, then `VALID`, or `INVALID` for a corner that looks
+/// enclosed (`LightRays::enclosed`), whose shares are not the light of any visible point.
+type Record = [f64; 4];
+const VALID: f64 = 1.0;
+const INVALID: f64 = 0.0;
+
+/// The shares a corner holds: the sun's (then two unused zeros), or the sky's above, below
+/// and all round.
+type Shares = [f64; 3];
+
+/// The terms cached, each on its own lattice.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Term {
+    Sun = 0,
+    Sky = 1,
+}
+
+static NEXT_SERIAL: AtomicU64 = AtomicU64::new(0);
+
+impl LightCache {
+    /// An empty cache for the light `lighting` (its ray counts times `settings.ray_factor`).
+    pub fn new(lighting: &Lighting, settings: CacheSettings) -> Self {
+        let rays = |n: u32, factor: u32| DiskPattern::new(n.saturating_mul(factor.max(1)));
+        let shadow_rays = lighting.sun.map_or(0, |s| s.shadow_rays);
+        let occlusion_rays = match &lighting.environment {
+            Some(e) => e.occlusion_rays,
+            None => lighting.sky.map_or(0, |s| s.occlusion_rays),
+        };
+        LightCache {
+            settings,
+            sun_disk: rays(shadow_rays, settings.sun_ray_factor),
+            hemisphere: rays(occlusion_rays, settings.sky_ray_factor),
+            shards: (0..SHARDS).map(|_| Mutex::default()).collect(),
+            serial: NEXT_SERIAL.fetch_add(1, Ordering::Relaxed),
+        }
+    }
+
+    /// Corners traced so far.
+    pub fn corners(&self) -> usize {
+        self.shards.iter().map(|s| lock(s).len()).sum()
+    }
+
+    /// What point `p` with facing `n`, seen with pixels `footprint` metres wide, sees of the
+    /// lights: the sun's share and the sky's, each read from its own lattice (a shadow's edge
+    /// splits the sun's cells, not the sky's).
+    pub(super) fn openness(
+        &self,
+        mesh: &TraceMesh,
+        lighting: &Lighting,
+        p: DVec3,
+        n: DVec3,
+        footprint: f64,
+    ) -> Openness {
+        let rays = LightRays {
+            mesh,
+            lighting,
+            sun_disk: &self.sun_disk,
+            hemisphere: &self.hemisphere,
+        };
+        let mut open = Openness::OPEN;
+        let plane = PlaneKey::of(p, n);
+        let at = plane.in_plane(p);
+        let seen = (p, n);
+        if rays.traces_sun(n) {
+            let levels = self.levels(footprint, self.settings.finest_pixels);
+            open.sun = self.lookup(&rays, Term::Sun, (plane, levels, at), seen)[0];
+        }
+        if rays.traces_sky() {
+            let levels = self.levels(footprint, self.settings.sky_finest_pixels);
+            [open.up, open.down, open.all] =
+                self.lookup(&rays, Term::Sky, (plane, levels, at), seen);
+        }
+        open
+    }
+
+    /// The `term` at in-plane point `at` of `plane`: from the coarsest cell of `levels`
+    /// down, the first whose corners are all valid and agree within the tolerance,
+    /// interpolated. Where even the finest cell's corners disagree (a shadow's edge, a
+    /// contact, a corner inside the structure), interpolating would blur what changes within
+    /// it: the term is traced at the point `seen` itself (position and facing), as the
+    /// per-pixel path does, so edges stay as sharp as the reference's.
+    fn lookup(
+        &self,
+        rays: &LightRays,
+        term: Term,
+        (plane, levels, at): (PlaneKey, (i32, i32), (f64, f64)),
+        seen: (DVec3, DVec3),
+    ) -> Shares {
+        let place = Place {
+            serial: self.serial,
+            plane,
+            levels,
+        };
+        if let Some(found) = last_leaf(term, place, at) {
+            return found;
+        }
+        for level in levels.0..=levels.1 {
+            let cell = cell_of(at, level);
+            let corners = CELL_CORNERS.map(|(di, dj)| {
+                let corner = Corner {
+                    term,
+                    plane,
+                    level,
+                    i: cell.0 + di,
+                    j: cell.1 + dj,
+                };
+                self.corner(rays, corner)
+            });
+            let leaf = Leaf {
+                place,
+                level,
+                cell,
+                corners,
+            };
+            // A cell with a corner inside the structure is split down to the finest: its valid
+            // corners may lie off the face, in the open (a face in a slot between two plates
+            // would read the light outside the slot).
+            let all_valid = corners.iter().all(|c| c[3] == VALID);
+            let agree = all_valid && spread(&corners).is_some_and(|s| s <= self.settings.tolerance);
+            if agree && let Some(found) = leaf.interpolate(at) {
+                LAST_LEAVES.with(|last| last.borrow_mut()[term as usize] = Some(leaf));
+                return found;
+            }
+        }
+        let turn = hashed_turn(plane.mix());
+        trace(rays, term, seen, turn)
+    }
+
+    /// The levels a lookup with pixels `footprint` wide descends through: from cells of at
+    /// least `coarsest` metres and `COARSE_CELL_PIXELS` pixels down to `finest` pixels.
+    fn levels(&self, footprint: f64, finest: f64) -> (i32, i32) {
+        let s = &self.settings;
+        let coarse = level_within(s.coarsest.max(COARSE_CELL_PIXELS * footprint));
+        let fine = level_within(finest * footprint);
+        (coarse, fine.max(coarse))
+    }
+
+    /// The value at `corner`, traced on first use.
+    fn corner(&self, rays: &LightRays, corner: Corner) -> Record {
+        let shard = &self.shards[(corner.mix() % SHARDS as u64) as usize];
+        if let Some(value) = lock(shard).get(&corner) {
+            return *value;
+        }
+        // Traced outside the lock: another thread tracing the same corner meanwhile finds the
+        // same value, whichever is kept. Every corner of a plane turns its patterns alike, so
+        // neighbouring corners differ only where the geometry makes a ray's fate change, not
+        // by sampling noise (which would split cells for nothing).
+        let (point, normal) = corner.point();
+        let turn = hashed_turn(corner.plane.mix());
+        let value = if rays.enclosed(point, normal) {
+            [0.0, 0.0, 0.0, INVALID]
+        } else {
+            let [a, b, c] = trace(rays, corner.term, (point, normal), turn);
+            [a, b, c, VALID]
+        };
+        *lock(shard).entry(corner).or_insert(value)
+    }
+}
+
+/// The map of a shard; a panic elsewhere while it was held leaves only whole entries.
+fn lock(shard: &Mutex<CornerMap>) -> std::sync::MutexGuard<'_, CornerMap> {
+    shard
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+thread_local! {
+    /// The leaf of each term this thread's last lookup ended in.
+    static LAST_LEAVES: RefCell<[Option<Leaf>; 2]> = const { RefCell::new([None, None]) };
+}
+
+/// The lookup's answer when it ends in the leaf this thread's last lookup of `term` ended in
+/// (consecutive pixels mostly do): the same cell, reached from the same place, interpolated
+/// anew.
+fn last_leaf(term: Term, place: Place, at: (f64, f64)) -> Option<Shares> {
+    LAST_LEAVES.with(|last| {
+        let last = last.borrow();
+        let leaf = last[term as usize].as_ref()?;
+        let same = leaf.place == place && cell_of(at, leaf.level) == leaf.cell;
+        if !same {
+            return None;
+        }
+        leaf.interpolate(at)
+    })
+}
+
+/// The `term`'s shares at the point and facing `seen`, its patterns turned by `turn`.
+fn trace(rays: &LightRays, term: Term, (p, n): (DVec3, DVec3), turn: (f64, f64)) -> Shares {
+    match term {
+        Term::Sun => [rays.sun_share(p, n, turn), 0.0, 0.0],
+        Term::Sky => rays.sky_shares(p, n, turn),
+    }
+}
+
+/// Where a lookup starts: the cache, the plane, and the levels it may descend through.
+#[derive(Clone, Copy, PartialEq)]
+struct Place {
+    serial: u64,
+    plane: PlaneKey,
+    levels: (i32, i32),
+}
+
+/// A cell a lookup ended in, with its corners' records.
+#[derive(Clone, Copy)]
+struct Leaf {
+    place: Place,
+    level: i32,
+    cell: (i64, i64),
+    corners: [Record; 4],
+}
+
+impl Leaf {
+    /// Bilinear between the valid corners at in-plane point `at`, the weights of the
+    /// others left out (None when no corner is valid).
+    fn interpolate(&self, at: (f64, f64)) -> Option<Shares> {
+        let fx = libm::scalbn(at.0, self.level) - self.cell.0 as f64;
+        let fy = libm::scalbn(at.1, self.level) - self.cell.1 as f64;
+        let weights = [
+            (1.0 - fx) * (1.0 - fy),
+            fx * (1.0 - fy),
+            (1.0 - fx) * fy,
+            fx * fy,
+        ];
+        let mut sum = [0.0; 3];
+        let mut total = 0.0;
+        for (w, corner) in weights.into_iter().zip(self.corners) {
+            let w = w * corner[3];
+            total += w;
+            for k in 0..3 {
+                sum[k] += w * corner[k];
+            }
+        }
+        (total > 0.0).then(|| sum.map(|s| s / total))
+    }
+}
+
+/// The corners of a cell, as offsets from its lowest one, in the order `Leaf` reads them.
+const CELL_CORNERS: [(i64, i64); 4] = [(0, 0), (1, 0), (0, 1), (1, 1)];
+
+/// The largest difference between the valid corners in any share (None when none is).
+fn spread(corners: &[Record; 4]) -> Option<f64> {
+    let valid = || corners.iter().filter(|c| c[3] == VALID);
+    valid().next()?;
+    Some(
+        (0..3)
+            .map(|k| {
+                let low = valid().map(|c| c[k]).fold(f64::INFINITY, f64::min);
+                let high = valid().map(|c| c[k]).fold(f64::NEG_INFINITY, f64::max);
+                high - low
+            })
+            .fold(0.0, f64::max),
+    )
+}
+
+/// The level whose cells are the largest power of two metres no wider than `size` (> 0): level
+/// ℓ has cells 2^−ℓ wide. Exact: frexp gives size = m·2^e with m in [½, 1), so 2^(e−1) ≤ size.
+fn level_within(size: f64) -> i32 {
+    let size = size.clamp(1e-9, 1e9);
+    1 - libm::frexp(size).1
+}
+
+/// The cell of level `level` holding in-plane point `at`.
+fn cell_of(at: (f64, f64), level: i32) -> (i64, i64) {
+    (
+        libm::scalbn(at.0, level).floor() as i64,
+        libm::scalbn(at.1, level).floor() as i64,
+    )
+}
+
+/// A plane of the mesh, quantised, facing where the camera saw it from, with the world axis
+/// it is laid out along: its lattice runs over the two other axes (the axes closest to the
+/// plane, as in triplanar mapping), projected onto the plane along the first.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+struct PlaneKey {
+    axis: u8,
+    normal: [i32; 3],
+    offset: i64,
+}
+
+impl PlaneKey {
+    fn of(p: DVec3, n: DVec3) -> Self {
+        let a = n.abs();
+        let axis = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        PlaneKey {
+            axis,
+            normal: n.to_array().map(|c| (c * PLANE_STEPS).round() as i32),
+            offset: (n.dot(p) * PLANE_STEPS).round() as i64,
+        }
+    }
+
+    /// The key's fields mixed into one word (the turn of the plane's ray patterns).
+    fn mix(self) -> u64 {
+        let [x, y, z] = self.normal.map(|c| c as u64);
+        mix_words(
+            0x243f_6a88_85a3_08d3,
+            [u64::from(self.axis), x, y, z, self.offset as u64],
+        )
+    }
+
+    /// The two world axes the lattice runs along.
+    fn lattice_axes(self) -> (usize, usize) {
+        let a = usize::from(self.axis);
+        ((a + 1) % 3, (a + 2) % 3)
+    }
+
+    /// `p`'s coordinates along the lattice's axes.
+    fn in_plane(self, p: DVec3) -> (f64, f64) {
+        let (b, c) = self.lattice_axes();
+        (p[b], p[c])
+    }
+
+    /// The unit normal and offset the key stands for.
+    fn plane(self) -> (DVec3, f64) {
+        let n = DVec3::from_array(self.normal.map(|c| f64::from(c) / PLANE_STEPS));
+        let length = n.length();
+        (n / length, self.offset as f64 / PLANE_STEPS / length)
+    }
+}
+
+/// A lattice corner of one term's lattice on a plane, at a level.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+struct Corner {
+    term: Term,
+    plane: PlaneKey,
+    level: i32,
+    i: i64,
+    j: i64,
+}
+
+impl Corner {
+    /// The world point and the facing normal of the corner.
+    fn point(self) -> (DVec3, DVec3) {
+        let (n, offset) = self.plane.plane();
+        let (b, c) = self.plane.lattice_axes();
+        let a = usize::from(self.plane.axis);
+        let mut p = DVec3::ZERO;
+        p[b] = libm::scalbn(self.i as f64, -self.level);
+        p[c] = libm::scalbn(self.j as f64, -self.level);
+        p[a] = (offset - n[b] * p[b] - n[c] * p[c]) / n[a];
+        // Off the plane by a share of the cell: a corner away from the pixels it serves may lie
+        // where the plane runs inside the structure (a facet of a sagging face extended along
+        // the neighbouring facets, a contact), and would see nothing.
+        (p + n * libm::scalbn(CORNER_LIFT, -self.level), n)
+    }
+
+    /// The key's fields mixed into one word: the map's hash and the shard.
+    fn mix(self) -> u64 {
+        mix_words(
+            self.plane.mix(),
+            [
+                self.term as u64,
+                self.level as u64,
+                self.i as u64,
+                self.j as u64,
+            ],
+        )
+    }
+}
+
+/// `words` folded into `seed` through splitmix64's finaliser (Steele, Lea & Flood 2014).
+fn mix_words<const N: usize>(seed: u64, words: [u64; N]) -> u64 {
+    words.into_iter().fold(seed, |h, x| {
+        let mut z = (h ^ x).wrapping_add(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    })
+}
+
+impl Hash for Corner {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        state.write_u64(self.mix());
+    }
+}
+
+/// Passes on the word `Corner::hash` writes, already mixed.
+#[derive(Default)]
+struct MixedKeyHasher(u64);
+
+impl Hasher for MixedKeyHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = self.0.rotate_left(8) ^ u64::from(b);
+        }
+    }
+
+    fn write_u64(&mut self, word: u64) {
+        self.0 = word;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Mesh;
+    use crate::materials::Sun;
+
+    #[test]
+    fn a_level_holds_the_largest_power_of_two_within_a_size() {
+        for size in [1e-6, 0.003, 0.25, 0.3, 0.5, 0.75, 1.0, 1.5, 7.0, 1e5] {
+            let cell = libm::scalbn(1.0, -level_within(size));
+            assert!(cell <= size && size < 2.0 * cell, "{size}: cell {cell}");
+        }
+    }
+
+    /// A horizontal plate over x < 0 at height H under an overhead sun of angular diameter θ:
+    /// on the ground the share of the disk seen at x is one minus the circular segment the
+    /// plate's edge cuts off the disk's image of radius H·tan(θ/2). Read from the cache at a
+    /// 1 mm footprint, the penumbra keeps that shape: the cells split down to the edge.
+    #[test]
+    fn the_cached_penumbra_follows_the_circular_segment() {
+        let height = 2.0;
+        let mesh = TraceMesh::build(&Mesh {
+            positions: vec![
+                DVec3::new(-50.0, -50.0, height),
+                DVec3::new(0.0, -50.0, height),
+                DVec3::new(0.0, 50.0, height),
+                DVec3::new(-50.0, 50.0, height),
+            ],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        });
+        let theta = 2.0_f64.to_radians();
+        let lighting = Lighting {
+            ambient: 0.0,
+            studio: None,
+            sun: Some(Sun {
+                direction: DVec3::Z,
+                colour: [1.0; 3],
+                angular_diameter: theta,
+                shadow_rays: 256,
+            }),
+            sky: None,
+            environment: None,
+            shadows: true,
+            ground: None,
+            film: Default::default(),
+        };
+        let cache = LightCache::new(&lighting, CacheSettings::default());
+        let r = height * (0.5 * theta).tan();
+        for step in -40..=40 {
+            let x = f64::from(step) * r / 30.0;
+            let p = DVec3::new(x, 0.3, 0.0);
+            let seen = cache.openness(&mesh, &lighting, p, DVec3::Z, 1e-3).sun;
+            let expected = if x >= r {
+                1.0
+            } else if x <= -r {
+                0.0
+            } else {
+                let h = r - x;
+                let segment = r * r * (1.0 - h / r).acos() - (r - h) * (2.0 * r * h - h * h).sqrt();
+                1.0 - segment / (std::f64::consts::PI * r * r)
+            };
+            assert!(
+                (seen - expected).abs() < 0.05,
+                "x = {x:.4} m: the cache gives {seen:.3}, the segment {expected:.3}"
+            );
+        }
+        assert!(cache.corners() > 0);
+    }
+}
