@@ -17,10 +17,13 @@ pub struct FrameLabels {
     /// Each member's end forces (local axes), peak moments, peak stress and utilisation, in the
     /// order of `model.members`.
     pub members: Vec<MemberResult>,
-    /// The largest node translation, metres.
+    /// The largest translation of any point of the members' axes, nodes included, metres: a
+    /// continuous girder's nodes sit on supports, and its deflection is inside the spans.
     pub max_displacement: f64,
-    /// The node where it occurs.
-    pub max_displacement_node: usize,
+    /// The member where it occurs.
+    pub max_displacement_member: usize,
+    /// Where along that member, metres from its start node.
+    pub max_displacement_position: f64,
     /// The largest member utilisation (peak stress / f_y).
     pub max_utilisation: f64,
     /// The member where it occurs.
@@ -32,8 +35,10 @@ pub struct FrameLabels {
 impl FrameLabels {
     /// The labels of an analysis.
     pub fn new(solution: &FrameSolution) -> FrameLabels {
-        let length = |n: &NodeResult| n.displacement.iter().map(|d| d * d).sum::<f64>().sqrt();
-        let (max_displacement_node, max_displacement) = argmax(solution.nodes.iter().map(length));
+        let (max_displacement_member, (max_displacement_position, max_displacement)) = argmax_by(
+            (0..solution.members.len()).map(|m| largest_translation(solution, m)),
+            |&(_, d)| d,
+        );
         let (max_utilisation_member, max_utilisation) =
             argmax(solution.members.iter().map(|m| m.utilisation));
         FrameLabels {
@@ -46,7 +51,8 @@ impl FrameLabels {
             reactions: solution.reactions.clone(),
             members: solution.members.clone(),
             max_displacement,
-            max_displacement_node,
+            max_displacement_member,
+            max_displacement_position,
             max_utilisation,
             max_utilisation_member,
             physically_plausible: max_utilisation <= 1.0,
@@ -56,8 +62,65 @@ impl FrameLabels {
 
 /// Index and value of the largest of `values` (the first on ties; 0 and 0 when empty).
 fn argmax(values: impl Iterator<Item = f64>) -> (usize, f64) {
-    values.enumerate().fold(
-        (0, 0.0),
-        |best, (i, v)| if v > best.1 { (i, v) } else { best },
-    )
+    argmax_by(values, |&v| v)
+}
+
+/// Index and item of the item of `items` with the largest `key` (the first on ties; 0 and the
+/// default when empty or when no key exceeds 0).
+fn argmax_by<T: Default>(items: impl Iterator<Item = T>, key: impl Fn(&T) -> f64) -> (usize, T) {
+    items
+        .enumerate()
+        .fold((0, T::default()), |best, (i, item)| {
+            if key(&item) > key(&best.1) {
+                (i, item)
+            } else {
+                best
+            }
+        })
+}
+
+/// Stations a member is sampled at before the largest is refined.
+const STATIONS: usize = 64;
+
+/// The position along member `m` (metres from its start) with the largest translation, and
+/// that translation: the largest of `STATIONS` equal stations, its ends and its load kinks,
+/// then refined by golden-section search between the neighbouring stations. The translation
+/// is smooth between kinks and has one peak near a station once stations are this fine.
+fn largest_translation(solution: &FrameSolution, m: usize) -> (f64, f64) {
+    let length = solution.member_length(m);
+    let at = |x: f64| solution.member_at(m, x).0.length();
+    let step = length / STATIONS as f64;
+    let stations = (0..=STATIONS).map(|i| i as f64 * step);
+    let candidates = stations.chain(solution.member_kinks(m).iter().copied());
+    let best = candidates.fold((0.0, at(0.0)), |best, x| {
+        let d = at(x);
+        if d > best.1 { (x, d) } else { best }
+    });
+    let refined = golden_section_max(&at, (best.0 - step).max(0.0), (best.0 + step).min(length));
+    if refined.1 > best.1 { refined } else { best }
+}
+
+/// The maximum of `f` on [a, b] by golden-section search (Kiefer 1953), to a bracket of
+/// 10⁻⁹ of the interval: exact for a unimodal `f`, never worse than its end points.
+fn golden_section_max(f: &impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> (f64, f64) {
+    let ratio = (5f64.sqrt() - 1.0) / 2.0;
+    let tolerance = (b - a) * 1e-9;
+    let mut c = b - ratio * (b - a);
+    let mut d = a + ratio * (b - a);
+    let (mut fc, mut fd) = (f(c), f(d));
+    while b - a > tolerance {
+        if fc > fd {
+            b = d;
+            (d, fd) = (c, fc);
+            c = b - ratio * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            (c, fc) = (d, fd);
+            d = a + ratio * (b - a);
+            fd = f(d);
+        }
+    }
+    let x = (a + b) / 2.0;
+    (x, f(x))
 }

@@ -129,6 +129,23 @@ fn two_span_continuous_beam_reactions_follow_the_three_moment_equation() {
         for member in &s.members {
             assert!(close(member.peak_moment_y, w * l * l / 8.0, 1e-12));
         }
+        // Every node sits on a support, so the largest deflection is inside a span. By symmetry
+        // each span is a propped cantilever: y(x) = w x (L³ − 3 L x² + 2 x³) / (48 EI) from the
+        // end support, largest at x = L (1 + √33) / 16.
+        let ei = E * 0.3 * 0.5f64.powi(3) / 12.0;
+        let x = l * (1.0 + 33f64.sqrt()) / 16.0;
+        let peak = w * x * (l.powi(3) - 3.0 * l * x * x + 2.0 * x.powi(3)) / (48.0 * ei);
+        let labels = FrameLabels::new(&s);
+        assert!(
+            close(labels.max_displacement, peak, 1e-9),
+            "{labels:?} vs {peak}"
+        );
+        let (member, along) = (
+            labels.max_displacement_member,
+            labels.max_displacement_position,
+        );
+        let from_end = if member == 0 { along } else { l - along };
+        assert!((from_end - x).abs() < 1e-3 * l, "{member} {along}");
     }
 }
 
