@@ -92,10 +92,7 @@ fn largest_translation(solution: &FrameSolution, m: usize) -> (f64, f64) {
     let step = length / STATIONS as f64;
     let stations = (0..=STATIONS).map(|i| i as f64 * step);
     let candidates = stations.chain(solution.member_kinks(m).iter().copied());
-    let best = candidates.fold((0.0, at(0.0)), |best, x| {
-        let d = at(x);
-        if d > best.1 { (x, d) } else { best }
-    });
+    let (_, best) = argmax_by(candidates.map(|x| (x, at(x))), |&(_, d)| d);
     let refined = golden_section_max(&at, (best.0 - step).max(0.0), (best.0 + step).min(length));
     if refined.1 > best.1 { refined } else { best }
 }
