@@ -531,7 +531,7 @@ impl Step {
 
 /// False position with the Illinois modification on a bracket [lo, hi] where f changes sign
 /// (f increasing). Converges superlinearly and can never leave the bracket, unlike an
-/// unbracketed secant, which can diverge for large α (docs/mechanics.md §10).
+/// unbracketed secant, which can diverge for large α (docs/mechanics.md §11).
 pub(super) fn illinois(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
     let (mut f_lo, mut f_hi) = (f(lo), f(hi));
     if f_lo >= 0.0 {

@@ -13,6 +13,7 @@
 //! Formulas, reference values, floating-point traps and the primary literature:
 //! `docs/mechanics.md`.
 
+pub mod dynamics;
 mod elastica;
 pub mod frame;
 mod linear;
