@@ -98,7 +98,7 @@ fn self_weight(model: &Value) -> f64 {
 }
 
 /// Each reaction: the node's position and the force and moment the support exerts.
-fn reactions(model: &Value, analysis: &Value) -> Vec<([f64; 3], [f64; 3], [f64; 3])> {
+fn reactions(model: &Value, analysis: &Value) -> Reactions {
     analysis["reactions"]
         .as_array()
         .unwrap()
@@ -115,17 +115,27 @@ fn reactions(model: &Value, analysis: &Value) -> Vec<([f64; 3], [f64; 3], [f64; 
 }
 
 /// Sum of the reactions' components `i`, N.
-fn total(reactions: &[([f64; 3], [f64; 3], [f64; 3])], i: usize) -> f64 {
+fn total(reactions: &Reactions, i: usize) -> f64 {
     reactions.iter().map(|r| r.1[i]).sum()
 }
 
 /// Vertical reaction of the supports at x = `x` (all of them across the bridge), N.
-fn line_reaction(reactions: &[([f64; 3], [f64; 3], [f64; 3])], x: f64) -> f64 {
+fn line_reaction(reactions: &Reactions, x: f64) -> f64 {
     reactions
         .iter()
         .filter(|r| (r.0[0] - x).abs() < 1e-9)
         .map(|r| r.1[2])
         .sum()
+}
+
+/// Each support's node position, and the force and moment the support exerts.
+type Reactions = Vec<([f64; 3], [f64; 3], [f64; 3])>;
+
+/// The frame `scene` builds, analysed: its model, its analysis and its reactions.
+fn solved(scene: &str) -> (Value, Value, Reactions) {
+    let (model, analysis) = analysed(scene);
+    let r = reactions(&model, &analysis);
+    (model, analysis, r)
 }
 
 fn close(got: f64, want: f64, relative: f64) -> bool {
@@ -135,10 +145,9 @@ fn close(got: f64, want: f64, relative: f64) -> bool {
 #[test]
 fn a_truss_bridges_reactions_carry_its_deck_load_and_the_weight_of_every_member() {
     for kind in ["pratt", "warren"] {
-        let (model, analysis) = analysed(&format!(
+        let (model, analysis, r) = solved(&format!(
             r#"bridge::truss_bridge(#{{ kind: "{kind}", panels: 6, panel: 5.0, depth: 4.0, width: 7.6, deck_load: 4.0e3 }})"#
         ));
-        let r = reactions(&model, &analysis);
         // Deck 7.6 − 0.6 = 7.0 m wide between the chords, 30 m long.
         let want = 4.0e3 * 7.0 * 30.0 + self_weight(&model);
         let up = total(&r, 2);
@@ -164,10 +173,9 @@ fn a_truss_bridge_loaded_on_its_first_half_puts_three_quarters_on_the_near_beari
     // Without self-weight, a uniform load q over the first half of a simply supported span
     // L gives the near bearings 3/8 q L and the far ones 1/8 q L: statics of the whole, which
     // the truss (statically determinate along its length) must reproduce.
-    let (model, analysis) = analysed(
+    let (_, _, r) = solved(
         r#"bridge::truss_bridge(#{ panels: 8, panel: 5.0, depth: 4.0, width: 7.6, deck_load: 6.0e3, load_to: 0.5, self_weight: false })"#,
     );
-    let r = reactions(&model, &analysis);
     let q_l = 6.0e3 * 7.0 * 40.0;
     assert!(close(line_reaction(&r, 0.0), 3.0 / 8.0 * q_l, 1e-9));
     assert!(close(line_reaction(&r, 40.0), 1.0 / 8.0 * q_l, 1e-9));
@@ -179,10 +187,9 @@ fn a_two_span_girder_bridge_follows_the_three_moment_equation_over_its_pier() {
     // girder is a two-span continuous beam, whose pier reaction is 10/8 w L (three-moment
     // equation) and end reactions 3/8 w L, whatever the cross-frames, which stay unstrained
     // when every girder carries the same load.
-    let (model, analysis) = analysed(
+    let (_, _, r) = solved(
         r#"bridge::girder_bridge(#{ spans: [20.0, 20.0], girders: 3, spacing: 3.0, deck: false, bearings: "rigid", self_weight: false, deck_load: 5.0e3 })"#,
     );
-    let r = reactions(&model, &analysis);
     let w_l = 5.0e3 * 3.0 * 3.0 * 20.0;
     assert!(close(line_reaction(&r, 20.0), 10.0 / 8.0 * w_l, 1e-9));
     for end in [0.0, 40.0] {
@@ -195,10 +202,9 @@ fn a_composite_girder_bridge_on_elastomeric_bearings_balances_its_load_symmetric
     // Three spans 20 + 26 + 20, the deck grillage on the girders, elastomeric bearings (all
     // springs) and the railing: the reactions balance the deck load and the members' weight,
     // nothing horizontal, and the symmetric bridge has mirror-image reactions.
-    let (model, analysis) = analysed(
+    let (model, analysis, r) = solved(
         r#"bridge::girder_bridge(#{ spans: [20.0, 26.0, 20.0], girders: 3, spacing: 3.0, deck_load: 5.0e3 })"#,
     );
-    let r = reactions(&model, &analysis);
     let want = 5.0e3 * 9.0 * 66.0 + self_weight(&model);
     assert!(
         close(total(&r, 2), want, 1e-9),
@@ -223,10 +229,9 @@ fn a_lattice_towers_base_carries_the_wind_shear_and_overturning_moment() {
     // w N per metre of height on an H m tower: base shear w H along +x, overturning moment
     // w H² / 2 about the y axis, balanced by the four fixed feet (their forces and moments).
     for bracing in ["x", "k"] {
-        let (model, analysis) = analysed(&format!(
+        let (_, _, r) = solved(&format!(
             r#"tower::lattice_tower(#{{ height: 30.0, panels: 10, wind: 2.0e3, bracing: "{bracing}", self_weight: false }})"#
         ));
-        let r = reactions(&model, &analysis);
         let (w, h) = (2.0e3, 30.0);
         assert!(close(-total(&r, 0), w * h, 1e-9), "{bracing}");
         let turning: f64 = r
