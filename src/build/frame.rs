@@ -1,7 +1,7 @@
 //! Analysing a frame and meshing it deformed: each member's section outline swept along its
 //! deformed axis, sections turned by the analysed section rotation, stations fine enough for the
-//! chord rule on the member's peak curvature. Each member runs on past its nodes by half the
-//! largest section meeting there, moving rigidly with its end, so the members of a joint
+//! chord rule on the member's peak curvature. Each member runs on past its nodes as far as the
+//! other members there reach along it, moving rigidly with its end, so the members of a joint
 //! overlap there as they do at rest and no corner opens under deformation.
 
 use super::beam::{section_outline, stations};
@@ -48,7 +48,7 @@ pub fn mesh_frame(frame: &FrameSpec, pixel_footprint: f64) -> Result<BuiltFrame<
     let model = &frame.model;
     let solution = model.solve()?;
     let tolerance = chord_tolerance(frame.tessellation, pixel_footprint);
-    let overhang = joint_overhangs(frame);
+    let overhang = joint_overhangs(frame, &solution);
     let members = model
         .members
         .iter()
@@ -62,7 +62,7 @@ pub fn mesh_frame(frame: &FrameSpec, pixel_footprint: f64) -> Result<BuiltFrame<
             let length = solution.member_length(i);
             let segments = segments_for_chord(length, curvature, tolerance);
             let at = stations(length, segments, solution.member_kinks(i));
-            let ends = (overhang[member.start], overhang[member.end]);
+            let ends = overhang[i];
             let outline = section_outline(&member.section, tolerance);
             let start = DVec3::from_array(model.nodes[member.start]);
             let place = |scale: f64| {
@@ -82,16 +82,38 @@ pub fn mesh_frame(frame: &FrameSpec, pixel_footprint: f64) -> Result<BuiltFrame<
     })
 }
 
-/// Half the largest section dimension meeting at each node: how far members run on past it.
-fn joint_overhangs(frame: &FrameSpec) -> Vec<f64> {
-    let mut out = vec![0.0f64; frame.model.nodes.len()];
-    for m in &frame.model.members {
-        let half = 0.5 * m.section.width().max(m.section.height());
-        for n in [m.start, m.end] {
-            out[n] = out[n].max(half);
-        }
+/// How far each member runs on past its (start, end) node: as far as the other members meeting
+/// there reach along its axis (each one's section box projected on that axis), and at least
+/// half its own smaller section dimension, so the members of a joint overlap at rest. Measured
+/// along the axis rather than by the largest section at the node, so a wide flat member (a deck
+/// slab strip of a grillage) does not push a thin member meeting it (a shear connector) out
+/// through its far face.
+fn joint_overhangs(frame: &FrameSpec, solution: &FrameSolution) -> Vec<(f64, f64)> {
+    let members = &frame.model.members;
+    let mut at_node: Vec<Vec<usize>> = vec![Vec::new(); frame.model.nodes.len()];
+    for (i, m) in members.iter().enumerate() {
+        at_node[m.start].push(i);
+        at_node[m.end].push(i);
     }
-    out
+    let reach_along = |k: usize, axis: DVec3| {
+        let (w, h) = (members[k].section.width(), members[k].section.height());
+        let axes = solution.member_axes(k);
+        0.5 * (axis.dot(axes.row(1)).abs() * w + axis.dot(axes.row(2)).abs() * h)
+    };
+    let overhang = |i: usize, node: usize| {
+        let axis = solution.member_axes(i).row(0);
+        let own = 0.5 * members[i].section.width().min(members[i].section.height());
+        at_node[node]
+            .iter()
+            .filter(|&&k| k != i)
+            .map(|&k| reach_along(k, axis))
+            .fold(own, f64::max)
+    };
+    members
+        .iter()
+        .enumerate()
+        .map(|(i, m)| (overhang(i, m.start), overhang(i, m.end)))
+        .collect()
 }
 
 /// The section frames of member `m` at `stations` (and at the overhangs past its ends, which
@@ -158,6 +180,43 @@ mod tests {
         }];
         f.display_scale = 50.0;
         f
+    }
+
+    /// A thin vertical connector under a 3 m wide, 0.2 m thick slab strip (a grillage deck on
+    /// its shear connector) reaches the strip's top face and stops there: it does not poke
+    /// through by half the strip's width.
+    #[test]
+    fn a_thin_member_under_a_wide_slab_ends_at_the_slabs_top_face() {
+        let mut f = FrameSpec::new("slab on a connector");
+        let m = &mut f.model;
+        m.nodes = vec![[0.0; 3], [0.0, 0.0, 1.0], [4.0, 0.0, 1.0]];
+        let connector = Section::Rectangle {
+            width: 0.02,
+            height: 0.2,
+        };
+        let slab = Section::Rectangle {
+            width: 3.0,
+            height: 0.2,
+        };
+        m.members = vec![Member::new(0, 1, connector), Member::new(1, 2, slab)];
+        m.supports = vec![NodeSupport::fixed(0)];
+        let built = mesh_frame(&f, 1e-3).unwrap();
+        let top = |shape: &crate::build::BuiltShape| {
+            shape.rest.iter().map(|p| p.z).fold(f64::MIN, f64::max)
+        };
+        assert!(
+            (top(&built.members[0]) - 1.1).abs() < 1e-12,
+            "{}",
+            top(&built.members[0])
+        );
+        assert!((top(&built.members[1]) - 1.1).abs() < 1e-12);
+        // The strip runs on past its free end by half its own thickness, not half its width.
+        let reach = built.members[1]
+            .rest
+            .iter()
+            .map(|p| p.x)
+            .fold(f64::MIN, f64::max);
+        assert!((reach - 4.1).abs() < 1e-12, "{reach}");
     }
 
     #[test]
