@@ -87,7 +87,7 @@ pub struct LightCache {
     serial: u64,
 }
 
-type CornerMap = HashMap<Corner, Record, BuildHasherDefault<MixedKeyHasher>>;
+type CornerMap = HashMap<Hashed, Record, BuildHasherDefault<MixedKeyHasher>>;
 
 /// What a corner holds: its `Shares`, then `VALID`, or `INVALID` for a corner that looks
 /// enclosed (`LightRays::enclosed`), whose shares are not the light of any visible point.
@@ -186,6 +186,7 @@ impl LightCache {
             return found;
         }
         for level in levels.0..=levels.1 {
+            let finest = level == levels.1;
             let cell = cell_of(at, level);
             let corners = CELL_CORNERS.map(|(di, dj)| {
                 let corner = Corner {
@@ -208,7 +209,13 @@ impl LightCache {
             // would read the light outside the slot).
             let all_valid = corners.iter().all(|c| c[3] == VALID);
             let agree = all_valid && spread(&corners).is_some_and(|s| s <= self.settings.tolerance);
-            if agree && let Some(found) = leaf.interpolate(at) {
+            // The sky's shares change over a finest cell by whole rays (each fixed direction
+            // draws a sharp outline across the plane), not by a shadow's edge: tracing the
+            // point would give the same steps a pixel aside, at the cost of every ray.
+            let smooth_enough = all_valid && finest && term == Term::Sky;
+            if (agree || smooth_enough)
+                && let Some(found) = leaf.interpolate(at)
+            {
                 LAST_LEAVES.with(|last| last.borrow_mut()[term as usize] = Some(leaf));
                 return found;
             }
@@ -228,8 +235,12 @@ impl LightCache {
 
     /// The value at `corner`, traced on first use.
     fn corner(&self, rays: &LightRays, corner: Corner) -> Record {
-        let shard = &self.shards[(corner.mix() % SHARDS as u64) as usize];
-        if let Some(value) = lock(shard).get(&corner) {
+        let key = Hashed {
+            hash: corner.mix(),
+            corner,
+        };
+        let shard = &self.shards[(key.hash % SHARDS as u64) as usize];
+        if let Some(value) = lock(shard).get(&key) {
             return *value;
         }
         // Traced outside the lock: another thread tracing the same corner meanwhile finds the
@@ -244,7 +255,7 @@ impl LightCache {
             let [a, b, c] = trace(rays, corner.term, (point, normal), turn);
             [a, b, c, VALID]
         };
-        *lock(shard).entry(corner).or_insert(value)
+        *lock(shard).entry(key).or_insert(value)
     }
 }
 
@@ -440,37 +451,64 @@ impl Corner {
         (p + n * libm::scalbn(CORNER_LIFT, -self.level), n)
     }
 
-    /// The key's fields mixed into one word: the map's hash and the shard.
+    /// The key's fields folded into one word, the map's hash and the shard: a multiply per
+    /// field (as rustc's FxHasher) and one finaliser, a tenth of `mix_words` over them all.
+    /// Only how the map spreads its keys depends on it, never a value.
     fn mix(self) -> u64 {
-        mix_words(
-            self.plane.mix(),
-            [
-                self.term as u64,
-                self.level as u64,
-                self.i as u64,
-                self.j as u64,
-            ],
-        )
+        let [x, y, z] = self.plane.normal.map(|c| c as u64);
+        let words = [
+            u64::from(self.plane.axis) | (self.term as u64) << 8 | (self.level as u64) << 32,
+            x,
+            y,
+            z,
+            self.plane.offset as u64,
+            self.i as u64,
+            self.j as u64,
+        ];
+        let folded = words.into_iter().fold(0, |h: u64, w| {
+            (h.rotate_left(5) ^ w).wrapping_mul(0x517c_c1b7_2722_0a95)
+        });
+        splitmix_finaliser(folded)
     }
 }
 
 /// `words` folded into `seed` through splitmix64's finaliser (Steele, Lea & Flood 2014).
 fn mix_words<const N: usize>(seed: u64, words: [u64; N]) -> u64 {
-    words.into_iter().fold(seed, |h, x| {
-        let mut z = (h ^ x).wrapping_add(0x9e37_79b9_7f4a_7c15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    })
+    words
+        .into_iter()
+        .fold(seed, |h, x| splitmix_finaliser(h ^ x))
 }
 
-impl Hash for Corner {
-    fn hash<H: Hasher>(&self, state: &mut H) {
-        state.write_u64(self.mix());
+/// splitmix64's finaliser: every bit of `word` reaches every bit of the result.
+fn splitmix_finaliser(word: u64) -> u64 {
+    let mut z = word.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// A corner with its `Corner::mix`, computed once for the shard and the map.
+#[derive(Clone, Copy, Debug)]
+struct Hashed {
+    hash: u64,
+    corner: Corner,
+}
+
+impl PartialEq for Hashed {
+    fn eq(&self, other: &Self) -> bool {
+        self.corner == other.corner
     }
 }
 
-/// Passes on the word `Corner::hash` writes, already mixed.
+impl Eq for Hashed {}
+
+impl Hash for Hashed {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        state.write_u64(self.hash);
+    }
+}
+
+/// Passes on the word `Hashed::hash` writes, already mixed.
 #[derive(Default)]
 struct MixedKeyHasher(u64);
 
