@@ -1,6 +1,7 @@
 //! Pipeline benchmark: image/depth pairs per second of whole runs (every default output of the
 //! recipe written to disk: RGB, depth, masks, JSON, manifest), on one thread and on every
-//! core, for each row of the table in docs/benchmarks.md, then a per-stage breakdown of single views.
+//! core, for each row of the table in docs/benchmarks.md, issue 31's targets beside what was
+//! measured, then a per-stage breakdown of single views.
 //! Prints medians; asserts nothing (speed is measured, never tested).
 //!
 //!     cargo bench --bench pipeline                        (about a quarter of an hour on 2 cores)
@@ -13,7 +14,9 @@
 //! views at growing sample counts (throughput and peak resident memory, each count in its own
 //! process), and the time per pair at 3840×3840 against 960×960. Then the cost per view of
 //! each daylight and camera effect, on and off (`SHMGEN_BENCH_ONLY=daylight`: only that;
-//! `SHMGEN_BENCH_ONLY=breakdown`: only the per-stage breakdown; `SHMGEN_BENCH_ONLY="light cache"`:
+//! `SHMGEN_BENCH_ONLY=breakdown`: only the per-stage breakdown, the lighting cache's filling
+//! per sample included; `SHMGEN_BENCH_ONLY=targets`: only issue 31's target table (A1, A2 and
+//! outdoor.rhai at 960², and `watch --once` of outdoor.rhai); `SHMGEN_BENCH_ONLY="light cache"`:
 //! only the lighting cache's speed against error on outdoor.rhai, at `SHMGEN_BENCH_SIZE`²
 //! (960 unless set); any other text: only the
 //! table's rows whose name holds it, e.g. `SHMGEN_BENCH_ONLY=quickstart`).
@@ -25,7 +28,10 @@ use shmgen::materials::{Backdrop, EnvironmentLight};
 use shmgen::output::{depth_exr, mask_png, rgb_png};
 use shmgen::pipeline::{self, RunOptions, Shard, prepare, view_camera};
 use shmgen::recipe::Recipe;
-use shmgen::render::{GBuffer, NO_HIT, SampleSurfaces, TraceMesh, shade};
+use shmgen::render::{
+    CacheSettings, GBuffer, LightCache, NO_HIT, SampleSurfaces, TraceMesh, shade,
+};
+use shmgen::scene::Shading;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -255,7 +261,7 @@ fn shade_on_black(
     mesh: &TraceMesh,
     (camera, g): (&Camera, &GBuffer),
     surfaces: &SampleSurfaces,
-    cache: Option<&shmgen::render::LightCache>,
+    cache: Option<&LightCache>,
 ) -> Vec<u8> {
     let black = Backdrop::Colour([0, 0, 0]);
     let lit = (&sample.lighting, cache);
@@ -265,7 +271,7 @@ fn shade_on_black(
 /// The stages of one view of a built sample, timed.
 fn view_stages(
     sample: &BuiltSample,
-    mesh: &TraceMesh,
+    (mesh, cache): (&TraceMesh, Option<&LightCache>),
     camera: &Camera,
     dir: &Path,
     stages: &mut Stages,
@@ -275,8 +281,8 @@ fn view_stages(
     // whichever path the run took; the hits are the same.
     stages.time("centre rays traced", || mesh.trace_rays(camera));
     let surfaces = surfaces_of(sample);
-    let rgb = stages.time("shade (anti-aliased)", || {
-        shade_on_black(sample, mesh, (camera, &g), &surfaces, None)
+    let rgb = stages.time("shade (anti-aliased, as run)", || {
+        shade_on_black(sample, mesh, (camera, &g), &surfaces, cache)
     });
     let png = stages.time("RGB PNG", || rgb_png(g.width, g.height, &rgb));
     let exr = stages.time("depth EXR", || depth_exr(g.width, g.height, &g.depth));
@@ -294,6 +300,69 @@ fn view_stages(
         }
     });
     g
+}
+
+/// Issue 31's targets: the job, the start of the name of the row that measures it, and the
+/// pairs per second to reach on 2 cores.
+const TARGETS: [(&str, &str, f64); 3] = [
+    ("A1 (paper's prompts)", "a1_beams.rhai smoke (", 90.0),
+    ("A2 (paper's prompts)", "a2_silo.rhai smoke (", 35.0),
+    ("outdoor.rhai, cached", "outdoor.rhai (", 10.0),
+];
+
+/// Issue 31's targets (2 cores, 960², every default output), beside what the rows above
+/// measured on every core and, when timed, `watch --once` of outdoor.rhai.
+fn target_table(rates: &[(&str, f64)], watch: Option<(f64, f64)>) {
+    println!("| target | measured | target |");
+    for (job, row, target) in TARGETS {
+        if let Some((_, all)) = rates.iter().find(|(name, _)| name.starts_with(row)) {
+            println!("| {job} | {all:.1} pairs/s | ≥ {target} pairs/s |");
+        }
+    }
+    if let Some((wall, cpu)) = watch {
+        println!(
+            "| watch --once outdoor.rhai (4 samples × 2 views) | {wall:.2} s ({cpu:.2} CPU-s) | ≤ 0.1 s |"
+        );
+    }
+}
+
+/// Median wall seconds of `shmgen watch --once scripts/outdoor.rhai` (the sheet written to a
+/// temporary folder), and the CPU seconds (user + system) of its median run.
+fn watch_once(runs: u64) -> (f64, f64) {
+    let dir = tempfile::tempdir().unwrap();
+    let times: Vec<(f64, f64)> = (0..runs.max(1))
+        .map(|_| {
+            let cpu_before = children_cpu_seconds();
+            let started = Instant::now();
+            let status = std::process::Command::new(env!("CARGO_BIN_EXE_shmgen"))
+                .arg("watch")
+                .arg(scripts().join("outdoor.rhai"))
+                .args(["--once", "--out"])
+                .arg(dir.path().join("sheet.png"))
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::null())
+                .status()
+                .unwrap();
+            assert!(status.success(), "watch --once outdoor.rhai failed");
+            let wall = started.elapsed().as_secs_f64();
+            (wall, children_cpu_seconds() - cpu_before)
+        })
+        .collect();
+    let wall = median(times.iter().map(|t| t.0).collect());
+    let cpu = times.iter().find(|t| t.0 == wall).map_or(f64::NAN, |t| t.1);
+    (wall, cpu)
+}
+
+/// User and system CPU seconds of this process's waited-for children so far.
+fn children_cpu_seconds() -> f64 {
+    // SAFETY: getrusage writes the struct it is given and nothing else.
+    let usage = unsafe {
+        let mut usage = std::mem::zeroed::<libc::rusage>();
+        libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage);
+        usage
+    };
+    let seconds = |t: libc::timeval| t.tv_sec as f64 + 1e-6 * t.tv_usec as f64;
+    seconds(usage.ru_utime) + seconds(usage.ru_stime)
 }
 
 /// The per-stage breakdown of every row.
@@ -314,17 +383,29 @@ fn breakdown(name: &str, recipe: &Recipe, samples: u64) {
     let mut stages = Stages::default();
     let mut coverage = Vec::new();
     let mut paths = std::collections::BTreeMap::new();
+    let (mut cache_fills, mut corners) = (Vec::new(), Vec::new());
     pool.install(|| {
         for s in 0..recipe.dataset.samples.min(samples) {
             let sample = stages.time("prepare (per sample)", || prepare(recipe, s).unwrap());
             let mesh = stages.time("scene mesh (per sample)", || TraceMesh::build(&sample.mesh));
             stages.time("BVH (per sample)", || mesh.build_bvh());
+            let cache = (recipe.dataset.shading == Shading::Cached)
+                .then(|| LightCache::new(&sample.lighting, CacheSettings::default()));
+            let mut views = Vec::new();
+            let started = Instant::now();
             for view in 0..recipe.dataset.views {
                 let camera = view_camera(&recipe.dataset, &sample, view).unwrap().camera;
-                let g = view_stages(&sample, &mesh, &camera, dir.path(), &mut stages);
+                let traced = (&mesh, cache.as_ref());
+                let g = view_stages(&sample, traced, &camera, dir.path(), &mut stages);
                 *paths.entry(g.visibility).or_insert(0) += 1;
                 let hits = g.triangle.iter().filter(|&&t| t != NO_HIT).count();
                 coverage.push(hits as f64 / g.triangle.len() as f64);
+                views.push(camera);
+            }
+            if let Some(cache) = cache.as_ref().filter(|c| c.corners() > 0) {
+                let filling = started.elapsed().as_secs_f64();
+                cache_fills.push(fill_time(&sample, &mesh, cache, &views, filling));
+                corners.push(cache.corners() as f64);
             }
         }
     });
@@ -339,6 +420,38 @@ fn breakdown(name: &str, recipe: &Recipe, samples: u64) {
         100.0 * median(coverage),
         cells.join(", ")
     );
+    if !cache_fills.is_empty() {
+        println!(
+            "    lighting cache: filling it {:.1} ms per sample ({:.0} corners), within the \
+             views' shading above",
+            median(cache_fills),
+            median(corners)
+        );
+    }
+}
+
+/// Milliseconds a sample's views spent filling the lighting cache: the time `first_pass`
+/// (seconds) they took with it empty, less the time they take again with it full (lookups
+/// only; every stage of a view but the shading is timed again too, so it cancels out).
+fn fill_time(
+    sample: &BuiltSample,
+    mesh: &TraceMesh,
+    cache: &LightCache,
+    views: &[Camera],
+    first_pass: f64,
+) -> f64 {
+    let dir = tempfile::tempdir().unwrap();
+    let started = Instant::now();
+    for camera in views {
+        view_stages(
+            sample,
+            (mesh, Some(cache)),
+            camera,
+            dir.path(),
+            &mut Stages::default(),
+        );
+    }
+    1e3 * (first_pass - started.elapsed().as_secs_f64()).max(0.0)
 }
 
 /// Median milliseconds per view (one thread, 960×960, anti-aliased) of shading a1's first beam
@@ -740,11 +853,19 @@ fn main() {
         return stage_breakdowns(staged);
     }
     println!("| row | 1 thread | {cores} threads |");
-    for (name, recipe) in rows.iter().filter(|(name, _)| name.contains(&only)) {
+    let mut rates = Vec::new();
+    let chosen = |name: &str| match only.as_str() {
+        "targets" => TARGETS.iter().any(|(_, row, _)| name.starts_with(row)),
+        only => name.contains(only),
+    };
+    for (name, recipe) in rows.iter().filter(|(name, _)| chosen(name)) {
         let one = rate(recipe, 1, runs);
         let all = rate(recipe, cores, runs);
         println!("| {name} | {one:.1} pairs/s | {all:.1} pairs/s |");
+        rates.push((*name, all));
     }
+    let timed_watch = only.is_empty() || only == "targets";
+    target_table(&rates, timed_watch.then(|| watch_once(runs)));
     if !only.is_empty() {
         return;
     }

@@ -87,7 +87,7 @@ pub struct LightCache {
     serial: u64,
 }
 
-type CornerMap = HashMap<Corner, Record, BuildHasherDefault<MixedKeyHasher>>;
+type CornerMap = HashMap<Hashed, Record, BuildHasherDefault<MixedKeyHasher>>;
 
 /// What a corner holds: its `Shares`, then `VALID`, or `INVALID` for a corner that looks
 /// enclosed (`LightRays::enclosed`), whose shares are not the light of any visible point.
@@ -186,6 +186,7 @@ impl LightCache {
             return found;
         }
         for level in levels.0..=levels.1 {
+            let finest = level == levels.1;
             let cell = cell_of(at, level);
             let corners = CELL_CORNERS.map(|(di, dj)| {
                 let corner = Corner {
@@ -208,7 +209,13 @@ impl LightCache {
             // would read the light outside the slot).
             let all_valid = corners.iter().all(|c| c[3] == VALID);
             let agree = all_valid && spread(&corners).is_some_and(|s| s <= self.settings.tolerance);
-            if agree && let Some(found) = leaf.interpolate(at) {
+            // The sky's shares change over a finest cell by whole rays (each fixed direction
+            // draws a sharp outline across the plane), not by a shadow's edge: tracing the
+            // point would give the same steps a pixel aside, at the cost of every ray.
+            let smooth_enough = finest && term == Term::Sky;
+            if (agree || smooth_enough)
+                && let Some(found) = leaf.interpolate(at)
+            {
                 LAST_LEAVES.with(|last| last.borrow_mut()[term as usize] = Some(leaf));
                 return found;
             }
@@ -228,8 +235,12 @@ impl LightCache {
 
     /// The value at `corner`, traced on first use.
     fn corner(&self, rays: &LightRays, corner: Corner) -> Record {
-        let shard = &self.shards[(corner.mix() % SHARDS as u64) as usize];
-        if let Some(value) = lock(shard).get(&corner) {
+        let key = Hashed {
+            hash: corner.mix(),
+            corner,
+        };
+        let shard = &self.shards[(key.hash % SHARDS as u64) as usize];
+        if let Some(value) = lock(shard).get(&key) {
             return *value;
         }
         // Traced outside the lock: another thread tracing the same corner meanwhile finds the
@@ -244,7 +255,7 @@ impl LightCache {
             let [a, b, c] = trace(rays, corner.term, (point, normal), turn);
             [a, b, c, VALID]
         };
-        *lock(shard).entry(corner).or_insert(value)
+        *lock(shard).entry(key).or_insert(value)
     }
 }
 
@@ -304,8 +315,8 @@ impl Leaf {
     /// Bilinear between the valid corners at in-plane point `at`, the weights of the
     /// others left out (None when no corner is valid).
     fn interpolate(&self, at: (f64, f64)) -> Option<Shares> {
-        let fx = libm::scalbn(at.0, self.level) - self.cell.0 as f64;
-        let fy = libm::scalbn(at.1, self.level) - self.cell.1 as f64;
+        let fx = at.0 * power_of_two(self.level) - self.cell.0 as f64;
+        let fy = at.1 * power_of_two(self.level) - self.cell.1 as f64;
         let weights = [
             (1.0 - fx) * (1.0 - fy),
             fx * (1.0 - fy),
@@ -353,9 +364,42 @@ fn level_within(size: f64) -> i32 {
 /// The cell of level `level` holding in-plane point `at`.
 fn cell_of(at: (f64, f64), level: i32) -> (i64, i64) {
     (
-        libm::scalbn(at.0, level).floor() as i64,
-        libm::scalbn(at.1, level).floor() as i64,
+        floor_to_i64(at.0 * power_of_two(level)),
+        floor_to_i64(at.1 * power_of_two(level)),
     )
+}
+
+/// 2^`level` exactly, for the levels `level_within` gives (|level| < 64): multiplying by it is
+/// `libm::scalbn`, exact, without the call (lookups do it for every pixel).
+fn power_of_two(level: i32) -> f64 {
+    debug_assert!(level.abs() < 64);
+    f64::from_bits(((1023 + i64::from(level)) as u64) << 52)
+}
+
+/// `x.floor() as i64` (saturating the same way) without the call to libm's floor, which the
+/// x86-64 baseline has no instruction for.
+fn floor_to_i64(x: f64) -> i64 {
+    let truncated = x as i64;
+    if (truncated as f64) > x {
+        truncated.saturating_sub(1)
+    } else {
+        truncated
+    }
+}
+
+/// `x.round() as i64` (halves away from zero, saturating) without the call to libm's round.
+fn round_to_i64(x: f64) -> i64 {
+    let truncated = x as i64;
+    // Exact: x and its truncation are within a factor two of each other, or the truncation is
+    // 0, or x is already whole (|x| ≥ 2⁵²).
+    let fraction = x - truncated as f64;
+    if fraction >= 0.5 {
+        truncated.saturating_add(1)
+    } else if fraction <= -0.5 {
+        truncated.saturating_sub(1)
+    } else {
+        truncated
+    }
 }
 
 /// A plane of the mesh, quantised, facing where the camera saw it from, with the world axis
@@ -380,8 +424,10 @@ impl PlaneKey {
         };
         PlaneKey {
             axis,
-            normal: n.to_array().map(|c| (c * PLANE_STEPS).round() as i32),
-            offset: (n.dot(p) * PLANE_STEPS).round() as i64,
+            normal: n.to_array().map(|c| {
+                round_to_i64(c * PLANE_STEPS).clamp(i32::MIN.into(), i32::MAX.into()) as i32
+            }),
+            offset: round_to_i64(n.dot(p) * PLANE_STEPS),
         }
     }
 
@@ -440,37 +486,64 @@ impl Corner {
         (p + n * libm::scalbn(CORNER_LIFT, -self.level), n)
     }
 
-    /// The key's fields mixed into one word: the map's hash and the shard.
+    /// The key's fields folded into one word, the map's hash and the shard: a multiply per
+    /// field (as rustc's FxHasher) and one finaliser, a tenth of `mix_words` over them all.
+    /// Only how the map spreads its keys depends on it, never a value.
     fn mix(self) -> u64 {
-        mix_words(
-            self.plane.mix(),
-            [
-                self.term as u64,
-                self.level as u64,
-                self.i as u64,
-                self.j as u64,
-            ],
-        )
+        let [x, y, z] = self.plane.normal.map(|c| c as u64);
+        let words = [
+            u64::from(self.plane.axis) | (self.term as u64) << 8 | (self.level as u64) << 32,
+            x,
+            y,
+            z,
+            self.plane.offset as u64,
+            self.i as u64,
+            self.j as u64,
+        ];
+        let folded = words.into_iter().fold(0, |h: u64, w| {
+            (h.rotate_left(5) ^ w).wrapping_mul(0x517c_c1b7_2722_0a95)
+        });
+        splitmix_finaliser(folded)
     }
 }
 
 /// `words` folded into `seed` through splitmix64's finaliser (Steele, Lea & Flood 2014).
 fn mix_words<const N: usize>(seed: u64, words: [u64; N]) -> u64 {
-    words.into_iter().fold(seed, |h, x| {
-        let mut z = (h ^ x).wrapping_add(0x9e37_79b9_7f4a_7c15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    })
+    words
+        .into_iter()
+        .fold(seed, |h, x| splitmix_finaliser(h ^ x))
 }
 
-impl Hash for Corner {
-    fn hash<H: Hasher>(&self, state: &mut H) {
-        state.write_u64(self.mix());
+/// splitmix64's finaliser: every bit of `word` reaches every bit of the result.
+fn splitmix_finaliser(word: u64) -> u64 {
+    let mut z = word.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// A corner with its `Corner::mix`, computed once for the shard and the map.
+#[derive(Clone, Copy, Debug)]
+struct Hashed {
+    hash: u64,
+    corner: Corner,
+}
+
+impl PartialEq for Hashed {
+    fn eq(&self, other: &Self) -> bool {
+        self.corner == other.corner
     }
 }
 
-/// Passes on the word `Corner::hash` writes, already mixed.
+impl Eq for Hashed {}
+
+impl Hash for Hashed {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        state.write_u64(self.hash);
+    }
+}
+
+/// Passes on the word `Hashed::hash` writes, already mixed.
 #[derive(Default)]
 struct MixedKeyHasher(u64);
 
@@ -495,6 +568,43 @@ mod tests {
     use super::*;
     use crate::geometry::Mesh;
     use crate::materials::Sun;
+
+    /// The call-free floor, round and power of two against libm's, on halves, integers,
+    /// neighbours of both, values past 2⁵² and 2⁶³ (saturating), signed zeros and NaN.
+    #[test]
+    fn the_call_free_floor_round_and_scaling_are_libms() {
+        let mut values = vec![0.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e300];
+        for base in [
+            0.5f64,
+            1.0,
+            1.5,
+            2.5,
+            3.0,
+            1e6 + 0.5,
+            4503599627370496.0,
+            9.3e18,
+            1e19,
+        ] {
+            for x in [base, base.next_up(), base.next_down()] {
+                values.extend([x, -x]);
+            }
+        }
+        for k in -20_000..20_000 {
+            values.push(f64::from(k) * 0.137_035_999);
+        }
+        for x in values {
+            assert_eq!(floor_to_i64(x), x.floor() as i64, "floor of {x:e}");
+            assert_eq!(round_to_i64(x), x.round() as i64, "round of {x:e}");
+            for level in -40..40 {
+                let scaled = x * power_of_two(level);
+                let reference = libm::scalbn(x, level);
+                assert!(
+                    scaled.to_bits() == reference.to_bits() || (x.is_nan() && scaled.is_nan()),
+                    "{x:e} scaled by 2^{level}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn a_level_holds_the_largest_power_of_two_within_a_size() {
