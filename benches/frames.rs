@@ -1,6 +1,7 @@
 //! Time of a frame analysis against model size: space trusses of 10 to 10⁵ members solved by
 //! the dense and the sparse Cholesky (dense only while it takes under a few seconds), and the
-//! size of the sparse factor. Prints a table; asserts nothing.
+//! size of the sparse factor; then the six lowest natural modes (dense eigensolver) of trusses
+//! up to its limit. Prints tables; asserts nothing.
 //!
 //!     cargo bench --bench frames
 
@@ -18,6 +19,27 @@ fn best_of(runs: usize, f: impl Fn()) -> f64 {
 }
 
 fn main() {
+    static_analysis();
+    natural_modes();
+}
+
+/// The six lowest modes of space trusses up to `DENSE_MODES_MAX_DOFS` free DOFs.
+fn natural_modes() {
+    println!();
+    println!("| members | free DOFs | six modes (ms) |");
+    println!("|---:|---:|---:|");
+    for panels in [1, 4, 11, 33, 67, 133] {
+        let model = space_truss(panels);
+        let dofs = 3 * model.nodes.len() - 6;
+        let runs = if dofs > 500 { 2 } else { 5 };
+        let t = best_of(runs, || {
+            model.natural_modes(6).expect("a stable truss");
+        });
+        println!("| {} | {dofs} | {:.1} |", model.members.len(), t * 1e3);
+    }
+}
+
+fn static_analysis() {
     println!("| members | free DOFs | dense (ms) | sparse (ms) |");
     println!("|---:|---:|---:|---:|");
     for panels in [1, 4, 11, 33, 111, 333, 1111, 11111] {

@@ -98,3 +98,81 @@ fn a_mechanism_in_a_recipe_is_refused_with_its_dofs_named() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("mechanism") && err.contains("ux"), "{err}");
 }
+
+/// A 6 m steel cantilever (0.1 × 0.2 m, height along z) of eight members vibrating in its
+/// first mode, carrying only its own mass.
+const CANTILEVER_MODE: &str = r#"
+dataset(#{
+    name: "cantilever mode", seed: 1, samples: 1, views: 1, outputs: ["rgb", "depth"],
+    camera: #{ width: 64, height: 48, fov_y: deg(60), distance: "frame" },
+    scene: |rng| {
+        let f = frame("cantilever", #{ plane: "xz", mass: "consistent" });
+        let s = rectangle(0.1, 0.2);
+        let a = f.node(0, 0, 0);
+        for i in 1..=8 {
+            let b = f.node(0.75 * i, 0, 0);
+            f.member(b - 1, b, s);
+        }
+        f.support(a, "fixed");
+        f.vibration([[1, 0.2]]);
+        f
+    },
+});
+"#;
+
+#[test]
+fn a_frame_vibration_snapshot_labels_its_frequencies_and_draws_its_amplitude() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run(dir.path(), CANTILEVER_MODE);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json = dir.path().join("out/samples/0000/000000_00.json");
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let schema: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/schema/view.schema.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let validator = jsonschema::validator_for(&schema).unwrap();
+    assert!(validator.is_valid(&record), "{}", json.display());
+    let analysis = &record["scene"]["structures"][0]["analysis"];
+    assert_eq!(analysis["analysis"], "vibration_snapshot");
+    // f₁ = (1.8751)² / (2π L²) √(E I / (ρ A)); eight members err by (β₁L/8)⁴/1440 ≈ 2e-6.
+    let (e, rho, l) = (210e9_f64, 7850.0, 6.0);
+    let (area, inertia) = (0.1 * 0.2, 0.1 * 0.2f64.powi(3) / 12.0);
+    let beta_l = 1.875_104_068_711_961_f64;
+    let f1 =
+        beta_l.powi(2) / (2.0 * std::f64::consts::PI * l * l) * (e * inertia / (rho * area)).sqrt();
+    let modes = &analysis["modes"];
+    let got = modes["frequencies"][0].as_f64().unwrap();
+    assert!((got / f1 - 1.0).abs() < 1e-5, "{got} vs {f1}");
+    assert_eq!(modes["snapshot"][0]["mode"], 1);
+    assert_eq!(modes["frequencies"].as_array().unwrap().len(), 6);
+    // The tip moves the amplitude (display_scale 1).
+    let tip = analysis["nodes"][8]["displacement"][2].as_f64().unwrap();
+    assert!((tip - 0.2).abs() < 1e-12, "{tip}");
+    assert!((analysis["max_displacement"].as_f64().unwrap() - 0.2).abs() < 1e-12);
+}
+
+#[test]
+fn a_frame_vibration_with_loads_is_refused_at_the_recipe() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = CANTILEVER_MODE.replace(
+        "f.vibration([[1, 0.2]]);",
+        "f.node_load(8, [0.0, 0.0, -1.0e3]);\n        f.vibration([[1, 0.2]]);",
+    );
+    let out = run(dir.path(), &recipe);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("recipe.rhai:15:11")
+            && err.contains("either static loads or a vibration snapshot"),
+        "{err}"
+    );
+}

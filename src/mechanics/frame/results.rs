@@ -26,6 +26,8 @@ pub struct FrameSolution {
     pub members: Vec<MemberResult>,
     /// Whether the geometric stiffness of the axial forces was included (P-Δ).
     pub second_order: bool,
+    /// For a vibration snapshot: its modes and the structure's lowest frequencies.
+    pub modal: Option<super::ModalLabels>,
     elements: Vec<Element>,
     /// Local end displacements of every member (released rotations recovered).
     local: Vec<Vec12>,
@@ -111,6 +113,7 @@ impl FrameSolution {
             reactions,
             members,
             second_order: false,
+            modal: None,
             elements,
             local,
         }

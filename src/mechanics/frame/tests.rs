@@ -262,7 +262,7 @@ fn one_member_cantilever_equals_the_beam_module() {
 }
 
 /// A space frame with members in three directions, releases, springs and loads of every kind.
-fn space_frame() -> FrameModel {
+pub(super) fn space_frame() -> FrameModel {
     let mut m = FrameModel::new();
     m.nodes = vec![
         [0.0, 0.0, 0.0],
