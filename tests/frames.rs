@@ -1,7 +1,8 @@
 //! Frames through the CLI: a recipe's frame is analysed, its labels land in the view JSON
 //! (valid against the published schema) with the values a hand calculation gives, a recipe
-//! error in a frame call points at its file, line and column, and `scripts/frames.rhai` gives
-//! the same bytes on any thread count, in shards and after a kill.
+//! error in a frame call points at its file, line and column, a rendered frame lies where the
+//! closed-form deformed members put it (to a fraction of a pixel), and `scripts/frames.rhai`
+//! gives the same bytes on any thread count, in shards and after a kill.
 
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -9,7 +10,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{hashes, ok};
+use common::{hashes, load, off_box, ok, read_exr_channels, render, view_path};
 
 fn shmgen() -> Command {
     Command::new(env!("CARGO_BIN_EXE_shmgen"))
@@ -272,4 +273,118 @@ fn a_killed_frames_run_resumes_to_the_same_bytes() {
     let text = String::from_utf8_lossy(&resumed.stdout);
     assert!(text.contains("already present"), "{text}");
     assert_eq!(hashes(&dir.path().join("clean")), hashes(&out));
+}
+
+/// An L frame in the x–z plane: a column (0, 0, 0)–(0, 0, H) clamped at its base, a rigid
+/// knee, a beam (0, 0, H)–(A, 0, H) cantilevering out with a downward force P at its tip; both
+/// 0.2 m wide (y) × 0.3 m deep rectangles, drawn `SCALE` times.
+const KNEE: (f64, f64, f64) = (3.0, 2.5, 2.0e4);
+const SCALE: f64 = 30.0;
+
+fn knee_recipe() -> String {
+    let (h, a, p) = KNEE;
+    format!(
+        r#"dataset(#{{
+    name: "knee", seed: 1, samples: 1, views: 2, outputs: ["depth", "mask", "displacement"],
+    camera: #{{ width: 320, height: 240, fixed: [
+        #{{ position: [1.3, -5.5, 1.2], target: [1.2, 0.0, 1.6] }},
+        #{{ position: [3.5, -4.0, 4.5], target: [1.0, 0.0, 2.0] }}] }},
+    scene: |rng| {{
+        let f = frame("knee", #{{ plane: "xz", display_scale: {SCALE} }});
+        let s = rectangle(0.2, 0.3);
+        let base = f.node(0, 0, 0);
+        let knee = f.node(0, 0, {h});
+        let tip = f.node({a}, 0, {h});
+        f.member(base, knee, s);
+        f.member(knee, tip, s);
+        f.support(base, "fixed");
+        f.node_load(tip, [0.0, 0.0, -{p}]);
+        f
+    }},
+}});
+"#
+    )
+}
+
+/// Where the closed form draws the rest point `r` of the L frame (sections turned rigidly by
+/// the scaled rotation, as docs/frames.md draws them): the column carries the constant moment
+/// P A (rotation θ z/H with θ = P A H/(E I), sway θ z²/(2H)) and shortens by P z/(E A); the
+/// beam turns with the knee and bends as a cantilever, w = −θ x − P x² (3A − x)/(6 E I).
+fn knee_truth(r: [f64; 3]) -> [f64; 3] {
+    let (h, a, p) = KNEE;
+    let (e, area, inertia) = (210e9, 0.2 * 0.3, 0.2 * 0.3f64.powi(3) / 12.0);
+    let theta = p * a * h / (e * inertia);
+    let knee = [theta * h / 2.0, -p * h / (e * area)];
+    // Axis point, its displacement (x, z) and the rotation about +y (z turns toward x).
+    // The column's rest points have |x| ≤ 0.15, the beam's beyond the knee x > 0.15.
+    let (axis, [ux, uz], turn) = if r[0] <= 0.15 + 1e-6 {
+        let z = r[2].clamp(0.0, h);
+        (
+            [0.0, 0.0, z],
+            [theta * z * z / (2.0 * h), -p * z / (e * area)],
+            theta * z / h,
+        )
+    } else {
+        let x = r[0].clamp(0.0, a);
+        let own = p * x * x * (3.0 * a - x) / (6.0 * e * inertia);
+        (
+            [x, 0.0, h],
+            [knee[0], knee[1] - theta * x - own],
+            theta + p * (2.0 * a * x - x * x) / (2.0 * e * inertia),
+        )
+    };
+    let o = [r[0] - axis[0], r[2] - axis[2]];
+    let (sin, cos) = (SCALE * turn).sin_cos();
+    let turned = [cos * o[0] + sin * o[1], -sin * o[0] + cos * o[1]];
+    [
+        SCALE * ux + turned[0] - o[0],
+        0.0,
+        SCALE * uz + turned[1] - o[1],
+    ]
+}
+
+#[test]
+fn a_rendered_frame_lies_on_its_closed_form_deformed_members_within_the_pixel_tolerance() {
+    // Each pixel's point, less its written displacement, is a point of the rest members (two
+    // boxes, running on past the knee by half the section); the closed form carries that rest
+    // point to within 0.1 px (the default chord tolerance) of where the pixel sees it. The
+    // knee's overlap, where two members share the joint, is left out.
+    let (h, a, _) = KNEE;
+    let (_dir, out) = render(&knee_recipe(), &[]);
+    let (mut worst_px, mut worst_rest, mut checked) = (0.0f64, 0.0f64, 0);
+    for view in 0..2 {
+        let v = load(&out, view, None);
+        let (_, channels) = read_exr_channels(&view_path(&out, 0, view, None, "displacement.exr"));
+        for row in 0..v.height {
+            for col in 0..v.width {
+                let i = row * v.width + col;
+                let Some(p) = v.point(row, col) else {
+                    continue;
+                };
+                let d = [&channels["R"], &channels["G"], &channels["B"]].map(|c| f64::from(c[i]));
+                let r: [f64; 3] = std::array::from_fn(|k| p[k] - d[k]);
+                let column = off_box([r[0], r[1], r[2] - h / 2.0], [0.15, 0.1, h / 2.0 + 0.15]);
+                let beam = off_box(
+                    [r[0] - (a - 0.15) / 2.0 - 0.075, r[1], r[2] - h],
+                    [(a + 0.3) / 2.0, 0.1, 0.15],
+                );
+                worst_rest = worst_rest.max(column.min(beam));
+                if r[0] < 0.2 && r[2] > h - 0.2 {
+                    continue;
+                }
+                let truth = knee_truth(r);
+                let want: [f64; 3] = std::array::from_fn(|k| r[k] + truth[k]);
+                let (at, _) = v.project(want);
+                let (seen, _) = v.project(p);
+                worst_px = worst_px.max((at[0] - seen[0]).hypot(at[1] - seen[1]));
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 5000, "{checked} pixels checked");
+    assert!(
+        worst_rest < 1e-4,
+        "a rest point {worst_rest} m off the rest members"
+    );
+    assert!(worst_px < 0.1, "{worst_px} px off the closed form");
 }
