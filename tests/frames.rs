@@ -5,8 +5,7 @@
 //! gives the same bytes on any thread count, in shards and after a kill.
 
 use std::path::Path;
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
 
 mod common;
 
@@ -26,6 +25,31 @@ fn run(dir: &Path, recipe: &str) -> std::process::Output {
         .arg(dir.join("out"))
         .output()
         .unwrap()
+}
+
+/// The `analysis` of the first structure in view 0 of sample 0 of `recipe`, run into a
+/// temporary folder, its view JSON checked against the published view schema.
+fn first_analysis(recipe: &str) -> serde_json::Value {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run(dir.path(), recipe);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json = dir.path().join("out/samples/0000/000000_00.json");
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let schema: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/schema/view.schema.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let validator = jsonschema::validator_for(&schema).unwrap();
+    assert!(validator.is_valid(&record), "{}", json.display());
+    record["scene"]["structures"][0]["analysis"].clone()
 }
 
 const TWO_SPANS: &str = r#"
@@ -50,26 +74,7 @@ dataset(#{
 
 #[test]
 fn a_two_span_girder_labels_its_reactions_by_the_three_moment_equation() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = run(dir.path(), TWO_SPANS);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json = dir.path().join("out/samples/0000/000000_00.json");
-    let record: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    let schema: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/schema/view.schema.json"),
-        )
-        .unwrap(),
-    )
-    .unwrap();
-    let validator = jsonschema::validator_for(&schema).unwrap();
-    assert!(validator.is_valid(&record), "{}", json.display());
-    let analysis = &record["scene"]["structures"][0]["analysis"];
+    let analysis = &first_analysis(TWO_SPANS);
     let wl = 1.0e4 * 6.0;
     for (r, want) in analysis["reactions"]
         .as_array()
@@ -129,26 +134,7 @@ dataset(#{
 
 #[test]
 fn a_frame_vibration_snapshot_labels_its_frequencies_and_draws_its_amplitude() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = run(dir.path(), CANTILEVER_MODE);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json = dir.path().join("out/samples/0000/000000_00.json");
-    let record: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    let schema: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/schema/view.schema.json"),
-        )
-        .unwrap(),
-    )
-    .unwrap();
-    let validator = jsonschema::validator_for(&schema).unwrap();
-    assert!(validator.is_valid(&record), "{}", json.display());
-    let analysis = &record["scene"]["structures"][0]["analysis"];
+    let analysis = &first_analysis(CANTILEVER_MODE);
     assert_eq!(analysis["analysis"], "vibration_snapshot");
     // f₁ = (1.8751)² / (2π L²) √(E I / (ρ A)); eight members err by (β₁L/8)⁴/1440 ≈ 2e-6.
     let (e, rho, l) = (210e9_f64, 7850.0, 6.0);
@@ -204,26 +190,22 @@ fn the_frames_script_is_the_same_bytes_on_one_or_two_threads_and_in_shards() {
         "views=2",
         "outputs=rgb,depth,mask,displacement,mesh",
     ];
-    let one = dir.path().join("t1");
-    ok(frames_script(&one, &sets, &["--threads", "1"]));
-    ok(frames_script(
-        &dir.path().join("t2"),
-        &sets,
-        &["--threads", "2"],
-    ));
-    let sharded = dir.path().join("sharded");
-    ok(frames_script(&sharded, &sets, &["--shard", "1/2"]));
-    ok(frames_script(
-        &sharded,
-        &sets,
-        &["--shard", "0/2", "--threads", "1"],
-    ));
-    let reference = hashes(&one);
+    // One thread; two; and two shards (the second on one thread) into one folder.
+    let runs: [(&str, &[&str]); 4] = [
+        ("t1", &["--threads", "1"]),
+        ("t2", &["--threads", "2"]),
+        ("sharded", &["--shard", "1/2"]),
+        ("sharded", &["--shard", "0/2", "--threads", "1"]),
+    ];
+    for (folder, extra) in runs {
+        ok(frames_script(&dir.path().join(folder), &sets, extra));
+    }
+    let [one, two, sharded] = ["t1", "t2", "sharded"].map(|f| hashes(&dir.path().join(f)));
     // run.json, manifest, per view rgb, depth, mask, displacement and json, and per sample the
     // deformed and rest meshes.
-    assert_eq!(reference.len(), 2 + 6 * (2 * 5 + 2));
-    assert_eq!(reference, hashes(&dir.path().join("t2")));
-    assert_eq!(reference, hashes(&sharded));
+    assert_eq!(one.len(), 2 + 6 * (2 * 5 + 2));
+    assert_eq!(one, two);
+    assert_eq!(one, sharded);
 }
 
 #[test]
@@ -241,30 +223,10 @@ fn a_killed_frames_run_resumes_to_the_same_bytes() {
     ));
     let out = dir.path().join("killed");
     let recipe = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/frames.rhai");
-    let mut child = shmgen()
-        .arg("run")
-        .arg(&recipe)
-        .arg("--out")
-        .arg(&out)
-        .args(sets.iter().flat_map(|s| ["--set", s]))
-        .args(["--threads", "1"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let manifest = out.join("manifest.jsonl");
-    let lines = |p: &Path| {
-        std::fs::read_to_string(p)
-            .map(|t| t.lines().count())
-            .unwrap_or(0)
-    };
-    let deadline = Instant::now() + Duration::from_secs(60);
-    while lines(&manifest) < 3 && Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(2));
-    }
-    child.kill().unwrap(); // SIGKILL
-    child.wait().unwrap();
-    let done_at_kill = lines(&manifest);
+    let mut args: Vec<&str> = sets.iter().flat_map(|s| ["--set", s]).collect();
+    args.extend(["--threads", "1"]);
+    let child = common::spawn_run(&recipe, &out, &args);
+    let done_at_kill = common::kill_after_samples(child, &out, 3);
     assert!(
         (3..samples).contains(&done_at_kill),
         "kill must land mid-run ({done_at_kill} samples done)"
