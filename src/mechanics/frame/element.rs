@@ -48,6 +48,9 @@ pub(super) struct Element {
     pub bar_start: f64,
     /// Positions of the span loads (where internal forces have kinks).
     pub kinks: Vec<f64>,
+    /// The axial force (N, tension positive) whose geometric stiffness the member carries in a
+    /// second-order analysis; 0 in a first-order one.
+    pub tension: f64,
 }
 
 /// Local axes of a member from `a` to `b` turned by `roll`: rows x, y, z.
@@ -205,6 +208,7 @@ impl Element {
             axial_udls: loads.axial_udls,
             bar_start,
             kinks: loads.kinks,
+            tension: 0.0,
         })
     }
 
@@ -213,6 +217,7 @@ impl Element {
     /// bending terms only.
     pub fn with_axial_force(mut self, tension: f64) -> Element {
         self.k_full += geometric_stiffness(tension, self.length);
+        self.tension = tension;
         (self.k, self.fixed) = condense(&self.k_full, &self.fixed_full, &self.released);
         self
     }
