@@ -4,8 +4,9 @@
 //! (`build::mesh_frame`, as a render does it for a 960-pixel, 60° camera framing the truss), in
 //! CPU time of the thread (the build machine is shared: wall time would count other jobs), with
 //! the triangles made and the process's peak resident memory after it (this table comes first,
-//! smallest model first, so the peak is that of the largest model meshed so far). Prints two
-//! tables; asserts nothing.
+//! smallest model first, so the peak is that of the largest model meshed so far); then the six
+//! lowest natural modes (dense eigensolver) of trusses up to its limit. Prints tables; asserts
+//! nothing.
 //!
 //!     cargo bench --bench frames
 
@@ -88,6 +89,27 @@ fn main() {
     // First, while the process's peak memory is still that of the models meshed so far.
     analysis_and_tessellation();
     println!();
+    static_analysis();
+    natural_modes();
+}
+
+/// The six lowest modes of space trusses up to `DENSE_MODES_MAX_DOFS` free DOFs.
+fn natural_modes() {
+    println!();
+    println!("| members | free DOFs | six modes (ms) |");
+    println!("|---:|---:|---:|");
+    for panels in [1, 4, 11, 33, 67, 133] {
+        let model = space_truss(panels);
+        let dofs = 3 * model.nodes.len() - 6;
+        let runs = if dofs > 500 { 2 } else { 5 };
+        let t = best_of(runs, || {
+            model.natural_modes(6).expect("a stable truss");
+        });
+        println!("| {} | {dofs} | {:.1} |", model.members.len(), t * 1e3);
+    }
+}
+
+fn static_analysis() {
     println!("| members | free DOFs | dense (ms) | sparse (ms) |");
     println!("|---:|---:|---:|---:|");
     for panels in [1, 4, 11, 33, 111, 333, 1111, 11111] {

@@ -2,8 +2,7 @@
 //! the files read back through other readers, and every kind of bad input.
 
 use std::path::Path;
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
 
 mod common;
 
@@ -163,29 +162,8 @@ fn killed_run_resumes_to_the_same_bytes() {
     ];
     ok(run(&recipe, &dir.path().join("clean"), &args));
     let out = dir.path().join("killed");
-    let mut child = Command::new(BIN)
-        .arg("run")
-        .arg(&recipe)
-        .arg("--out")
-        .arg(&out)
-        .args(args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let manifest = out.join("manifest.jsonl");
-    let deadline = Instant::now() + Duration::from_secs(60);
-    let lines = |p: &Path| {
-        std::fs::read_to_string(p)
-            .map(|t| t.lines().count())
-            .unwrap_or(0)
-    };
-    while lines(&manifest) < 3 && Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(2));
-    }
-    child.kill().unwrap(); // SIGKILL
-    child.wait().unwrap();
-    let done_at_kill = lines(&manifest);
+    let child = common::spawn_run(&recipe, &out, &args);
+    let done_at_kill = common::kill_after_samples(child, &out, 3);
     assert!(
         (3..40).contains(&done_at_kill),
         "kill must land mid-run ({done_at_kill} samples done)"

@@ -240,25 +240,7 @@ fn register_loads(engine: &mut Engine) {
         "vibration",
         |ctx: NativeCallContext, b: &mut BeamSpec, modes: Array| -> Fallible<BeamSpec> {
             b.declared_at = Some(call_site(&ctx));
-            let mut snapshot = Vec::with_capacity(modes.len());
-            for m in &modes {
-                let pair = m.clone().try_cast::<Array>().filter(|p| p.len() == 2);
-                let Some(pair) = pair else {
-                    return fail(format!("vibration: {m} must be [mode, amplitude]"));
-                };
-                let mode = pair[0].as_int().ok().filter(|n| (1..=10_000).contains(n));
-                let Some(mode) = mode else {
-                    return fail(format!(
-                        "vibration: mode {} must be a whole number from 1 to 10000",
-                        pair[0]
-                    ));
-                };
-                snapshot.push((mode as u32, number(&pair[1], "vibration amplitude")?));
-            }
-            if snapshot.is_empty() {
-                return fail("vibration([]) needs at least one [mode, amplitude]".to_string());
-            }
-            b.vibration = snapshot;
+            b.vibration = vibration_snapshot(&modes)?;
             Ok(b.clone())
         },
     );
@@ -412,4 +394,28 @@ fn register_settings(engine: &mut Engine) {
             b.clone()
         },
     );
+}
+
+/// A snapshot of free vibration from `[[mode, amplitude], ...]` (modes from 1, amplitudes in
+/// metres), as beams and frames take it.
+pub(super) fn vibration_snapshot(modes: &Array) -> OptResult<Vec<(u32, f64)>> {
+    let mut snapshot = Vec::with_capacity(modes.len());
+    for m in modes {
+        let pair = m.clone().try_cast::<Array>().filter(|p| p.len() == 2);
+        let Some(pair) = pair else {
+            return Err(format!("vibration: {m} must be [mode, amplitude]"));
+        };
+        let mode = pair[0].as_int().ok().filter(|n| (1..=10_000).contains(n));
+        let Some(mode) = mode else {
+            return Err(format!(
+                "vibration: mode {} must be a whole number from 1 to 10000",
+                pair[0]
+            ));
+        };
+        snapshot.push((mode as u32, number(&pair[1], "vibration amplitude")?));
+    }
+    if snapshot.is_empty() {
+        return Err("vibration([]) needs at least one [mode, amplitude]".to_string());
+    }
+    Ok(snapshot)
 }

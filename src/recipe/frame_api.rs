@@ -3,11 +3,13 @@
 //! is built, and an error found then points back at the last call that changed the model.
 //! Methods that add a node or a member return its index, so later calls can refer to it.
 
+use super::beam_api::vibration_snapshot;
 use super::diagnostics::call_site;
 use super::options::{OptResult, Options, number};
 use super::result::{Fallible, fail};
 use crate::mechanics::frame::{
-    Axes, Member, MemberLoad, MemberTheory, NodalLoad, NodeSupport, Plane, Release,
+    Axes, MassMatrix, Member, MemberLoad, MemberTheory, NodalLoad, NodalMass, NodeSupport, Plane,
+    Release,
 };
 use crate::mechanics::{Load, Section};
 use crate::scene::FrameSpec;
@@ -33,9 +35,68 @@ pub fn register(engine: &mut Engine) {
     engine.register_get("members", |f: &mut FrameSpec| f.model.members.len() as INT);
     register_structure(engine);
     register_loads(engine);
+    register_vibration(engine);
 }
 
-/// `frame(name, #{ plane, self_weight, second_order, display_scale })`.
+/// Masses at nodes and vibration snapshots of the whole frame.
+fn register_vibration(engine: &mut Engine) {
+    engine.register_fn(
+        "mass",
+        |ctx: NativeCallContext, f: &mut FrameSpec, n: INT, kg: Dynamic| {
+            nodal_mass(&ctx, f, n, &kg, &Array::new())
+        },
+    );
+    engine.register_fn(
+        "mass",
+        |ctx: NativeCallContext, f: &mut FrameSpec, n: INT, kg: Dynamic, inertia: Array| {
+            nodal_mass(&ctx, f, n, &kg, &inertia)
+        },
+    );
+    // A snapshot of free vibration of the whole frame: [[mode, amplitude], ...], amplitudes
+    // in metres, as for a beam.
+    engine.register_fn(
+        "vibration",
+        |ctx: NativeCallContext, f: &mut FrameSpec, modes: Array| -> Fallible<FrameSpec> {
+            changed(&ctx, f, |f| {
+                f.model.vibration = vibration_snapshot(&modes)?;
+                Ok(())
+            })
+        },
+    );
+}
+
+/// A mass `kg` on node `n`, with rotary inertia `[ix, iy, iz]` kg·m² about world axes (empty
+/// for none).
+fn nodal_mass(
+    ctx: &NativeCallContext,
+    f: &mut FrameSpec,
+    n: INT,
+    kg: &Dynamic,
+    inertia: &Array,
+) -> Fallible<FrameSpec> {
+    changed(ctx, f, |f| {
+        let node = node(f, n, "mass")?;
+        let mass = number(kg, "mass")?;
+        let inertia = if inertia.is_empty() {
+            [0.0; 3]
+        } else {
+            triple(inertia, "mass inertia")?
+        };
+        if !inertia.iter().chain([&mass]).all(|x| *x >= 0.0) {
+            return Err(format!(
+                "mass {mass} kg and inertia {inertia:?} kg·m² on node {node} must not be negative"
+            ));
+        }
+        f.model.masses.push(NodalMass {
+            node,
+            mass,
+            inertia,
+        });
+        Ok(())
+    })
+}
+
+/// `frame(name, #{ plane, self_weight, second_order, mass, display_scale })`.
 fn frame_options(f: &mut FrameSpec, map: Map) -> OptResult<()> {
     let mut o = Options::new(map, "frame");
     f.model.plane = match o.choice("plane", &["space", "xz", "yz", "xy"], Some("space"))? {
@@ -46,6 +107,10 @@ fn frame_options(f: &mut FrameSpec, map: Map) -> OptResult<()> {
     };
     f.model.self_weight = o.flag("self_weight", false)?;
     f.model.second_order = o.flag("second_order", false)?;
+    f.model.mass_matrix = match o.choice("mass", &["consistent", "lumped"], Some("consistent"))? {
+        "lumped" => MassMatrix::Lumped,
+        _ => MassMatrix::Consistent,
+    };
     f.display_scale = o.number("display_scale", 1.0)?;
     if !(f.display_scale >= 0.0) {
         return Err(format!(

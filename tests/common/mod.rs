@@ -472,3 +472,35 @@ fn crc32(bytes: &[u8]) -> u32 {
     }
     !crc
 }
+
+/// Kills `child` (SIGKILL) once the dataset it writes into `out` lists `samples` samples in
+/// its manifest (or after a minute); returns how many it lists then.
+pub fn kill_after_samples(mut child: std::process::Child, out: &Path, samples: usize) -> usize {
+    let manifest = out.join("manifest.jsonl");
+    let lines = || {
+        std::fs::read_to_string(&manifest)
+            .map(|t| t.lines().count())
+            .unwrap_or(0)
+    };
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while lines() < samples && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    lines()
+}
+
+/// `shmgen run RECIPE --out OUT EXTRA...` started in the background, its output discarded.
+pub fn spawn_run(recipe: &Path, out: &Path, extra: &[&str]) -> std::process::Child {
+    Command::new(BIN)
+        .arg("run")
+        .arg(recipe)
+        .arg("--out")
+        .arg(out)
+        .args(extra)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap()
+}

@@ -1,9 +1,9 @@
 //! One member as the stiffness method sees it: local axes, the 12 × 12 local stiffness
 //! (Euler–Bernoulli or Timoshenko), releases by static condensation, fixed-end forces of its
-//! loads from the beam module's clamped–clamped solution, and the recovery of the released
-//! end rotations.
+//! loads from the beam module's clamped–clamped solution, the recovery of the released
+//! end rotations, and its mass matrix (consistent or lumped) for the natural modes.
 
-use super::{Axes, FrameModel, Member, MemberLoad, MemberTheory, SpaceSection};
+use super::{Axes, FrameModel, MassMatrix, Member, MemberLoad, MemberTheory, SpaceSection};
 use crate::mechanics::{LinearBeam, Load, Support};
 use glam::{DMat3, DVec3};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
@@ -48,6 +48,9 @@ pub(super) struct Element {
     pub bar_start: f64,
     /// Positions of the span loads (where internal forces have kinks).
     pub kinks: Vec<f64>,
+    /// The axial force (N, tension positive) whose geometric stiffness the member carries in a
+    /// second-order analysis; 0 in a first-order one.
+    pub tension: f64,
 }
 
 /// Local axes of a member from `a` to `b` turned by `roll`: rows x, y, z.
@@ -205,6 +208,7 @@ impl Element {
             axial_udls: loads.axial_udls,
             bar_start,
             kinks: loads.kinks,
+            tension: 0.0,
         })
     }
 
@@ -213,6 +217,7 @@ impl Element {
     /// bending terms only.
     pub fn with_axial_force(mut self, tension: f64) -> Element {
         self.k_full += geometric_stiffness(tension, self.length);
+        self.tension = tension;
         (self.k, self.fixed) = condense(&self.k_full, &self.fixed_full, &self.released);
         self
     }
@@ -368,6 +373,100 @@ impl LocalLoads {
         }
         (start, end)
     }
+}
+
+impl Element {
+    /// The member's mass matrix in local DOFs for a material of `density` (kg/m³): the
+    /// Euler–Bernoulli consistent matrix or a lumped one, the released end rotations following
+    /// the other DOFs as the static condensation of the stiffness has them (no end moment), so
+    /// the rows and columns of released DOFs are zero.
+    pub fn mass(&self, density: f64, kind: MassMatrix) -> Mat12 {
+        let (per_length, polar) = (
+            density * self.props.area,
+            density * (self.props.i_y + self.props.i_z),
+        );
+        let m = match kind {
+            MassMatrix::Consistent => consistent_mass(per_length, polar, self.length),
+            MassMatrix::Lumped => lumped_mass(per_length, polar, self.length),
+        };
+        let t = self.condensation();
+        t.transpose() * m * t
+    }
+
+    /// T with d = T d_a: the identity on the kept DOFs, and each released DOF from the kept
+    /// ones by K_bb d_b = −K_ba d_a (columns of released DOFs zero).
+    fn condensation(&self) -> Mat12 {
+        let mut t = Mat12::identity();
+        let b: Vec<usize> = (0..12).filter(|&i| self.released[i]).collect();
+        if b.is_empty() {
+            return t;
+        }
+        let kbb = DMatrix::from_fn(b.len(), b.len(), |r, c| self.k_full[(b[r], b[c])]);
+        let inv = kbb
+            .try_inverse()
+            .expect("the released block of a member is invertible (validated)");
+        for (r, &row) in b.iter().enumerate() {
+            for j in 0..12 {
+                t[(row, j)] = if self.released[j] {
+                    0.0
+                } else {
+                    -(0..b.len())
+                        .map(|c| inv[(r, c)] * self.k_full[(b[c], j)])
+                        .sum::<f64>()
+                };
+            }
+        }
+        t
+    }
+}
+
+/// Consistent mass of a prismatic member (Przemieniecki §11): linear axial and torsional
+/// fields, Hermite cubics in bending (Euler–Bernoulli: the section's rotary inertia in
+/// bending is left out, as is shear deformation for Timoshenko members). `per_length` ρA
+/// kg/m, `polar` ρ(I_y + I_z) kg·m.
+fn consistent_mass(per_length: f64, polar: f64, l: f64) -> Mat12 {
+    let mut m = Mat12::zeros();
+    let mut put = |a: usize, b: usize, v: f64| {
+        m[(a, b)] += v;
+        if a != b {
+            m[(b, a)] += v;
+        }
+    };
+    let (bar, twist) = (per_length * l / 6.0, polar * l / 6.0);
+    for (a, b, c) in [(0, 6, bar), (3, 9, twist)] {
+        put(a, a, 2.0 * c);
+        put(b, b, 2.0 * c);
+        put(a, b, c);
+    }
+    let c = per_length * l / 420.0;
+    // x–y plane (v, θz): DOFs 1, 5, 7, 11; x–z plane (w, θy): 2, 4, 8, 10, where θy = −dw/dx
+    // flips the couplings of a deflection with a rotation (as in the stiffness).
+    for ([v0, t0, v1, t1], s) in [([1, 5, 7, 11], 1.0), ([2, 4, 8, 10], -1.0)] {
+        put(v0, v0, 156.0 * c);
+        put(v1, v1, 156.0 * c);
+        put(v0, v1, 54.0 * c);
+        put(t0, t0, 4.0 * l * l * c);
+        put(t1, t1, 4.0 * l * l * c);
+        put(t0, t1, -3.0 * l * l * c);
+        put(v0, t0, s * 22.0 * l * c);
+        put(v0, t1, -s * 13.0 * l * c);
+        put(t0, v1, s * 13.0 * l * c);
+        put(v1, t1, -s * 22.0 * l * c);
+    }
+    m
+}
+
+/// Lumped mass: half the member's mass on each end's translations and half its rotary inertia
+/// about its axis on each end's twist; none on the bending rotations.
+fn lumped_mass(per_length: f64, polar: f64, l: f64) -> Mat12 {
+    let mut m = Mat12::zeros();
+    for end in [0, 6] {
+        for d in 0..3 {
+            m[(end + d, end + d)] = per_length * l / 2.0;
+        }
+        m[(end + 3, end + 3)] = polar * l / 2.0;
+    }
+    m
 }
 
 /// Local stiffness of a prismatic space-frame member (Przemieniecki 1968, §5.6; Φ = 0 gives

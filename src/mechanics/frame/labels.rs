@@ -1,14 +1,15 @@
 //! The labels of an analysed frame, as written next to each sample: what an engineer checks by
 //! hand (node displacements, reactions, member end forces, peak stress and utilisation).
 
-use super::{FrameSolution, MemberResult, NodeResult, Reaction};
+use super::{FrameSolution, MemberResult, ModalLabels, NodeResult, Reaction};
 use serde::Serialize;
 
 /// What the analysis of a frame found.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct FrameLabels {
     /// "linear_static": first-order elastic analysis by the direct stiffness method;
-    /// "p_delta": second order, equilibrium in the displaced geometry.
+    /// "p_delta": second order, equilibrium in the displaced geometry; "vibration_snapshot":
+    /// a sum of natural modes (forces and stresses are those that hold that shape).
     pub analysis: &'static str,
     /// Each node's displacement and rotation, world axes, in the order of `model.nodes`.
     pub nodes: Vec<NodeResult>,
@@ -30,19 +31,23 @@ pub struct FrameLabels {
     pub max_utilisation_member: usize,
     /// Whether every member stays elastic (utilisation at most 1). Buckling is not checked.
     pub physically_plausible: bool,
+    /// For a vibration snapshot: the modes drawn, the lowest natural frequencies and their
+    /// effective masses. Absent for a static analysis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub modes: Option<ModalLabels>,
 }
 
 impl FrameLabels {
     /// The labels of an analysis.
     pub fn new(solution: &FrameSolution) -> FrameLabels {
-        let (max_displacement_member, (max_displacement_position, max_displacement)) = argmax_by(
-            (0..solution.members.len()).map(|m| largest_translation(solution, m)),
-            |&(_, d)| d,
-        );
+        let (max_displacement_member, max_displacement_position, max_displacement) =
+            largest_translation_of(solution);
         let (max_utilisation_member, max_utilisation) =
             argmax(solution.members.iter().map(|m| m.utilisation));
         FrameLabels {
-            analysis: if solution.second_order {
+            analysis: if solution.modal.is_some() {
+                "vibration_snapshot"
+            } else if solution.second_order {
                 "p_delta"
             } else {
                 "linear_static"
@@ -56,8 +61,19 @@ impl FrameLabels {
             max_utilisation,
             max_utilisation_member,
             physically_plausible: max_utilisation <= 1.0,
+            modes: solution.modal.clone(),
         }
     }
+}
+
+/// The member, position along it (metres from its start) and size of the largest translation
+/// of any point of the members' axes.
+pub(super) fn largest_translation_of(solution: &FrameSolution) -> (usize, f64, f64) {
+    let (member, (position, size)) = argmax_by(
+        (0..solution.members.len()).map(|m| largest_translation(solution, m)),
+        |&(_, d)| d,
+    );
+    (member, position, size)
 }
 
 /// Index and value of the largest of `values` (the first on ties; 0 and 0 when empty).

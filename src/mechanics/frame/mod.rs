@@ -6,7 +6,8 @@
 //! from the beam module's member solution), the choice of dense or sparse Cholesky, the refusal
 //! of a mechanism with the free DOFs named, and the results: node displacements, reactions,
 //! member end forces, the deformed shape inside every member and its peak moment, stress and
-//! utilisation. Must not touch: meshes, Rhai, cameras or files.
+//! utilisation; and the natural modes of the whole structure (member and nodal masses) with
+//! vibration snapshots drawn from them. Must not touch: meshes, Rhai, cameras or files.
 //!
 //! Conventions (docs/frames.md): world frame, +Z up, metres, newtons. A member's local x runs
 //! from its start node to its end node; local z is the section's height direction (the beam
@@ -16,6 +17,9 @@
 
 mod element;
 mod labels;
+mod modes;
+#[cfg(test)]
+mod modes_tests;
 mod results;
 mod section;
 mod solve;
@@ -23,6 +27,7 @@ mod solve;
 mod tests;
 
 pub use labels::FrameLabels;
+pub use modes::{DENSE_MODES_MAX_DOFS, FrameModeLabel, ModalLabels, NaturalModes};
 pub use results::{FrameSolution, MemberResult, NodeResult, Reaction};
 pub use section::SpaceSection;
 pub use solve::{DENSE_MAX_DOFS, Solver};
@@ -65,6 +70,51 @@ pub struct FrameModel {
     /// members' geometric stiffness, iterated on their axial forces.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub second_order: bool,
+    /// Masses added at nodes (equipment, a deck's share carried by the node), for the natural
+    /// modes; the members' own mass is ρ A per metre.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub masses: Vec<NodalMass>,
+    /// How the members' mass is spread over their DOFs for the natural modes.
+    #[serde(default, skip_serializing_if = "MassMatrix::is_consistent")]
+    pub mass_matrix: MassMatrix,
+    /// A snapshot of free vibration instead of static loads: (mode number from 1, amplitude in
+    /// metres). The drawn shape is Σ A_n φ_n, each natural mode φ_n scaled so the largest
+    /// translation of any point of the members' axes is 1.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub vibration: Vec<(u32, f64)>,
+}
+
+/// A mass added at a node: the same `mass` in each translation and a rotary inertia about
+/// each world axis.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct NodalMass {
+    /// The node carrying it.
+    pub node: usize,
+    /// Mass, kg.
+    pub mass: f64,
+    /// Rotary inertia about world x, y, z through the node, kg·m².
+    pub inertia: [f64; 3],
+}
+
+/// How a member's mass is spread over its end DOFs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum MassMatrix {
+    /// The consistent matrix of the member's own displacement fields (linear along the axis
+    /// and in twist, Hermite cubics in bending): frequencies converge from above as members
+    /// are subdivided.
+    #[default]
+    Consistent,
+    /// Half the member's mass at each end's translations (and half its rotary inertia about
+    /// the axis on its twist); no rotary inertia in bending: frequencies converge from below.
+    Lumped,
+}
+
+impl MassMatrix {
+    /// Whether this is the default, consistent matrix (left out of the scene JSON).
+    pub fn is_consistent(&self) -> bool {
+        *self == MassMatrix::Consistent
+    }
 }
 
 /// A coordinate plane a plane structure lies in.
@@ -278,6 +328,9 @@ impl FrameModel {
             self_weight: false,
             plane: None,
             second_order: false,
+            masses: Vec::new(),
+            mass_matrix: MassMatrix::Consistent,
+            vibration: Vec::new(),
         }
     }
 
@@ -319,6 +372,20 @@ impl FrameModel {
                 ));
             }
         }
+        for m in &self.masses {
+            node("a nodal mass", m.node)?;
+            if !m
+                .inertia
+                .iter()
+                .chain([&m.mass])
+                .all(|x| *x >= 0.0 && x.is_finite())
+            {
+                return Err(format!(
+                    "the mass on node {}: mass {} kg and inertia {:?} kg·m² must be finite and not negative",
+                    m.node, m.mass, m.inertia
+                ));
+            }
+        }
         for l in &self.loads {
             node("a nodal load", l.node)?;
             if !l.force.iter().chain(&l.moment).all(|x| x.is_finite()) {
@@ -339,11 +406,10 @@ impl FrameModel {
     /// Linear static analysis with the given linear solver.
     pub fn solve_with(&self, solver: Solver) -> Result<FrameSolution, String> {
         self.validate()?;
-        let elements = self
-            .members
-            .iter()
-            .map(|m| element::Element::new(self, m))
-            .collect::<Result<Vec<_>, _>>()?;
+        if !self.vibration.is_empty() {
+            return self.vibration_snapshot();
+        }
+        let elements = self.elements()?;
         let displacements = solve::displacements(self, &elements, solver)?;
         let first = results::FrameSolution::new(self, elements, displacements);
         if self.second_order {

@@ -4,7 +4,8 @@
 //!
 //! Inside a member the field is exact for the theory: the clamped–clamped solution of its own
 //! loads (the beam module's `LinearBeam`) plus the field its end displacements make in an
-//! unloaded member (cubic for Euler–Bernoulli, with the Timoshenko shear terms otherwise).
+//! unloaded member (cubic for Euler–Bernoulli, with the Timoshenko shear terms otherwise; the
+//! beam-column's field for an Euler–Bernoulli member carrying an axial force under P-Δ).
 
 use super::element::{Element, Vec12};
 use super::{FrameModel, NodeSupport};
@@ -26,6 +27,8 @@ pub struct FrameSolution {
     pub members: Vec<MemberResult>,
     /// Whether the geometric stiffness of the axial forces was included (P-Δ).
     pub second_order: bool,
+    /// For a vibration snapshot: its modes and the structure's lowest frequencies.
+    pub modal: Option<super::ModalLabels>,
     elements: Vec<Element>,
     /// Local end displacements of every member (released rotations recovered).
     local: Vec<Vec12>,
@@ -111,6 +114,7 @@ impl FrameSolution {
             reactions,
             members,
             second_order: false,
+            modal: None,
             elements,
             local,
         }
@@ -148,13 +152,13 @@ fn local_field(el: &Element, d: &Vec12, x: f64) -> (DVec3, DVec3) {
         d[0] * (1.0 - xi) + d[6] * xi + axial_particular(el, xi * l) / (el.e * el.props.area);
     let twist = d[3] * (1.0 - xi) + d[9] * xi;
     // x–y plane: v = y, θz = section rotation (counter-clockwise, x toward y).
-    let (v, theta_z) = cubic(xi, l, el.phi_y, [d[1], d[5], d[7], d[11]]);
-    let py = el.beam_y.at(xi * l);
     let ei_z = el.e * el.props.i_z;
+    let (v, theta_z) = homogeneous(el, ei_z, xi, el.phi_y, [d[1], d[5], d[7], d[11]]);
+    let py = el.beam_y.at(xi * l);
     // x–z plane: w = z, θy = −(rotation in the w sense).
-    let (w, rot_w) = cubic(xi, l, el.phi_z, [d[2], -d[4], d[8], -d[10]]);
-    let pz = el.beam_z.at(xi * l);
     let ei_y = el.e * el.props.i_y;
+    let (w, rot_w) = homogeneous(el, ei_y, xi, el.phi_z, [d[2], -d[4], d[8], -d[10]]);
+    let pz = el.beam_z.at(xi * l);
     (
         DVec3::new(axial, v - py.v / ei_z, w - pz.v / ei_y),
         DVec3::new(
@@ -163,6 +167,81 @@ fn local_field(el: &Element, d: &Vec12, x: f64) -> (DVec3, DVec3) {
             theta_z - py.rotation / ei_z,
         ),
     )
+}
+
+/// Deflection and section rotation of a member from its end values [v₀, θ₀, v_L, θ_L] in a
+/// plane of bending stiffness `ei`: the cubic of [`cubic`], or, for an Euler–Bernoulli member
+/// carrying an axial force in a second-order analysis, the beam-column's exact field of
+/// E I v⁗ = N v″ ([`beam_column`]), so the drawn shape inside the member is amplified as the
+/// axial force amplifies it (the part of its own span loads stays first order).
+fn homogeneous(el: &Element, ei: f64, xi: f64, phi: f64, ends: [f64; 4]) -> (f64, f64) {
+    if el.tension == 0.0 || phi != 0.0 {
+        return cubic(xi, el.length, phi, ends);
+    }
+    beam_column(xi, el.length, el.tension / ei, ends)
+}
+
+/// The field of E I v⁗ = N v″ (s = N / E I, tension positive) with end values
+/// [v₀, θ₀, v_L, θ_L], θ = dv/dx: v = v₀ + θ₀ x + c g₂(x) + d g₃(x), where g₂″ = cos k x
+/// (compression, k² = −s) or cosh k x (tension, k² = s), g₂(0) = g₂′(0) = 0, and g₃′ = g₂.
+pub(super) fn beam_column(xi: f64, l: f64, s: f64, [v0, t0, v1, t1]: [f64; 4]) -> (f64, f64) {
+    let x = xi * l;
+    let (g2_l, g2_slope_l, g3_l) = (g2(l, s), g2_slope(l, s), g3(l, s));
+    // v(L) = v_L and v′(L) = θ_L: [g₂ g₃; g₂′ g₂] [c d]ᵀ = [v_L − v₀ − θ₀ L, θ_L − θ₀]ᵀ.
+    let (r0, r1) = (v1 - v0 - t0 * l, t1 - t0);
+    let det = g2_l * g2_l - g3_l * g2_slope_l;
+    let c = (r0 * g2_l - g3_l * r1) / det;
+    let d = (g2_l * r1 - g2_slope_l * r0) / det;
+    (
+        v0 + t0 * x + c * g2(x, s) + d * g3(x, s),
+        t0 + c * g2_slope(x, s) + d * g2(x, s),
+    )
+}
+
+/// Where (k x)² is below this, g₂, g₂′ and g₃ are summed from their series (four terms,
+/// truncation below 1e-14) instead of closed forms that would cancel.
+const SERIES: f64 = 1e-2;
+
+/// (1 − cos k x)/k² in compression, (cosh k x − 1)/k² in tension (s = ∓k²).
+fn g2(x: f64, s: f64) -> f64 {
+    let y2 = s * x * x;
+    if y2.abs() < SERIES {
+        return x * x / 2.0 * (1.0 + y2 / 12.0 + y2 * y2 / 360.0 + y2.powi(3) / 20160.0);
+    }
+    let k = s.abs().sqrt();
+    if s < 0.0 {
+        (1.0 - (k * x).cos()) / (k * k)
+    } else {
+        ((k * x).cosh() - 1.0) / (k * k)
+    }
+}
+
+/// g₂′ = sin(k x)/k in compression, sinh(k x)/k in tension.
+fn g2_slope(x: f64, s: f64) -> f64 {
+    let y2 = s * x * x;
+    if y2.abs() < SERIES {
+        return x * (1.0 + y2 / 6.0 + y2 * y2 / 120.0 + y2.powi(3) / 5040.0);
+    }
+    let k = s.abs().sqrt();
+    if s < 0.0 {
+        (k * x).sin() / k
+    } else {
+        (k * x).sinh() / k
+    }
+}
+
+/// g₃ = ∫ g₂: (k x − sin k x)/k³ in compression, (sinh k x − k x)/k³ in tension.
+fn g3(x: f64, s: f64) -> f64 {
+    let y2 = s * x * x;
+    if y2.abs() < SERIES {
+        return x.powi(3) / 6.0 * (1.0 + y2 / 20.0 + y2 * y2 / 840.0 + y2.powi(3) / 60480.0);
+    }
+    let k = s.abs().sqrt();
+    if s < 0.0 {
+        (k * x - (k * x).sin()) / k.powi(3)
+    } else {
+        ((k * x).sinh() - k * x) / k.powi(3)
+    }
 }
 
 /// Deflection and section rotation of an unloaded member from its end values

@@ -34,6 +34,16 @@ pub enum Solver {
     Sparse,
 }
 
+/// The structure's free DOFs and its equilibrated stiffness and load on them.
+pub(super) struct Assembled {
+    /// The global DOF (6 × node + dof) of each free DOF.
+    pub free: Vec<usize>,
+    /// D: each free DOF's scale, diag(K)^(-1/2); physical = scaled × D.
+    pub scale: Vec<f64>,
+    /// D K D and D F.
+    pub system: System,
+}
+
 /// The world displacements of every node, [ux, uy, uz, rx, ry, rz]; a rotation no member end
 /// resists (a node of pinned bars only) is 0.
 pub(super) fn displacements(
@@ -41,6 +51,47 @@ pub(super) fn displacements(
     elements: &[Element],
     solver: Solver,
 ) -> Result<Vec<[f64; 6]>, String> {
+    let Assembled {
+        free,
+        scale,
+        system,
+    } = assemble(model, elements)?;
+    let dense = match solver {
+        Solver::Auto => system.size <= DENSE_MAX_DOFS,
+        Solver::Dense => true,
+        Solver::Sparse => false,
+    };
+    let order = if dense {
+        (0..system.size).collect()
+    } else {
+        reverse_cuthill_mckee(&system)
+    };
+    let solved = if dense {
+        system.solve_dense()
+    } else {
+        system.solve_sparse(&order)
+    };
+    let scaled = solved.map_err(|()| system.mechanism(&free, dense, &order))?;
+    Ok(to_nodes(model.nodes.len(), &free, &scale, &scaled))
+}
+
+/// Node displacements [ux, uy, uz, rx, ry, rz] from a scaled free-DOF vector; DOFs not free
+/// are 0.
+pub(super) fn to_nodes(
+    nodes: usize,
+    free: &[usize],
+    scale: &[f64],
+    scaled: &[f64],
+) -> Vec<[f64; 6]> {
+    let mut out = vec![[0.0; 6]; nodes];
+    for (i, &d) in free.iter().enumerate() {
+        out[d / 6][d % 6] = scaled[i] * scale[i];
+    }
+    out
+}
+
+/// The free DOFs, their scales and the equilibrated system; refuses DOFs nothing resists.
+pub(super) fn assemble(model: &FrameModel, elements: &[Element]) -> Result<Assembled, String> {
     let n = model.nodes.len() * 6;
     let mut fixed = vec![false; n];
     let mut springs = vec![0.0; n];
@@ -122,33 +173,11 @@ pub(super) fn displacements(
             .collect(),
         rhs: free.iter().zip(&scale).map(|(&d, s)| load[d] * s).collect(),
     };
-    let dense = match solver {
-        Solver::Auto => system.size <= DENSE_MAX_DOFS,
-        Solver::Dense => true,
-        Solver::Sparse => false,
-    };
-    let order = if dense {
-        (0..system.size).collect()
-    } else {
-        reverse_cuthill_mckee(&system)
-    };
-    let solved = if dense {
-        system.solve_dense()
-    } else {
-        system.solve_sparse(&order)
-    };
-    let scaled = solved.map_err(|()| {
-        let moving = system.null_vector(dense, &order);
-        mechanism(
-            &moving.iter().map(|&i| free[i]).collect::<Vec<_>>(),
-            "the structure can move without straining its members",
-        )
-    })?;
-    let mut out = vec![[0.0; 6]; model.nodes.len()];
-    for (i, &d) in free.iter().enumerate() {
-        out[d / 6][d % 6] = scaled[i] * scale[i];
-    }
-    Ok(out)
+    Ok(Assembled {
+        free,
+        scale,
+        system,
+    })
 }
 
 /// The message refusing a mechanism: the DOFs that move, by node and name.
@@ -170,14 +199,33 @@ fn mechanism(dofs: &[usize], why: &str) -> String {
 }
 
 /// The equilibrated free-DOF system: symmetric entries (duplicates add) and its right side.
-struct System {
-    size: usize,
+pub(super) struct System {
+    pub size: usize,
     entries: Vec<(usize, usize, f64)>,
     rhs: Vec<f64>,
 }
 
 impl System {
-    fn dense(&self, shift: f64) -> DMatrix<f64> {
+    /// The refusal of a system that failed to factor: the free DOFs (global numbers `free`)
+    /// that move in its mechanism.
+    pub fn mechanism(&self, free: &[usize], dense: bool, order: &[usize]) -> String {
+        let moving = self.null_vector(dense, order);
+        mechanism(
+            &moving.iter().map(|&i| free[i]).collect::<Vec<_>>(),
+            "the structure can move without straining its members",
+        )
+    }
+
+    /// Dense Cholesky factor of the system, refused (None) at a pivot that marks a mechanism.
+    pub fn dense_cholesky(&self) -> Option<nalgebra::Cholesky<f64, nalgebra::Dyn>> {
+        let chol = self.dense(0.0).cholesky()?;
+        if chol.l_dirty().diagonal().iter().any(|p| !(p * p > PIVOT)) {
+            return None;
+        }
+        Some(chol)
+    }
+
+    pub fn dense(&self, shift: f64) -> DMatrix<f64> {
         let mut k = DMatrix::from_diagonal_element(self.size, self.size, shift);
         for &(i, j, v) in &self.entries {
             k[(i, j)] += v;
@@ -186,10 +234,7 @@ impl System {
     }
 
     fn solve_dense(&self) -> Result<Vec<f64>, ()> {
-        let chol = self.dense(0.0).cholesky().ok_or(())?;
-        if chol.l_dirty().diagonal().iter().any(|p| !(p * p > PIVOT)) {
-            return Err(());
-        }
+        let chol = self.dense_cholesky().ok_or(())?;
         Ok(chol
             .solve(&DVector::from_vec(self.rhs.clone()))
             .as_slice()
