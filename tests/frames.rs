@@ -88,6 +88,46 @@ fn a_two_span_girder_labels_its_reactions_by_the_three_moment_equation() {
     assert_eq!(analysis["physically_plausible"], true);
 }
 
+fn warren(panels: i64) -> String {
+    format!(
+        r#"
+import "frame" as frames;
+dataset(#{{
+    name: "warren", seed: 1, samples: 1, views: 1, outputs: ["rgb"],
+    camera: #{{ width: 32, height: 32, fov_y: deg(60), distance: "frame" }},
+    scene: |rng| frames::truss("warren", {panels}, 3.0, 2.5, 1.0e5),
+}});
+"#
+    )
+}
+
+#[test]
+fn the_stdlib_warren_truss_stands_and_its_end_diagonal_carries_the_reaction() {
+    // Method of joints at the left support: the end diagonal alone balances the reaction,
+    // N = −R / sin θ with sin θ = h / √(h² + p²); the reactions share the n/2 − 1 loads.
+    let (p, h, load) = (3.0_f64, 2.5_f64, 1.0e5);
+    for panels in [2, 4, 6, 8] {
+        let analysis = first_analysis(&warren(panels));
+        let reaction = (panels / 2 - 1) as f64 * load / 2.0;
+        for r in analysis["reactions"].as_array().unwrap() {
+            let got = r["force"][2].as_f64().unwrap();
+            assert!((got - reaction).abs() < 1e-9 * load, "{panels} panels: {got}");
+        }
+        let diagonal = analysis["members"][0]["axial_force"].as_f64().unwrap();
+        let want = -reaction * (h * h + p * p).sqrt() / h;
+        assert!((diagonal - want).abs() < 1e-9 * load, "{panels} panels: {diagonal} vs {want}");
+    }
+}
+
+#[test]
+fn a_warren_truss_with_an_odd_number_of_diagonals_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run(dir.path(), &warren(5));
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("even number of diagonals") && err.contains("got 5"), "{err}");
+}
+
 #[test]
 fn a_frame_call_on_a_missing_node_points_at_the_recipe() {
     let dir = tempfile::tempdir().unwrap();
@@ -211,8 +251,7 @@ fn the_frames_script_is_the_same_bytes_on_one_or_two_threads_and_in_shards() {
 #[test]
 fn a_killed_frames_run_resumes_to_the_same_bytes() {
     let dir = tempfile::tempdir().unwrap();
-    // Sample 16 of the script is a Warren truss whose stdlib model is a mechanism (reported),
-    // so the run stays at 16 samples, large enough that the kill lands mid-run.
+    // 16 samples at 640 px: large enough that the kill lands mid-run.
     let samples = 16;
     let count = format!("samples={samples}");
     let sets = ["size=640", count.as_str(), "views=2"];
