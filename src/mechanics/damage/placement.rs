@@ -45,7 +45,7 @@ impl Default for ExposureRules {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct DamageRequest {
     /// Damage placed by the recipe, exactly where it says.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub placed: Vec<Damage>,
     /// The beam is reinforced concrete: the mechanics cracks it where the moment and the shear
     /// exceed the concrete's resistance, and solves it with the cracked stiffness.
@@ -89,6 +89,26 @@ pub struct DamageLabels {
     pub max_deflection_at: f64,
     /// Widest crack, millimetres (0 without cracks).
     pub max_crack_width_mm: f64,
+}
+
+impl DamageLabels {
+    /// Where the stiffness jumps (ends of corrosion regions with section loss): stations there
+    /// keep mesh vertices on the exact curve.
+    pub fn stiffness_breaks(&self) -> Vec<f64> {
+        self.items
+            .iter()
+            .filter_map(|d| match d.shape {
+                DamageShape::Corrosion {
+                    from,
+                    to,
+                    section_loss,
+                    ..
+                } if section_loss > 0.0 => Some([from, to]),
+                _ => None,
+            })
+            .flatten()
+            .collect()
+    }
 }
 
 /// A beam as the damage model sees it.
