@@ -95,18 +95,9 @@ impl DamageLabels {
     /// Where the stiffness jumps (ends of corrosion regions with section loss): stations there
     /// keep mesh vertices on the exact curve.
     pub fn stiffness_breaks(&self) -> Vec<f64> {
-        self.items
-            .iter()
-            .filter_map(|d| match d.shape {
-                DamageShape::Corrosion {
-                    from,
-                    to,
-                    section_loss,
-                    ..
-                } if section_loss > 0.0 => Some([from, to]),
-                _ => None,
-            })
-            .flatten()
+        section_loss_regions(&self.items)
+            .into_iter()
+            .flat_map(|(from, to, _)| [from, to])
             .collect()
     }
 }
@@ -152,18 +143,7 @@ pub fn solve_damage(
     if let Some(rules) = &request.corrosion_by_exposure {
         items.extend(exposure_corrosion(member, rules));
     }
-    let regions: Vec<(f64, f64, f64)> = items
-        .iter()
-        .filter_map(|d| match d.shape {
-            DamageShape::Corrosion {
-                from,
-                to,
-                section_loss,
-                ..
-            } if section_loss > 0.0 => Some((from, to, 1.0 - section_loss)),
-            _ => None,
-        })
-        .collect();
+    let regions = section_loss_regions(&items);
     let remaining = |x: f64| -> f64 {
         regions
             .iter()
@@ -221,6 +201,22 @@ pub fn solve_damage(
         max_crack_width_mm,
     };
     Ok((axis, labels))
+}
+
+/// The corrosion regions that lose section: (from, to, fraction of the section remaining).
+fn section_loss_regions(items: &[Damage]) -> Vec<(f64, f64, f64)> {
+    items
+        .iter()
+        .filter_map(|d| match d.shape {
+            DamageShape::Corrosion {
+                from,
+                to,
+                section_loss,
+                ..
+            } if section_loss > 0.0 => Some((from, to, 1.0 - section_loss)),
+            _ => None,
+        })
+        .collect()
 }
 
 fn crack_width_mm(d: &Damage) -> f64 {

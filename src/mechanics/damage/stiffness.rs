@@ -219,8 +219,11 @@ impl SteppedBeam {
         let l = self.length;
         let moment_scale = (0..=64)
             .map(|i| self.base.at(l * i as f64 / 64.0).moment.abs())
-            .fold(0.0, f64::max)
-            .max(f64::MIN_POSITIVE);
+            .fold(0.0, f64::max);
+        if moment_scale == 0.0 {
+            // Unloaded: the redundants are zero and the axis straight.
+            return Ok(());
+        }
         // Unknowns in moment units: the prop's reaction times L.
         let unit = match self.redundant {
             Redundant::Prop => [1.0 / l, 0.0],
@@ -349,6 +352,16 @@ mod tests {
         // Tip slope: θ = P[(L² − (L − a)²)·2/(2EI) + (L − a)²/(2EI)].
         let slope = p * ((l * l - (l - a).powi(2)) / EI + (l - a).powi(2) / (2.0 * EI));
         assert!((beam.at(l).slope / slope - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn an_unloaded_beam_stays_straight_on_any_supports() {
+        // No load: no moment to scale the compatibility system by, and nothing to solve.
+        for support in [Support::FixedFixed, Support::ProppedCantilever] {
+            let idle =
+                SteppedBeam::solve(support, 3.0, &[], &[1.0], &stepped(0.0, 1.0, 2.0)).unwrap();
+            assert_eq!(idle.peak(), (0.0, 0.0));
+        }
     }
 
     #[test]
