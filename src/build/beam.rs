@@ -5,7 +5,10 @@
 use super::tessellation::{chord_tolerance, segments_for_chord};
 use crate::geometry::outline::{self, PAPER_DIVISIONS, SectionOutline};
 use crate::geometry::{Frame3, Mesh, sweep};
-use crate::mechanics::{BeamProblem, Deformation, Section, SectionFrame, kinks, section_frames};
+use crate::mechanics::damage::{DamageLabels, DamagedMember, SteppedBeam, solve_damage};
+use crate::mechanics::{
+    AxisPoint, BeamProblem, Deformation, Section, SectionFrame, Theory, kinks, section_frames,
+};
 use crate::scene::{BeamSpec, Tessellation};
 use glam::{DMat3, DVec3};
 
@@ -19,6 +22,8 @@ pub struct BuiltBeam {
     pub deformation: Deformation,
     /// Equal intervals along the length (load positions and the peak add stations).
     pub segments: usize,
+    /// What damage the beam has and what it did to the deflection; None for a sound beam.
+    pub damage: Option<DamageLabels>,
 }
 
 /// The mechanics problem a beam description poses.
@@ -49,15 +54,30 @@ pub fn beam_radius(beam: &BeamSpec) -> f64 {
 /// pixel (metres) at the nearest distance a camera can be from this beam.
 pub fn mesh_beam(beam: &BeamSpec, pixel_footprint: f64) -> Result<BuiltBeam, String> {
     let deformation = Deformation::solve(&problem(beam))?;
+    let (damaged, damage) = match beam.damage_asked.is_empty() {
+        true => (None, None),
+        false => {
+            let (axis, labels) = damage(beam, &deformation)?;
+            (axis, Some(labels))
+        }
+    };
+    let axis_at = |x: f64| -> AxisPoint {
+        match &damaged {
+            Some(d) => d.at(x),
+            None => deformation.at(x),
+        }
+    };
     let tolerance = chord_tolerance(beam.tessellation.tolerance(), pixel_footprint);
+    let max_curvature = match &damaged {
+        Some(d) => d.max_curvature(),
+        None => deformation.max_curvature(beam.length),
+    };
     let segments = match beam.tessellation {
         Tessellation::Segments(n) => n as usize,
         Tessellation::Paper => PAPER_DIVISIONS,
-        Tessellation::Chord(_) | Tessellation::Pixels(_) => segments_for_chord(
-            beam.length,
-            deformation.max_curvature(beam.length),
-            tolerance,
-        ),
+        Tessellation::Chord(_) | Tessellation::Pixels(_) => {
+            segments_for_chord(beam.length, max_curvature, tolerance)
+        }
     };
     let outline = match beam.tessellation {
         Tessellation::Paper => paper_outline(&beam.section)
@@ -65,9 +85,15 @@ pub fn mesh_beam(beam: &BeamSpec, pixel_footprint: f64) -> Result<BuiltBeam, Str
         _ => section_outline(&beam.section, tolerance),
     };
     let mut at = kinks(&beam.loads);
-    at.push(deformation.labels.max_deflection_at);
+    match &damage {
+        Some(d) => {
+            at.push(d.max_deflection_at);
+            at.extend(d.stiffness_breaks());
+        }
+        None => at.push(deformation.labels.max_deflection_at),
+    }
     let stations = stations(beam.length, segments, &at);
-    let frames = section_frames(&stations, beam.mapping, beam.axial(), |x| deformation.at(x));
+    let frames = section_frames(&stations, beam.mapping, beam.axial(), axis_at);
     let unloaded: Vec<SectionFrame> = stations
         .iter()
         .map(|&x| SectionFrame {
@@ -92,7 +118,41 @@ pub fn mesh_beam(beam: &BeamSpec, pixel_footprint: f64) -> Result<BuiltBeam, Str
         mesh,
         deformation,
         segments,
+        damage,
     })
+}
+
+/// Places the damage the beam asks for under the physical loads of its sound solution, and
+/// the damaged axis where its stiffness changed. A changed stiffness needs a static linear
+/// solution to start from (the damaged beam is integrated as Euler–Bernoulli).
+fn damage(
+    beam: &BeamSpec,
+    deformation: &Deformation,
+) -> Result<(Option<SteppedBeam>, DamageLabels), String> {
+    let labels = &deformation.labels;
+    let member = DamagedMember {
+        support: beam.support,
+        length: beam.length,
+        section: &beam.section,
+        elastic_modulus: beam.elastic_modulus,
+        second_moment: beam.section.properties(beam.poisson).second_moment,
+        loads: &labels.loads,
+        sound_peak: (labels.max_deflection, labels.max_deflection_at),
+    };
+    let (axis, damage) = solve_damage(&member, &beam.damage_asked)?;
+    let linear = matches!(labels.theory, Theory::EulerBernoulli | Theory::Timoshenko);
+    if axis.is_some() && (!linear || !beam.vibration.is_empty()) {
+        return Err(format!(
+            "damage that lowers the stiffness (cracks, section loss) needs a static linear solution to start from, but this beam ran {}{}; pin theory(\"euler_bernoulli\") or lower the deflection",
+            labels.theory.name(),
+            if beam.vibration.is_empty() {
+                ""
+            } else {
+                " (a vibration snapshot)"
+            }
+        ));
+    }
+    Ok((axis, damage))
 }
 
 /// The outline with no more vertices than the shape needs: polygons exactly, circles with

@@ -114,6 +114,8 @@ pub struct BeamOutcome {
     pub labels: Labels,
     /// Equal intervals along the length (load positions and the peak add stations).
     pub segments: usize,
+    /// The beam's damage and what it did to the deflection; None for a sound beam.
+    pub damage: Option<crate::mechanics::damage::DamageLabels>,
 }
 
 /// Why a sample could not be built, and where the recipe declared what failed.
@@ -183,6 +185,7 @@ pub fn build_sample(
                 beams.push(Some(BeamOutcome {
                     labels: built.deformation.labels,
                     segments: built.segments,
+                    damage: built.damage,
                 }));
             }
             Structure::Assembly(a) => {

@@ -5,14 +5,18 @@
 //! of loads, the cantilever elastica, the von Kármán beam with axially restrained ends,
 //! vibration mode shapes, the choice of theory by estimated error, the range each theory can
 //! represent, the derived labels (load, moment, stress, membrane force, plausibility), the
-//! mapping of section points onto the deformed axis, cross-section properties, and silo shell
-//! patterns with their plausible amplitudes, and structures analysed as a whole (`frame`: space
-//! frames and trusses by the direct stiffness method). Must not touch: meshes, cameras or files; it works on plain
-//! numbers in the beam's own frame (axis along x from 0 to L, deflection v positive downward).
+//! mapping of section points onto the deformed axis, cross-section properties, silo shell
+//! patterns with their plausible amplitudes; structures analysed as a whole (`frame`: space
+//! frames and trusses by the direct stiffness method); damage (`damage`: cracks, corrosion,
+//! spalls and dents as data, placed by a recipe or by the stresses, and the damaged stiffness);
+//! and beams in time (`dynamics`: moving axles, blows and sampled forces by modal
+//! superposition). Must not touch: meshes, cameras or files; it works on plain numbers in the
+//! beam's own frame (axis along x from 0 to L, deflection v positive downward).
 //!
 //! Formulas, reference values, floating-point traps and the primary literature:
 //! `docs/mechanics.md`.
 
+pub mod damage;
 pub mod dynamics;
 mod elastica;
 pub mod frame;

@@ -479,6 +479,11 @@ pub struct BeamRecord<'a> {
     /// What the mechanics found: the theory used and its estimated error, the physical loads, the
     /// peak deflection, moment and stress, and whether the beam could carry the loads.
     pub labels: &'a Labels,
+    /// The beam's damage (cracks, corrosion, spalls, dents: type, position on the undeformed
+    /// surface, size, orientation, width in mm, severity, cause), the crack model's section,
+    /// and the damaged beam's stiffness and deflection; absent for a sound beam.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damage: Option<&'a crate::mechanics::damage::DamageLabels>,
 }
 
 /// The ground of a sample: a flat square under the structures, drawn in the RGB image.
@@ -631,6 +636,7 @@ impl<'a> SampleRecord<'a> {
                             section_properties: b.section.properties(b.poisson),
                             segments: outcome.segments,
                             labels: &outcome.labels,
+                            damage: outcome.damage.as_ref(),
                         }),
                         _ => None,
                     },

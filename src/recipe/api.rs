@@ -73,6 +73,7 @@ pub fn register(
         },
     );
     super::beam_api::register(engine);
+    super::damage_api::register(engine);
     super::frame_api::register(engine);
     super::shape_api::register(engine, files);
     super::material_api::register(engine, materials);

@@ -13,6 +13,7 @@ mod access;
 mod api;
 mod augment_api;
 mod beam_api;
+mod damage_api;
 mod diagnostics;
 mod engine;
 mod environment_api;

@@ -3,6 +3,7 @@
 
 use super::{SourceSite, Tolerance};
 use crate::materials::Material;
+use crate::mechanics::damage::DamageRequest;
 use crate::mechanics::{
     Axial, Load, Mapping, STEEL_E, STEEL_FY, STEEL_NU, Section, Support, Target, Theory,
 };
@@ -99,6 +100,11 @@ pub struct BeamSpec {
     /// into, all reaching down to one level below the deflected beam. Absent: not drawn.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub supports_drawn: bool,
+    /// Damage placed by the recipe, and whether the mechanics places more (reinforced concrete:
+    /// cracks by stress; steel: corrosion by exposure). Absent: a sound beam. What was placed
+    /// and what it did is in `damage` next to `labels`.
+    #[serde(default, skip_serializing_if = "DamageRequest::is_empty")]
+    pub damage_asked: DamageRequest,
     /// The recipe call that last changed the beam's mechanics (its construction, supports,
     /// loads, target or material constants), where errors found when solving it point.
     #[serde(skip)]
@@ -128,6 +134,7 @@ impl BeamSpec {
             centre: [0.0; 3],
             yaw: 0.0,
             supports_drawn: false,
+            damage_asked: DamageRequest::default(),
             declared_at: None,
         }
     }
