@@ -111,11 +111,17 @@ fn the_stdlib_warren_truss_stands_and_its_end_diagonal_carries_the_reaction() {
         let reaction = (panels / 2 - 1) as f64 * load / 2.0;
         for r in analysis["reactions"].as_array().unwrap() {
             let got = r["force"][2].as_f64().unwrap();
-            assert!((got - reaction).abs() < 1e-9 * load, "{panels} panels: {got}");
+            assert!(
+                (got - reaction).abs() < 1e-9 * load,
+                "{panels} panels: {got}"
+            );
         }
         let diagonal = analysis["members"][0]["axial_force"].as_f64().unwrap();
         let want = -reaction * (h * h + p * p).sqrt() / h;
-        assert!((diagonal - want).abs() < 1e-9 * load, "{panels} panels: {diagonal} vs {want}");
+        assert!(
+            (diagonal - want).abs() < 1e-9 * load,
+            "{panels} panels: {diagonal} vs {want}"
+        );
     }
 }
 
@@ -125,7 +131,10 @@ fn a_warren_truss_with_an_odd_number_of_diagonals_is_refused() {
     let out = run(dir.path(), &warren(5));
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("even number of diagonals") && err.contains("got 5"), "{err}");
+    assert!(
+        err.contains("even number of diagonals") && err.contains("got 5"),
+        "{err}"
+    );
 }
 
 #[test]
