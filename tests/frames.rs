@@ -356,7 +356,8 @@ fn knee_truth(r: [f64; 3]) -> [f64; 3] {
 #[test]
 fn a_rendered_frame_lies_on_its_closed_form_deformed_members_within_the_pixel_tolerance() {
     // Each pixel's point, less its written displacement, is a point of the rest members (two
-    // boxes, running on past the knee by half the section); the closed form carries that rest
+    // boxes: past the knee each runs as far as the other reaches along it, 0.15 m; past a free
+    // end or the base, half its own smaller side, 0.1 m); the closed form carries that rest
     // point to within 0.1 px (the default chord tolerance) of where the pixel sees it. The
     // knee's overlap, where two members share the joint, is left out.
     let (h, a, _) = KNEE;
@@ -373,10 +374,14 @@ fn a_rendered_frame_lies_on_its_closed_form_deformed_members_within_the_pixel_to
                 };
                 let d = [&channels["R"], &channels["G"], &channels["B"]].map(|c| f64::from(c[i]));
                 let r: [f64; 3] = std::array::from_fn(|k| p[k] - d[k]);
-                let column = off_box([r[0], r[1], r[2] - h / 2.0], [0.15, 0.1, h / 2.0 + 0.15]);
+                // The column spans z ∈ [−0.1, h + 0.15], the beam x ∈ [−0.15, a + 0.1].
+                let column = off_box(
+                    [r[0], r[1], r[2] - (h + 0.05) / 2.0],
+                    [0.15, 0.1, (h + 0.25) / 2.0],
+                );
                 let beam = off_box(
-                    [r[0] - (a - 0.15) / 2.0 - 0.075, r[1], r[2] - h],
-                    [(a + 0.3) / 2.0, 0.1, 0.15],
+                    [r[0] - (a - 0.05) / 2.0, r[1], r[2] - h],
+                    [(a + 0.25) / 2.0, 0.1, 0.15],
                 );
                 worst_rest = worst_rest.max(column.min(beam));
                 if r[0] < 0.2 && r[2] > h - 0.2 {
