@@ -6,10 +6,11 @@
 //! snapshot Σ A_n φ_n as a [`FrameSolution`] (its member fields, end forces and stresses are
 //! those of that shape).
 //!
-//! Method: K (equilibrated, as the static solve has it) = L Lᵀ by dense Cholesky, which also
-//! refuses a mechanism with its DOFs named; then the symmetric eigenproblem of
-//! C = L⁻¹ M L⁻ᵀ (eigenvalues 1/ω²), so a singular M (lumped mass, massless DOFs) is fine:
-//! its null space gives infinite frequencies, which are dropped. Inside a member a mode's shape
+//! Method: K (equilibrated, as the static solve has it) = L Lᵀ by Cholesky, which also
+//! refuses a mechanism with its DOFs named. Up to [`DENSE_MODES_MAX_DOFS`] free DOFs, the
+//! symmetric eigenproblem of C = L⁻¹ M L⁻ᵀ (eigenvalues 1/ω²), so a singular M (lumped mass,
+//! massless DOFs) is fine: its null space gives infinite frequencies, which are dropped. Above,
+//! subspace iteration on the sparse factor (the wanted modes only). Inside a member a mode's shape
 //! is the static field of its end displacements (Hermite cubics): exact at the nodes of the
 //! discrete model, and the member's own dynamic shape differs from it by terms of order
 //! (ω/ω₁ of the member clamped)², so members should be subdivided where a mode has more than
@@ -21,10 +22,10 @@ use super::{FrameModel, MassMatrix, labels, solve};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
-/// The largest number of free DOFs whose modes are solved (dense). The dense symmetric
+/// The largest number of free DOFs whose modes are solved dense. The dense symmetric
 /// eigensolver costs O(n³): `cargo bench --bench frames` measured 32 ms at 300 DOFs, 0.28 s
-/// at 600 and 2.2 s at 1,200 (one core); beyond, a sample would take far longer than its
-/// render, and a subspace iteration on the sparse factor would be the way (not built).
+/// at 600 and 2.2 s at 1,200 (one core); larger models go to subspace iteration on the
+/// sparse factor.
 pub const DENSE_MODES_MAX_DOFS: usize = 1200;
 
 /// Modes reported in the labels of a vibration snapshot besides those it draws.
@@ -33,6 +34,13 @@ const REPORTED_MODES: usize = 6;
 /// An eigenvalue 1/ω² below this fraction of the largest belongs to a DOF without mass
 /// (infinite frequency) and is not a mode.
 const MASSLESS: f64 = 1e-12;
+
+/// Subspace iteration stops when every wanted eigenvalue ω² changes by less than this
+/// fraction in one iteration (the mode shapes are then accurate to about its square root).
+const SUBSPACE_TOLERANCE: f64 = 1e-13;
+
+/// Iterations after which subspace iteration gives up.
+const SUBSPACE_ITERATIONS: usize = 500;
 
 /// The lowest natural modes of a frame.
 #[derive(Clone, Debug)]
@@ -81,7 +89,7 @@ pub struct FrameModeLabel {
 
 impl FrameModel {
     /// The lowest `count` natural modes with the supports applied; refuses a mechanism (as
-    /// the static analysis does), a model above [`DENSE_MODES_MAX_DOFS`] free DOFs, and one
+    /// the static analysis does), and one
     /// with fewer than `count` DOFs that carry mass.
     pub fn natural_modes(&self, count: usize) -> Result<NaturalModes, String> {
         self.validate()?;
@@ -103,29 +111,12 @@ impl FrameModel {
             scale,
             system,
         } = solve::assemble(self, &elements)?;
-        if free.len() > DENSE_MODES_MAX_DOFS {
-            return Err(format!(
-                "natural modes: the frame has {} free DOFs, more than the {DENSE_MODES_MAX_DOFS} the dense eigensolver takes in reasonable time (O(n³): 2.2 s at 1,200); use fewer members or a plane model",
-                free.len()
-            ));
-        }
         let mass = self.scaled_mass(&elements, &free, &scale);
-        let order: Vec<usize> = (0..system.size).collect();
-        let chol = system
-            .dense_cholesky()
-            .ok_or_else(|| system.mechanism(&free, true, &order))?;
-        let l = chol.l();
-        // C = L⁻¹ M L⁻ᵀ, symmetric; its eigenvalues are 1/ω².
-        let half = l
-            .solve_lower_triangular(&mass)
-            .expect("a Cholesky factor has a nonzero diagonal");
-        let c = l
-            .solve_lower_triangular(&half.transpose())
-            .expect("a Cholesky factor has a nonzero diagonal");
-        let eigen = ((&c + c.transpose()) * 0.5).symmetric_eigen();
-        let mut pairs: Vec<usize> = (0..eigen.eigenvalues.len()).collect();
-        pairs.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
-        let largest = pairs.first().map_or(0.0, |&i| eigen.eigenvalues[i]);
+        let found = if free.len() <= DENSE_MODES_MAX_DOFS {
+            dense_modes(&system, &mass, &free, count)?
+        } else {
+            subspace_modes(&system, &mass, &free, count)?
+        };
         let translation = |k: usize| -> DVector<f64> {
             DVector::from_fn(free.len(), |i, _| {
                 if free[i] % 6 == k {
@@ -136,25 +127,16 @@ impl FrameModel {
             })
         };
         let rigid: Vec<DVector<f64>> = (0..3).map(translation).collect();
-        let moving_mass = [0, 1, 2].map(|k| rigid[k].dot(&(&mass * &rigid[k])));
+        let moving_mass = [0, 1, 2].map(|k| rigid[k].dot(&mass.times(&rigid[k])));
         let mut modes = NaturalModes {
             omega: Vec::new(),
             shapes: Vec::new(),
             effective_mass: Vec::new(),
             moving_mass,
         };
-        for &i in pairs.iter().take(count) {
-            let mu = eigen.eigenvalues[i];
-            if !(mu > MASSLESS * largest) {
-                break;
-            }
-            // φ' = L⁻ᵀ y has φ'ᵀ M φ' = yᵀ C y = μ: divided by √μ it is mass-normalised.
-            let shape = l
-                .tr_solve_lower_triangular(&eigen.eigenvectors.column(i).into_owned())
-                .expect("a Cholesky factor has a nonzero diagonal")
-                / mu.sqrt();
-            let m_shape = &mass * &shape;
-            modes.omega.push(mu.sqrt().recip());
+        for (omega, shape) in found {
+            let m_shape = mass.times(&shape);
+            modes.omega.push(omega);
             modes
                 .effective_mass
                 .push([0, 1, 2].map(|k| m_shape.dot(&rigid[k]).powi(2)));
@@ -179,16 +161,16 @@ impl FrameModel {
         elements: &[Element],
         free: &[usize],
         scale: &[f64],
-    ) -> DMatrix<f64> {
+    ) -> ScaledMass {
         let mut index = vec![usize::MAX; self.nodes.len() * 6];
         for (i, &d) in free.iter().enumerate() {
             index[d] = i;
         }
-        let mut mass = DMatrix::zeros(free.len(), free.len());
+        let mut entries = Vec::new();
         let mut add = |a: usize, b: usize, v: f64| {
             let (i, j) = (index[a], index[b]);
-            if i != usize::MAX && j != usize::MAX {
-                mass[(i, j)] += v * scale[i] * scale[j];
+            if i != usize::MAX && j != usize::MAX && v != 0.0 {
+                entries.push((i, j, v * scale[i] * scale[j]));
             }
         };
         for (el, member) in elements.iter().zip(&self.members) {
@@ -197,9 +179,7 @@ impl FrameModel {
             let dof = |i: usize| 6 * if i < 6 { member.start } else { member.end } + i % 6;
             for i in 0..12 {
                 for j in 0..12 {
-                    if m[(i, j)] != 0.0 {
-                        add(dof(i), dof(j), m[(i, j)]);
-                    }
+                    add(dof(i), dof(j), m[(i, j)]);
                 }
             }
         }
@@ -210,7 +190,10 @@ impl FrameModel {
                 add(d + 3, d + 3, nodal.inertia[k]);
             }
         }
-        mass
+        ScaledMass {
+            size: free.len(),
+            entries,
+        }
     }
 
     /// The snapshot Σ A_n φ_n of `vibration` as a solution: each mode scaled so the largest
@@ -293,4 +276,170 @@ fn sign(shape: &[[f64; 6]]) -> f64 {
             |best, v| if v.abs() > best.abs() { v } else { best },
         );
     if largest < 0.0 { -1.0 } else { 1.0 }
+}
+
+/// The scaled mass matrix D M D on the free DOFs, as entries (duplicates add).
+pub(super) struct ScaledMass {
+    size: usize,
+    entries: Vec<(usize, usize, f64)>,
+}
+
+impl ScaledMass {
+    /// The matrix, dense.
+    pub fn dense(&self) -> DMatrix<f64> {
+        let mut m = DMatrix::zeros(self.size, self.size);
+        for &(i, j, v) in &self.entries {
+            m[(i, j)] += v;
+        }
+        m
+    }
+
+    /// The diagonal of M.
+    fn dense_diagonal(&self) -> DVector<f64> {
+        let mut d = DVector::zeros(self.size);
+        for &(i, j, v) in &self.entries {
+            if i == j {
+                d[i] += v;
+            }
+        }
+        d
+    }
+
+    /// M x.
+    fn times(&self, x: &DVector<f64>) -> DVector<f64> {
+        let mut y = DVector::zeros(self.size);
+        for &(i, j, v) in &self.entries {
+            y[i] += v * x[j];
+        }
+        y
+    }
+
+    /// M X, column by column.
+    fn times_block(&self, x: &DMatrix<f64>) -> DMatrix<f64> {
+        let mut y = DMatrix::zeros(self.size, x.ncols());
+        for &(i, j, v) in &self.entries {
+            for c in 0..x.ncols() {
+                y[(i, c)] += v * x[(j, c)];
+            }
+        }
+        y
+    }
+}
+
+/// The lowest modes as (ω, mass-normalised shape in scaled DOFs), dense: K = L Lᵀ, then the
+/// symmetric eigenproblem of C = L⁻¹ M L⁻ᵀ (eigenvalues 1/ω²).
+pub(super) fn dense_modes(
+    system: &solve::System,
+    mass: &ScaledMass,
+    free: &[usize],
+    count: usize,
+) -> Result<Vec<(f64, DVector<f64>)>, String> {
+    let order: Vec<usize> = (0..system.size).collect();
+    let chol = system
+        .dense_cholesky()
+        .ok_or_else(|| system.mechanism(free, true, &order))?;
+    let l = chol.l();
+    let half = l
+        .solve_lower_triangular(&mass.dense())
+        .expect("a Cholesky factor has a nonzero diagonal");
+    let c = l
+        .solve_lower_triangular(&half.transpose())
+        .expect("a Cholesky factor has a nonzero diagonal");
+    let eigen = ((&c + c.transpose()) * 0.5).symmetric_eigen();
+    let mut pairs: Vec<usize> = (0..eigen.eigenvalues.len()).collect();
+    pairs.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
+    let largest = pairs.first().map_or(0.0, |&i| eigen.eigenvalues[i]);
+    let mut found = Vec::new();
+    for &i in pairs.iter().take(count) {
+        let mu = eigen.eigenvalues[i];
+        if !(mu > MASSLESS * largest) {
+            break;
+        }
+        // φ' = L⁻ᵀ y has φ'ᵀ M φ' = yᵀ C y = μ: divided by √μ it is mass-normalised.
+        let shape = l
+            .tr_solve_lower_triangular(&eigen.eigenvectors.column(i).into_owned())
+            .expect("a Cholesky factor has a nonzero diagonal")
+            / mu.sqrt();
+        found.push((mu.sqrt().recip(), shape));
+    }
+    Ok(found)
+}
+
+/// The lowest modes by subspace iteration (Bathe, *Finite Element Procedures*, §11.6) on the
+/// sparse factor of K: p = max(2q, q + 8) vectors, X̄ = K⁻¹ M X, the projected problem
+/// K̃ Q = M̃ Q Λ solved dense, X = X̄ Q, until the q wanted ω² settle. Starting vectors: the mass
+/// diagonal, then unit vectors at the DOFs of largest m_ii/k_ii (k_ii is 1 in scaled DOFs).
+pub(super) fn subspace_modes(
+    system: &solve::System,
+    mass: &ScaledMass,
+    free: &[usize],
+    count: usize,
+) -> Result<Vec<(f64, DVector<f64>)>, String> {
+    let n = system.size;
+    let order = system.fill_reducing_order();
+    let factor = system
+        .sparse_factor(&order)
+        .ok_or_else(|| system.mechanism(free, false, &order))?;
+    let q = count.min(n);
+    let p = (2 * q).max(q + 8).min(n);
+    let diagonal = mass.dense_diagonal();
+    let mut heaviest: Vec<usize> = (0..n).collect();
+    heaviest.sort_by(|&a, &b| diagonal[b].total_cmp(&diagonal[a]).then(a.cmp(&b)));
+    let mut x = DMatrix::zeros(n, p);
+    x.column_mut(0).copy_from(&diagonal);
+    for c in 1..p {
+        x[(heaviest[c - 1], c)] = 1.0;
+    }
+    let mut previous = vec![f64::INFINITY; q];
+    for _ in 0..SUBSPACE_ITERATIONS {
+        let y = mass.times_block(&x);
+        let xbar = factor.solve(&y);
+        let k_small = symmetric(xbar.transpose() * &y);
+        let m_small = symmetric(xbar.transpose() * mass.times_block(&xbar));
+        let Some(lm) = m_small.clone().cholesky() else {
+            return Err(format!(
+                "natural modes: fewer than {p} DOFs of the frame carry mass (add nodal masses or use the consistent mass matrix)"
+            ));
+        };
+        let l = lm.l();
+        let half = l
+            .solve_lower_triangular(&k_small)
+            .expect("a Cholesky factor has a nonzero diagonal");
+        let c = l
+            .solve_lower_triangular(&half.transpose())
+            .expect("a Cholesky factor has a nonzero diagonal");
+        let eigen = symmetric(c).symmetric_eigen();
+        let mut ranks: Vec<usize> = (0..p).collect();
+        ranks.sort_by(|&a, &b| eigen.eigenvalues[a].total_cmp(&eigen.eigenvalues[b]));
+        let vectors = DMatrix::from_fn(p, p, |r, k| eigen.eigenvectors[(r, ranks[k])]);
+        let basis = l
+            .tr_solve_lower_triangular(&vectors)
+            .expect("a Cholesky factor has a nonzero diagonal");
+        x = xbar * basis;
+        let lambda: Vec<f64> = ranks
+            .iter()
+            .take(q)
+            .map(|&k| eigen.eigenvalues[k])
+            .collect();
+        let settled = lambda
+            .iter()
+            .zip(&previous)
+            .all(|(l, was)| (l - was).abs() <= SUBSPACE_TOLERANCE * l.abs());
+        previous = lambda;
+        if settled {
+            return Ok(previous
+                .iter()
+                .enumerate()
+                .map(|(k, l)| (l.sqrt(), x.column(k).into_owned()))
+                .collect());
+        }
+    }
+    Err(format!(
+        "natural modes: subspace iteration did not settle in {SUBSPACE_ITERATIONS} iterations ({n} free DOFs, {q} modes)"
+    ))
+}
+
+/// (A + Aᵀ)/2: a product that is symmetric in exact arithmetic, made exactly so.
+fn symmetric(a: DMatrix<f64>) -> DMatrix<f64> {
+    (&a + a.transpose()) * 0.5
 }

@@ -260,7 +260,15 @@ impl System {
     }
 
     fn solve_sparse(&self, order: &[usize]) -> Result<Vec<f64>, ()> {
-        let chol = CscCholesky::factor(&self.sparse(order, 0.0)).map_err(|_| ())?;
+        let factor = self.sparse_factor(order).ok_or(())?;
+        let x = factor.solve(&DMatrix::from_column_slice(self.size, 1, &self.rhs));
+        Ok(x.as_slice().to_vec())
+    }
+
+    /// Sparse Cholesky factor of the system in `order`, refused (None) at a pivot that marks a
+    /// mechanism.
+    pub fn sparse_factor(&self, order: &[usize]) -> Option<SparseFactor> {
+        let chol = CscCholesky::factor(&self.sparse(order, 0.0)).ok()?;
         let l = chol.l();
         for c in 0..self.size {
             let col = l.col(c);
@@ -270,16 +278,18 @@ impl System {
                 .position(|&r| r == c)
                 .map_or(0.0, |k| col.values()[k]);
             if !(pivot * pivot > PIVOT) {
-                return Err(());
+                return None;
             }
         }
-        let b = DMatrix::from_fn(self.size, 1, |r, _| self.rhs[order[r]]);
-        let x = chol.solve(&b);
-        let mut out = vec![0.0; self.size];
-        for (r, &d) in order.iter().enumerate() {
-            out[d] = x[(r, 0)];
-        }
-        Ok(out)
+        Some(SparseFactor {
+            chol,
+            order: order.to_vec(),
+        })
+    }
+
+    /// A bandwidth-reducing order for [`System::sparse_factor`].
+    pub fn fill_reducing_order(&self) -> Vec<usize> {
+        reverse_cuthill_mckee(self)
     }
 
     /// DOFs that move in the mechanism: two steps of inverse iteration on the system shifted
@@ -312,6 +322,25 @@ impl System {
             x.iter_mut().for_each(|v| *v /= top);
         }
         (0..self.size).filter(|&i| x[i].abs() > 0.1).collect()
+    }
+}
+
+/// The sparse Cholesky factor of a system, with the order its rows were permuted to.
+pub(super) struct SparseFactor {
+    chol: CscCholesky<f64>,
+    order: Vec<usize>,
+}
+
+impl SparseFactor {
+    /// X with K X = B, for every column of B (rows in the system's own numbering).
+    pub fn solve(&self, b: &DMatrix<f64>) -> DMatrix<f64> {
+        let permuted = DMatrix::from_fn(b.nrows(), b.ncols(), |r, c| b[(self.order[r], c)]);
+        let y = self.chol.solve(&permuted);
+        let mut x = DMatrix::zeros(b.nrows(), b.ncols());
+        for (r, &d) in self.order.iter().enumerate() {
+            x.row_mut(d).copy_from(&y.row(r));
+        }
+        x
     }
 }
 
