@@ -89,8 +89,7 @@ pub struct FrameModeLabel {
 
 impl FrameModel {
     /// The lowest `count` natural modes with the supports applied; refuses a mechanism (as
-    /// the static analysis does), and one
-    /// with fewer than `count` DOFs that carry mass.
+    /// the static analysis does) and a model with fewer than `count` DOFs that carry mass.
     pub fn natural_modes(&self, count: usize) -> Result<NaturalModes, String> {
         self.validate()?;
         let modes = self.lowest_modes(count)?;
