@@ -338,13 +338,7 @@ pub(super) fn dense_modes(
         .dense_cholesky()
         .ok_or_else(|| system.mechanism(free, true, &order))?;
     let l = chol.l();
-    let half = l
-        .solve_lower_triangular(&mass.dense())
-        .expect("a Cholesky factor has a nonzero diagonal");
-    let c = l
-        .solve_lower_triangular(&half.transpose())
-        .expect("a Cholesky factor has a nonzero diagonal");
-    let eigen = ((&c + c.transpose()) * 0.5).symmetric_eigen();
+    let eigen = reduced(&l, &mass.dense()).symmetric_eigen();
     let mut pairs: Vec<usize> = (0..eigen.eigenvalues.len()).collect();
     pairs.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
     let largest = pairs.first().map_or(0.0, |&i| eigen.eigenvalues[i]);
@@ -401,13 +395,7 @@ pub(super) fn subspace_modes(
             ));
         };
         let l = lm.l();
-        let half = l
-            .solve_lower_triangular(&k_small)
-            .expect("a Cholesky factor has a nonzero diagonal");
-        let c = l
-            .solve_lower_triangular(&half.transpose())
-            .expect("a Cholesky factor has a nonzero diagonal");
-        let eigen = symmetric(c).symmetric_eigen();
+        let eigen = reduced(&l, &k_small).symmetric_eigen();
         let mut ranks: Vec<usize> = (0..p).collect();
         ranks.sort_by(|&a, &b| eigen.eigenvalues[a].total_cmp(&eigen.eigenvalues[b]));
         let vectors = DMatrix::from_fn(p, p, |r, k| eigen.eigenvectors[(r, ranks[k])]);
@@ -436,6 +424,18 @@ pub(super) fn subspace_modes(
     Err(format!(
         "natural modes: subspace iteration did not settle in {SUBSPACE_ITERATIONS} iterations ({n} free DOFs, {q} modes)"
     ))
+}
+
+/// L⁻¹ A L⁻ᵀ for a Cholesky factor L and a symmetric A, made exactly symmetric: the standard
+/// form of the pencil (A, L Lᵀ).
+fn reduced(l: &DMatrix<f64>, a: &DMatrix<f64>) -> DMatrix<f64> {
+    let half = l
+        .solve_lower_triangular(a)
+        .expect("a Cholesky factor has a nonzero diagonal");
+    let c = l
+        .solve_lower_triangular(&half.transpose())
+        .expect("a Cholesky factor has a nonzero diagonal");
+    symmetric(c)
 }
 
 /// (A + Aᵀ)/2: a product that is symmetric in exact arithmetic, made exactly so.
