@@ -27,6 +27,14 @@ fn run(dir: &Path, recipe: &str) -> std::process::Output {
         .unwrap()
 }
 
+/// The error a run of `recipe` fails with (the run must fail).
+fn refused(recipe: &str) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run(dir.path(), recipe);
+    assert!(!out.status.success(), "the run should have failed");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
 /// The `analysis` of the first structure in view 0 of sample 0 of `recipe`, run into a
 /// temporary folder, its view JSON checked against the published view schema.
 fn first_analysis(recipe: &str) -> serde_json::Value {
@@ -127,10 +135,7 @@ fn the_stdlib_warren_truss_stands_and_its_end_diagonal_carries_the_reaction() {
 
 #[test]
 fn a_warren_truss_with_an_odd_number_of_diagonals_is_refused() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = run(dir.path(), &warren(5));
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = refused(&warren(5));
     assert!(
         err.contains("even number of diagonals") && err.contains("got 5"),
         "{err}"
@@ -139,11 +144,8 @@ fn a_warren_truss_with_an_odd_number_of_diagonals_is_refused() {
 
 #[test]
 fn a_frame_call_on_a_missing_node_points_at_the_recipe() {
-    let dir = tempfile::tempdir().unwrap();
     let recipe = TWO_SPANS.replace("f.support(c, \"roller\");", "f.support(7, \"roller\");");
-    let out = run(dir.path(), &recipe);
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = refused(&recipe);
     assert!(
         err.contains("recipe.rhai:15:11") && err.contains("node 7 does not exist"),
         "{err}"
@@ -152,11 +154,8 @@ fn a_frame_call_on_a_missing_node_points_at_the_recipe() {
 
 #[test]
 fn a_mechanism_in_a_recipe_is_refused_with_its_dofs_named() {
-    let dir = tempfile::tempdir().unwrap();
     let recipe = TWO_SPANS.replace("f.support(a, \"pinned\");", "f.support(a, \"roller\");");
-    let out = run(dir.path(), &recipe);
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = refused(&recipe);
     assert!(err.contains("mechanism") && err.contains("ux"), "{err}");
 }
 
@@ -204,14 +203,11 @@ fn a_frame_vibration_snapshot_labels_its_frequencies_and_draws_its_amplitude() {
 
 #[test]
 fn a_frame_vibration_with_loads_is_refused_at_the_recipe() {
-    let dir = tempfile::tempdir().unwrap();
     let recipe = CANTILEVER_MODE.replace(
         "f.vibration([[1, 0.2]]);",
         "f.node_load(8, [0.0, 0.0, -1.0e3]);\n        f.vibration([[1, 0.2]]);",
     );
-    let out = run(dir.path(), &recipe);
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = refused(&recipe);
     assert!(
         err.contains("recipe.rhai:15:11")
             && err.contains("either static loads or a vibration snapshot"),
