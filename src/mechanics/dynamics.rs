@@ -77,7 +77,7 @@ pub enum TimeLoad {
         start: f64,
         /// Time between values (positive).
         step: f64,
-        /// The force at `start + k·step`.
+        /// The force at `start + k·step` (at least two values).
         values: Vec<f64>,
     },
 }
@@ -133,12 +133,11 @@ impl TimeLoad {
                 values,
             } => {
                 let s = (t - start) / step;
-                let last = (values.len() - 1) as f64;
-                if side.within(s, 0.0, last) || (values.len() == 1 && s == 0.0) {
-                    let k = (s.floor().max(0.0) as usize).min(values.len().saturating_sub(2));
+                let last = values.len().saturating_sub(1) as f64;
+                if side.within(s, 0.0, last) {
+                    let k = (s.floor().max(0.0) as usize).min(values.len() - 2);
                     let w = s - k as f64;
-                    let next = values.get(k + 1).copied().unwrap_or(values[k]);
-                    out.push((*at, values[k] * (1.0 - w) + next * w));
+                    out.push((*at, values[k] * (1.0 - w) + values[k + 1] * w));
                 }
             }
         }
@@ -259,8 +258,11 @@ impl TimeLoad {
                 if !(step.is_finite() && *step > 0.0) {
                     return Err(format!("sample step must be positive, got {step} s"));
                 }
-                if values.is_empty() {
-                    return Err("a sampled force needs at least one value".into());
+                if values.len() < 2 {
+                    return Err(format!(
+                        "a sampled force needs at least two values (it is linear between them), got {}",
+                        values.len()
+                    ));
                 }
                 values.iter().try_for_each(|&v| finite("sampled force", v))
             }

@@ -214,4 +214,11 @@ fn bad_parameters_are_refused_with_their_values() {
         duration: 0.1,
     };
     assert!(pulse.check(L).unwrap_err().contains("25"));
+    let single = TimeLoad::Sampled {
+        at: 1.0,
+        start: 0.0,
+        step: 0.01,
+        values: vec![5.0],
+    };
+    assert!(single.check(L).unwrap_err().contains("got 1"));
 }

@@ -294,7 +294,7 @@ impl ScaledMass {
     }
 
     /// The diagonal of M.
-    fn dense_diagonal(&self) -> DVector<f64> {
+    fn diagonal(&self) -> DVector<f64> {
         let mut d = DVector::zeros(self.size);
         for &(i, j, v) in &self.entries {
             if i == j {
@@ -375,7 +375,7 @@ pub(super) fn subspace_modes(
         .ok_or_else(|| system.mechanism(free, false, &order))?;
     let q = count.min(n);
     let p = (2 * q).max(q + 8).min(n);
-    let diagonal = mass.dense_diagonal();
+    let diagonal = mass.diagonal();
     let mut heaviest: Vec<usize> = (0..n).collect();
     heaviest.sort_by(|&a, &b| diagonal[b].total_cmp(&diagonal[a]).then(a.cmp(&b)));
     let mut x = DMatrix::zeros(n, p);
