@@ -85,7 +85,7 @@ pub enum TimeLoad {
 impl TimeLoad {
     /// The point forces (position, N) this load applies at time `t`, on the given side of `t`
     /// (the two differ where a force jumps: an axle arriving or leaving, a step).
-    fn forces_at(&self, t: f64, side: Side, length: f64, out: &mut Vec<(f64, f64)>) {
+    pub(crate) fn forces_at(&self, t: f64, side: Side, length: f64, out: &mut Vec<(f64, f64)>) {
         match self {
             TimeLoad::Vehicle {
                 axles,
@@ -144,7 +144,7 @@ impl TimeLoad {
     }
 
     /// Instants where the force jumps or has a corner: time nodes must fall on them.
-    fn corners(&self, length: f64, out: &mut Vec<f64>) {
+    pub(crate) fn corners(&self, length: f64, out: &mut Vec<f64>) {
         match self {
             TimeLoad::Vehicle {
                 axles,
@@ -171,7 +171,7 @@ impl TimeLoad {
 
     /// The highest angular frequency at which this load's modal forces vary, rad/s, for a beam
     /// keeping `modes` modes (0 where they are linear between corners).
-    fn variation(&self, length: f64, modes: usize) -> f64 {
+    pub(crate) fn variation(&self, length: f64, modes: usize) -> f64 {
         match self {
             // An axle at x = ct meets mode n's waves at about nπc/L.
             TimeLoad::Vehicle { speed, .. } => PI * speed * modes as f64 / length,
@@ -272,7 +272,7 @@ impl TimeLoad {
 
 /// Which limit of a force history at an instant: just before it or just after it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Side {
+pub(crate) enum Side {
     Before,
     After,
 }
@@ -280,7 +280,7 @@ enum Side {
 impl Side {
     /// Whether a quantity increasing through `x` lies in [lo, hi] on this side of the instant:
     /// just before, the interval is (lo, hi]; just after, [lo, hi).
-    fn within(self, x: f64, lo: f64, hi: f64) -> bool {
+    pub(crate) fn within(self, x: f64, lo: f64, hi: f64) -> bool {
         match self {
             Side::Before => lo < x && x <= hi,
             Side::After => lo <= x && x < hi,
@@ -369,32 +369,19 @@ impl ModalBeam {
         times: &[f64],
         per_period: u32,
     ) -> Response {
-        let nodes = self.time_nodes(loads, from, times, per_period.max(4));
-        let mut state: Vec<[f64; 2]> = vec![[0.0; 2]; self.modes.len()];
-        let mut force = self.modal_forces(loads, from, Side::After);
-        let mut snapshots = Vec::with_capacity(times.len());
-        let mut next = 0;
-        let mut stepper = Stepper::default();
-        let mut t = from;
-        for &node in &nodes {
-            let h = node - t;
-            if h > 0.0 {
-                let arriving = self.modal_forces(loads, node, Side::Before);
-                for (k, mode) in self.modes.iter().enumerate() {
-                    let step = stepper.get(mode.omega, self.damping, h, k);
-                    state[k] = step.advance(state[k], force[k], arriving[k]);
-                }
-            }
-            (t, force) = (node, self.modal_forces(loads, node, Side::After));
-            while next < times.len() && times[next] <= t {
-                snapshots.push(Snapshot {
-                    time: times[next],
-                    state: state.clone(),
-                    force: force.clone(),
-                });
-                next += 1;
-            }
+        let mut corners = Vec::new();
+        for load in loads {
+            load.corners(self.length, &mut corners);
         }
+        let forcing = loads
+            .iter()
+            .map(|l| l.variation(self.length, self.modes.len()))
+            .fold(0.0, f64::max);
+        let nodes = time_nodes(corners, forcing, from, times, per_period);
+        let omegas: Vec<f64> = self.modes.iter().map(|m| m.omega).collect();
+        let snapshots = integrate(&omegas, self.damping, from, &nodes, times, |t, side| {
+            self.modal_forces(loads, t, side)
+        });
         Response { snapshots }
     }
 
@@ -421,41 +408,6 @@ impl ModalBeam {
         forces
     }
 
-    /// Steps of at most 2π/(ω_f · per_period) for the fastest force variation ω_f, through every
-    /// force corner and output time. The modes' own frequencies set no limit: the step is exact
-    /// for any length, only the force's interpolation needs resolving.
-    fn time_nodes(
-        &self,
-        loads: &[TimeLoad],
-        from: f64,
-        times: &[f64],
-        per_period: u32,
-    ) -> Vec<f64> {
-        let last = times.last().copied().unwrap_or(from).max(from);
-        let forcing = loads
-            .iter()
-            .map(|l| l.variation(self.length, self.modes.len()))
-            .fold(0.0, f64::max);
-        let h = 2.0 * PI / (forcing * per_period as f64);
-        let mut fixed: Vec<f64> = times.to_vec();
-        for load in loads {
-            load.corners(self.length, &mut fixed);
-        }
-        fixed.retain(|&t| t > from && t <= last);
-        fixed.push(last);
-        fixed.sort_by(f64::total_cmp);
-        fixed.dedup();
-        let mut nodes = Vec::new();
-        let mut start = from;
-        for &end in &fixed {
-            let pieces = ((end - start) / h).ceil().max(1.0);
-            nodes.extend((1..pieces as usize).map(|i| start + (end - start) * i as f64 / pieces));
-            nodes.push(end);
-            start = end;
-        }
-        nodes
-    }
-
     /// The loads acting just after time t as static span loads (outputs are right-continuous,
     /// like the modal forces stored with them).
     fn static_loads(&self, loads: &[TimeLoad], t: f64) -> Vec<Load> {
@@ -464,6 +416,76 @@ impl ModalBeam {
             .map(|(at, force)| Load::Point { at, force })
             .collect()
     }
+}
+
+/// Time nodes from `from` to the last output time: every output time and force corner, with
+/// steps of at most 2π/(ω_f · per_period) between them for the fastest force variation ω_f
+/// (rad/s; 0 where the forces are linear between corners). The modes' own frequencies set no
+/// limit: the step is exact for any length, only the force's interpolation needs resolving.
+pub(crate) fn time_nodes(
+    corners: Vec<f64>,
+    forcing: f64,
+    from: f64,
+    times: &[f64],
+    per_period: u32,
+) -> Vec<f64> {
+    let last = times.last().copied().unwrap_or(from).max(from);
+    let h = 2.0 * PI / (forcing * per_period.max(4) as f64);
+    let mut fixed: Vec<f64> = times.to_vec();
+    fixed.extend(corners);
+    fixed.retain(|&t| t > from && t <= last);
+    fixed.push(last);
+    fixed.sort_by(f64::total_cmp);
+    fixed.dedup();
+    let mut nodes = Vec::new();
+    let mut start = from;
+    for &end in &fixed {
+        let pieces = ((end - start) / h).ceil().max(1.0);
+        nodes.extend((1..pieces as usize).map(|i| start + (end - start) * i as f64 / pieces));
+        nodes.push(end);
+        start = end;
+    }
+    nodes
+}
+
+/// Modal coordinates q̈ + 2ζω q̇ + ω² q = f(t) of modes of angular frequency `omegas` and
+/// damping ratio ζ = `damping`, integrated from rest at `from` through `nodes` (ascending,
+/// containing every output time), exact for `forces` linear between nodes; the state at each
+/// of `times`. `forces(t, side)` gives every mode's f on that side of t.
+pub(crate) fn integrate(
+    omegas: &[f64],
+    damping: f64,
+    from: f64,
+    nodes: &[f64],
+    times: &[f64],
+    forces: impl Fn(f64, Side) -> Vec<f64>,
+) -> Vec<Snapshot> {
+    let mut state: Vec<[f64; 2]> = vec![[0.0; 2]; omegas.len()];
+    let mut force = forces(from, Side::After);
+    let mut snapshots = Vec::with_capacity(times.len());
+    let mut next = 0;
+    let mut stepper = Stepper::default();
+    let mut t = from;
+    for &node in nodes {
+        let h = node - t;
+        if h > 0.0 {
+            let arriving = forces(node, Side::Before);
+            for (k, &omega) in omegas.iter().enumerate() {
+                let step = stepper.get(omega, damping, h, k);
+                state[k] = step.advance(state[k], force[k], arriving[k]);
+            }
+        }
+        (t, force) = (node, forces(node, Side::After));
+        while next < times.len() && times[next] <= t {
+            snapshots.push(Snapshot {
+                time: times[next],
+                state: state.clone(),
+                force: force.clone(),
+            });
+            next += 1;
+        }
+    }
+    snapshots
 }
 
 /// Mean of φ² over [0, 1] by 4-point Gauss–Legendre on panels finer than the mode's waves.
@@ -549,12 +571,12 @@ impl Step {
 
 /// The modal state at one output time.
 #[derive(Clone, Debug)]
-struct Snapshot {
-    time: f64,
+pub(crate) struct Snapshot {
+    pub(crate) time: f64,
     /// [q, q̇] per mode.
-    state: Vec<[f64; 2]>,
+    pub(crate) state: Vec<[f64; 2]>,
     /// Modal force per mode at that time.
-    force: Vec<f64>,
+    pub(crate) force: Vec<f64>,
 }
 
 /// The beam's motion at the requested times.

@@ -7,7 +7,8 @@
 //! of a mechanism with the free DOFs named, and the results: node displacements, reactions,
 //! member end forces, the deformed shape inside every member and its peak moment, stress and
 //! utilisation; and the natural modes of the whole structure (member and nodal masses) with
-//! vibration snapshots drawn from them. Must not touch: meshes, Rhai, cameras or files.
+//! vibration snapshots drawn from them, and the response in time to loads moving along a lane
+//! of members by modal superposition. Must not touch: meshes, Rhai, cameras or files.
 //!
 //! Conventions (docs/frames.md): world frame, +Z up, metres, newtons. A member's local x runs
 //! from its start node to its end node; local z is the section's height direction (the beam
@@ -15,6 +16,9 @@
 //! member), turned by the member's `roll` about x; y = z × x. End forces are the forces the
 //! nodes exert on the member, in local axes, [N, Vy, Vz, T, My, Mz] at the start then the end.
 
+mod dynamics;
+#[cfg(test)]
+mod dynamics_tests;
 mod element;
 mod labels;
 mod modes;
@@ -26,6 +30,7 @@ mod solve;
 #[cfg(test)]
 mod tests;
 
+pub use dynamics::{FrameDynamics, FrameState};
 pub use labels::FrameLabels;
 pub use modes::{DENSE_MODES_MAX_DOFS, FrameModeLabel, ModalLabels, NaturalModes};
 pub use results::{FrameSolution, MemberResult, NodeResult, Reaction};

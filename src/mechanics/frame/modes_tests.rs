@@ -16,7 +16,7 @@ const CANTILEVER_BETA_L: [f64; 2] = [1.875_104_068_711_961, 4.694_091_132_974_17
 
 /// A 10 m plane (x–z) beam of `n` equal members of a 0.1 × 0.2 m steel rectangle (height
 /// along z), held as `ends` says, and its (E I / (ρ A L⁴))^½.
-fn chain(n: usize, ends: Support) -> (FrameModel, f64) {
+pub(super) fn chain(n: usize, ends: Support) -> (FrameModel, f64) {
     let length = 10.0;
     let section = Section::Rectangle {
         width: 0.1,
