@@ -413,8 +413,10 @@ mod tests {
         let start = Instant::now();
         // One byte of a request every 200 ms, never finishing: each read has data, so only a
         // deadline for the whole request ends it.
+        // The bound after the deadline is generous: on a loaded machine the serving thread
+        // may wait seconds for a core, and this test is about being let go, not promptness.
         let closed = loop {
-            assert!(start.elapsed() < REQUEST_TIMEOUT * 2, "still held");
+            assert!(start.elapsed() < REQUEST_TIMEOUT * 4, "still held");
             if stream.write_all(b"G").is_err() {
                 break start.elapsed();
             }
