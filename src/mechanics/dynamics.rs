@@ -459,8 +459,8 @@ impl ModalBeam {
     }
 
     /// The loads acting just after time t as static span loads (outputs are right-continuous,
-    /// like the modal forces stored with them).
-    fn static_loads(&self, loads: &[TimeLoad], t: f64) -> Vec<Load> {
+    /// like the modal forces stored with them): the static part of the deflection at t.
+    pub fn static_loads(&self, loads: &[TimeLoad], t: f64) -> Vec<Load> {
         self.point_forces(loads, t, Side::After)
             .into_iter()
             .map(|(at, force)| Load::Point { at, force })
@@ -594,6 +594,18 @@ impl Response {
         self.snapshots[k].state.iter().map(|s| s[0]).collect()
     }
 
+    /// The dynamic part of the deflection at output `k`: (mode number from 1, q_n − f_n/ω_n²),
+    /// the amplitude of each normalised mode shape to add to the static deflection of
+    /// `ModalBeam::static_loads` at that instant (the mode-acceleration method).
+    pub fn dynamic_amplitudes(&self, beam: &ModalBeam, k: usize) -> Vec<(u32, f64)> {
+        let snap = &self.snapshots[k];
+        (1..)
+            .zip(&beam.modes)
+            .zip(snap.state.iter().zip(&snap.force))
+            .map(|((n, mode), ([q, _], f))| (n, dynamic_amplitude(mode, *q, *f)))
+            .collect()
+    }
+
     /// The motion at x (m) at output `k`, by the mode-acceleration method.
     pub fn at(&self, beam: &ModalBeam, loads: &[TimeLoad], k: usize, x: f64) -> Motion {
         let snap = &self.snapshots[k];
@@ -615,7 +627,7 @@ impl Response {
         for ((mode, [q, v]), f) in beam.modes.iter().zip(&snap.state).zip(&snap.force) {
             let (phi, _, curvature) = mode.shape.at(xi);
             let w2 = mode.omega * mode.omega;
-            let dynamic = q - f / w2;
+            let dynamic = dynamic_amplitude(mode, *q, *f);
             let accel = f - 2.0 * beam.damping * mode.omega * v - w2 * q;
             motion.deflection += dynamic * phi;
             motion.velocity += v * phi;
@@ -625,6 +637,12 @@ impl Response {
         }
         motion
     }
+}
+
+/// The part of modal coordinate q that the static solution of the same forces does not hold:
+/// q − f/ω², f the modal force (acceleration) at that instant.
+fn dynamic_amplitude(mode: &Mode, q: f64, f: f64) -> f64 {
+    q - f / (mode.omega * mode.omega)
 }
 
 #[cfg(test)]

@@ -109,6 +109,11 @@ pub struct BeamSpec {
     /// holds its static shape in every frame.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motion: Option<BeamMotion>,
+    /// In a frame of a sequence: the dynamic part of the deflection at the frame's instant,
+    /// (mode number, amplitude in metres of the normalised mode shape), added to the static
+    /// solution of `loads` (which then hold the loads acting at that instant). Empty otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub frame_modes: Vec<(u32, f64)>,
     /// The recipe call that last changed the beam's mechanics (its construction, supports,
     /// loads, target or material constants), where errors found when solving it point.
     #[serde(skip)]
@@ -140,6 +145,7 @@ impl BeamSpec {
             supports_drawn: false,
             damage_asked: DamageRequest::default(),
             motion: None,
+            frame_modes: Vec::new(),
             declared_at: None,
         }
     }

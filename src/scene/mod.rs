@@ -163,10 +163,13 @@ impl DatasetSpec {
         u32::try_from(self.camera.images(self.views)).unwrap_or(u32::MAX)
     }
 
-    /// Images written per sample: every camera view, clean and augmented (at most 2 × 10⁵
-    /// views × 1001, well inside u32).
+    /// Images written per sample: every camera view, clean and augmented, in every frame of a
+    /// sequence (saturating at u32::MAX).
     pub fn images_per_sample(&self) -> u32 {
-        let images = u64::from(self.cameras_per_sample()) * u64::from(self.augment.per_view());
+        let frames = self.sequence.as_ref().map_or(1, SequenceSpec::frames);
+        let images = u64::from(self.cameras_per_sample())
+            * u64::from(self.augment.per_view())
+            * u64::from(frames);
         u32::try_from(images).unwrap_or(u32::MAX)
     }
 }
