@@ -57,25 +57,25 @@ impl SequenceSpec {
         let positive = |v: f64| v.is_finite() && v > 0.0;
         if !positive(self.duration) {
             return Some(format!(
-                "sequence duration = {} s must be a positive number of seconds",
+                "sequence.duration = {} s must be a positive number of seconds",
                 self.duration
             ));
         }
         if !positive(self.fps) {
             return Some(format!(
-                "sequence fps = {} must be a positive frame rate",
+                "sequence.fps = {} must be a positive frame rate",
                 self.fps
             ));
         }
         let frames = self.duration * self.fps;
         if frames > f64::from(MAX_FRAMES) {
             return Some(format!(
-                "sequence duration × fps = {frames} frames, more than the {MAX_FRAMES} a sample may film"
+                "sequence.duration × fps = {frames} frames, more than the {MAX_FRAMES} a sample may film"
             ));
         }
         if !(positive(self.exposure) && self.exposure <= 1.0 / self.fps) {
             return Some(format!(
-                "sequence exposure = {} s must be positive and at most the frame interval 1/fps = {} s",
+                "sequence.exposure = {} s must be positive and at most the frame interval 1/fps = {} s",
                 self.exposure,
                 1.0 / self.fps
             ));
@@ -102,19 +102,19 @@ impl MountShake {
         let non_negative = |v: f64| v.is_finite() && v >= 0.0;
         if !non_negative(self.rotation) {
             return Some(format!(
-                "mount rotation = {} rad must be a finite RMS ≥ 0",
+                "sequence.mount.rotation = {} rad must be a finite RMS ≥ 0",
                 self.rotation
             ));
         }
         if !non_negative(self.translation) {
             return Some(format!(
-                "mount translation = {} m must be a finite RMS ≥ 0",
+                "sequence.mount.translation = {} m must be a finite RMS ≥ 0",
                 self.translation
             ));
         }
         if !(self.band.is_finite() && self.band > 0.0) {
             return Some(format!(
-                "mount band = {} Hz must be a positive frequency",
+                "sequence.mount.band = {} Hz must be a positive frequency",
                 self.band
             ));
         }
