@@ -125,7 +125,11 @@ mod tests {
             .map(|w| (w[0] * w[0] + w[0] * w[1] + w[1] * w[1]) / 3.0)
             .sum::<f64>()
             / (values.len() - 1) as f64;
-        assert!((mean_square.sqrt() - 2.0).abs() < 0.05, "{}", mean_square.sqrt());
+        assert!(
+            (mean_square.sqrt() - 2.0).abs() < 0.05,
+            "{}",
+            mean_square.sqrt()
+        );
         let mean = values.iter().sum::<f64>() / values.len() as f64;
         assert!(mean.abs() < 0.1, "{mean}");
     }

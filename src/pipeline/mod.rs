@@ -21,9 +21,9 @@ mod view;
 pub use crate::output::{EXIT_COMPLETE, EXIT_INCOMPLETE, EXIT_RUNNING, Status, status};
 pub use geometry::SampleGeometry;
 pub use record::{FrameRecord, ViewFacts};
-pub use sequence::{MountOffset, SampleMotion, mount_offset};
 pub use record::{RunRecord, ViewRecord, json_bytes, run_json, run_schema, view_schema};
 pub use sample::{for_each_image, prepare, write_sample};
+pub use sequence::{MountOffset, SampleMotion, mount_offset};
 pub use view::{RenderedView, SampleRenderer, view_camera};
 
 use crate::output::DatasetFolder;

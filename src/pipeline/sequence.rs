@@ -8,8 +8,8 @@
 //! files (the sample pipeline builds and writes each frame as it builds a still).
 
 use crate::cameras::Camera;
-use crate::mechanics::dynamics::{ModalBeam, Response};
 use crate::mechanics::Target;
+use crate::mechanics::dynamics::{ModalBeam, Response};
 use crate::scene::{BeamSpec, DatasetSpec, SceneSpec, SequenceSpec, SourceSite, Structure};
 use crate::seeds::{Scope, Stream};
 use glam::{DMat3, DVec3};
@@ -53,14 +53,12 @@ impl SampleMotion {
             .iter()
             .enumerate()
             .map(|(i, structure)| match structure {
-                Structure::Beam(b) if b.motion.is_some() => {
-                    moving_beam(b, &times)
-                        .map(Some)
-                        .map_err(|message| MotionError {
-                            message: format!("structure {i}: {message}"),
-                            site: b.declared_at.clone(),
-                        })
-                }
+                Structure::Beam(b) if b.motion.is_some() => moving_beam(b, &times)
+                    .map(Some)
+                    .map_err(|message| MotionError {
+                        message: format!("structure {i}: {message}"),
+                        site: b.declared_at.clone(),
+                    }),
                 _ => Ok(None),
             })
             .collect::<Result<_, _>>()?;
@@ -91,7 +89,9 @@ impl SampleMotion {
 
 fn frame_modes(beam: &BeamSpec, moving: &MovingBeam, k: usize) -> Vec<(u32, f64)> {
     match &beam.motion {
-        Some(motion) if !motion.quasi_static => moving.response.dynamic_amplitudes(&moving.modal, k),
+        Some(motion) if !motion.quasi_static => {
+            moving.response.dynamic_amplitudes(&moving.modal, k)
+        }
         _ => Vec::new(),
     }
 }

@@ -11,9 +11,7 @@ use super::diagnostics::call_site;
 use super::options::{OptResult, Options, number};
 use super::result::{Fallible, fail};
 use crate::mechanics::dynamics::{Axle, TimeLoad};
-use crate::scene::{
-    BeamMotion, BeamSpec, DEFAULT_EXPOSURE_FRACTION, MountShake, SequenceSpec,
-};
+use crate::scene::{BeamMotion, BeamSpec, DEFAULT_EXPOSURE_FRACTION, MountShake, SequenceSpec};
 use rhai::{Array, Dynamic, Engine, NativeCallContext};
 
 /// `dataset.sequence`: `#{ duration, fps, exposure, mount: #{ rotation, translation, band } }`.
@@ -61,7 +59,10 @@ fn add_load(ctx: &NativeCallContext, b: &mut BeamSpec, load: TimeLoad) -> Fallib
     if let Err(why) = load.check(b.length) {
         return fail(why);
     }
-    b.motion.get_or_insert_with(BeamMotion::default).loads.push(load);
+    b.motion
+        .get_or_insert_with(BeamMotion::default)
+        .loads
+        .push(load);
     Ok(b.clone())
 }
 
@@ -100,42 +101,27 @@ fn register_time_loads(engine: &mut Engine) {
             add_load(&ctx, b, load)
         },
     );
-    engine.register_fn(
+    // Forces at one point, each given by (position, force, start, a time): `duration` of a
+    // hammer blow, `rise` of a ramp.
+    point_history(
+        engine,
         "hammer",
-        |ctx: NativeCallContext,
-         b: &mut BeamSpec,
-         at: Dynamic,
-         force: Dynamic,
-         start: Dynamic,
-         duration: Dynamic|
-         -> Fallible<BeamSpec> {
-            let load = TimeLoad::Pulse {
-                at: number(&at, "hammer position")?,
-                force: number(&force, "hammer force")?,
-                start: number(&start, "hammer start")?,
-                duration: number(&duration, "hammer duration")?,
-            };
-            add_load(&ctx, b, load)
+        "duration",
+        |at, force, start, duration| TimeLoad::Pulse {
+            at,
+            force,
+            start,
+            duration,
         },
     );
-    engine.register_fn(
-        "ramp",
-        |ctx: NativeCallContext,
-         b: &mut BeamSpec,
-         at: Dynamic,
-         force: Dynamic,
-         start: Dynamic,
-         rise: Dynamic|
-         -> Fallible<BeamSpec> {
-            let load = TimeLoad::Ramp {
-                at: number(&at, "ramp position")?,
-                force: number(&force, "ramp force")?,
-                start: number(&start, "ramp start")?,
-                rise: number(&rise, "ramp rise")?,
-            };
-            add_load(&ctx, b, load)
-        },
-    );
+    point_history(engine, "ramp", "rise", |at, force, start, rise| {
+        TimeLoad::Ramp {
+            at,
+            force,
+            start,
+            rise,
+        }
+    });
     engine.register_fn(
         "ambient",
         |ctx: NativeCallContext,
@@ -157,6 +143,33 @@ fn register_time_loads(engine: &mut Engine) {
                 step,
                 values,
             };
+            add_load(&ctx, b, load)
+        },
+    );
+}
+
+/// Registers `name(at, force, start, <time>)` on beams, adding the force history `make` builds.
+fn point_history(
+    engine: &mut Engine,
+    name: &'static str,
+    time: &'static str,
+    make: fn(f64, f64, f64, f64) -> TimeLoad,
+) {
+    engine.register_fn(
+        name,
+        move |ctx: NativeCallContext,
+              b: &mut BeamSpec,
+              at: Dynamic,
+              force: Dynamic,
+              start: Dynamic,
+              span: Dynamic|
+              -> Fallible<BeamSpec> {
+            let load = make(
+                number(&at, &format!("{name} position"))?,
+                number(&force, &format!("{name} force"))?,
+                number(&start, &format!("{name} start"))?,
+                number(&span, &format!("{name} {time}"))?,
+            );
             add_load(&ctx, b, load)
         },
     );
@@ -210,9 +223,7 @@ fn register_modal_model(engine: &mut Engine) {
             let n = match n.as_int() {
                 Ok(n) if (1..=200).contains(&n) => n as u32,
                 _ => {
-                    return fail(format!(
-                        "modes = {n} must be a whole number from 1 to 200"
-                    ));
+                    return fail(format!("modes = {n} must be a whole number from 1 to 200"));
                 }
             };
             Ok(edit_motion(&ctx, b, |m| m.modes = n))

@@ -21,15 +21,15 @@ pub use augment::{
     WarpSpec, operation_path,
 };
 pub use beam::{BeamSpec, Tessellation};
-pub use sequence::{
-    BeamMotion, DEFAULT_DAMPING, DEFAULT_EXPOSURE_FRACTION, DEFAULT_MODES, MAX_FRAMES, MountShake,
-    STEEL_DENSITY, SequenceSpec,
-};
 pub use frame::FrameSpec;
 pub use ground::{GROUND_PART, GroundSpec, ground_radius};
 pub use light::{
     Background, EnvironmentLightSpec, EnvironmentSpec, GroundBounceSpec, ImageRecord, LightSpec,
     OUTDOOR_AMBIENT, SUN_DIAMETER, SkyGradient, SkySpec, SunSpec, Tone,
+};
+pub use sequence::{
+    BeamMotion, DEFAULT_DAMPING, DEFAULT_EXPOSURE_FRACTION, DEFAULT_MODES, MAX_FRAMES, MountShake,
+    STEEL_DENSITY, SequenceSpec,
 };
 
 use crate::cameras::CameraRig;
