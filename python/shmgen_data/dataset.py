@@ -105,7 +105,8 @@ UNIT_TOLERANCE = 1e-3
 #: A view as a sample lists it: (view index, copy index or None, stem, absolute paths by kind).
 _Entry = tuple[int, int | None, str, dict[str, Path]]
 
-_STEM = re.compile(r"^(\d+)(?:_(\d+)(?:a(\d+))?)?$")
+# sample, then view and copy for a view's file, then frame for a sequence (docs/sequences.md).
+_STEM = re.compile(r"^(\d+)(?:_(\d+)(?:a(\d+))?)?(?:_f(\d+))?$")
 
 
 def _kind_of(relative: str) -> tuple[str, str]:
@@ -768,7 +769,7 @@ class Dataset(Sequence[View]):
         return result
 
     def _sample(self, index: int, files: list[str], copies: bool) -> Sample:
-        views: dict[tuple[int, int], _Entry] = {}
+        views: dict[tuple[int, int, int], _Entry] = {}
         own: dict[str, Path] = {}
         where = f"{self.root}/manifest.jsonl: sample {index}"
         for relative in sorted(set(files)):  # plain relative paths (checked by _read_manifest)
@@ -777,12 +778,15 @@ class Dataset(Sequence[View]):
             match = _STEM.match(stem)
             if match is None or int(match.group(1)) != index:
                 raise DatasetError(f"{where} lists {relative}, not a file of sample {index}")
+            frame = -1 if match.group(4) is None else int(match.group(4))
             if match.group(2) is None:
-                own[kind] = path
+                # A frame's own files (meshes) are keyed by frame: "f0042.mesh.ply".
+                own[kind if frame < 0 else f"f{frame:04}.{kind}"] = path
                 continue
             view = int(match.group(2))
             copy = None if match.group(3) is None else int(match.group(3))
-            views.setdefault((view, -1 if copy is None else copy), (view, copy, stem, {}))[3][kind] = path
+            key = (view, -1 if copy is None else copy, frame)
+            views.setdefault(key, (view, copy, stem, {}))[3][kind] = path
         entries = [views[key] for key in sorted(views) if copies or views[key][1] is None]
         return Sample(self.root, index, entries, own, self._files)
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from conftest import REPO, make
 from shmgen_data import Dataset, MissingFileError, read_ply
 
 #: The README's file list: output → (shape after (H, W), dtype).
@@ -229,3 +230,20 @@ def test_an_output_not_written_is_named(deformation):
     with pytest.raises(KeyError, match="unknown output 'colour'"):
         view.load("colour")
     assert Dataset(deformation, copies=False)[0].stem == "000000_00"
+
+
+def test_every_frame_of_a_sequence_is_a_view_with_its_time_and_meshes(tmp_path):
+    """scripts/monitoring.rhai, 6 frames of 2 fixed cameras: 12 views, each frame's record
+    carries its time, and each frame's own meshes are kept apart (`f0003.mesh.ply`)."""
+    out = make(tmp_path, None, "monitoring", recipe=REPO / "scripts" / "monitoring.rhai",
+               settings={"samples": 1, "size": 32, "duration": 0.1,
+                         "outputs": "rgb,depth,displacement,mesh"})
+    sample = Dataset(out).samples[0]
+    views = sample.views
+    assert len(views) == 12
+    frames = sorted((v.view, v.record["frame"]["index"]) for v in views)
+    assert frames == [(view, k) for view in (0, 1) for k in range(6)]
+    for v in views:
+        assert v.record["frame"]["time"] == v.record["frame"]["index"] / 60.0
+        assert v.displacement.shape == (32, 32, 3)
+    assert {f"f{k:04}.mesh.ply" for k in range(6)} <= set(sample.files)

@@ -53,7 +53,11 @@ pub fn beam_radius(beam: &BeamSpec) -> f64 {
 /// Solves the mechanics and meshes the deformed beam. `pixel_footprint` is the size of a
 /// pixel (metres) at the nearest distance a camera can be from this beam.
 pub fn mesh_beam(beam: &BeamSpec, pixel_footprint: f64) -> Result<BuiltBeam, String> {
-    let deformation = Deformation::solve(&problem(beam))?;
+    let deformation = Deformation::solve(&problem(beam))?.plus_modes(
+        beam.support,
+        beam.length,
+        &beam.frame_modes,
+    );
     let (damaged, damage) = match beam.damage_asked.is_empty() {
         true => (None, None),
         false => {

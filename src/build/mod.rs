@@ -143,6 +143,48 @@ pub fn build_sample(
     index: u64,
     scene: SceneSpec,
 ) -> Result<BuiltSample, BuildError> {
+    build_framed(dataset, index, scene, None)
+}
+
+/// Where a sample's cameras aim and its ground lies: by default the deformed scene's bounding
+/// sphere and lowest point. Every frame of a sequence takes its reference's (the structures
+/// under their static loads alone), so fixed cameras, light and ground stay put while the
+/// structures move.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Framing {
+    /// Centre of the sphere the cameras aim at.
+    pub centre: DVec3,
+    /// Its radius, metres.
+    pub radius: f64,
+    /// Lowest point of the structures, world z (where a ground without a height lies).
+    pub lowest: f64,
+}
+
+impl BuiltSample {
+    /// This sample's framing, for the frames of its sequence.
+    pub fn framing(&self) -> Framing {
+        let structures = self.structure_mesh().0;
+        let lowest = structures
+            .positions
+            .iter()
+            .map(|p| p.z)
+            .fold(f64::INFINITY, f64::min);
+        Framing {
+            centre: self.centre,
+            radius: self.radius,
+            lowest: self.ground.map_or(lowest, |g| g.height),
+        }
+    }
+}
+
+/// [`build_sample`], framed by `framing` when given (a frame of a sequence) rather than by its
+/// own deformed geometry.
+pub fn build_framed(
+    dataset: &DatasetSpec,
+    index: u64,
+    scene: SceneSpec,
+    framing: Option<Framing>,
+) -> Result<BuiltSample, BuildError> {
     let mut assembled = Assembled {
         structures: scene.structures.len(),
         ..Assembled::default()
@@ -229,17 +271,23 @@ pub fn build_sample(
             )));
         }
     }
-    let (centre, radius) = assembled
-        .mesh
-        .bounding_sphere()
-        .expect("a scene has at least one structure");
+    let (centre, radius) = match framing {
+        Some(f) => (f.centre, f.radius),
+        None => assembled
+            .mesh
+            .bounding_sphere()
+            .expect("a scene has at least one structure"),
+    };
     if !(radius > 0.0 && radius.is_finite()) {
         return Err(BuildError::whole_scene(format!(
             "the scene has no extent (radius {radius})"
         )));
     }
     let ground = dataset.ground.as_ref().map(|spec| {
-        let lowest = assembled.mesh.bounds().map_or(0.0, |(lo, _)| lo.z);
+        let lowest = match framing {
+            Some(f) => f.lowest,
+            None => assembled.mesh.bounds().map_or(0.0, |(lo, _)| lo.z),
+        };
         let height = spec.height.unwrap_or(lowest);
         let built = BuiltGround {
             height,

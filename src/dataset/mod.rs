@@ -63,8 +63,10 @@ pub struct View {
     pub view: u32,
     /// Augmented copy index, None for the clean view.
     pub copy: Option<u32>,
-    /// The file-name stem shared by its files, e.g. `000003_01` or `000003_01a0`; WebDataset's
-    /// key (no dots).
+    /// The frame of a sequence (docs/sequences.md), None for a still.
+    pub frame: Option<u32>,
+    /// The file-name stem shared by its files, e.g. `000003_01`, `000003_01a0` or
+    /// `000003_01_f0042`; WebDataset's key (no dots).
     pub stem: String,
     /// Its files relative to the dataset root, sorted by name (the record `…json` included).
     pub files: Vec<String>,
@@ -118,13 +120,20 @@ enum Owner {
         sample: u64,
         view: u32,
         copy: Option<u32>,
+        frame: Option<u32>,
     },
     Sample(u64),
 }
 
-/// Parses a file's stem: `000003` (the sample), `000003_01` (view 1), `000003_01a2` (copy 2).
+/// Parses a file's stem: `000003` (the sample), `000003_01` (view 1), `000003_01a2` (copy 2),
+/// with `_f0042` after it in frame 42 of a sequence (`000003_f0042` is the sample's own file in
+/// that frame, grouped with the sample's files).
 fn owner_of(stem: &str) -> Option<Owner> {
     let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    let (stem, frame) = match stem.rsplit_once("_f") {
+        Some((rest, frame)) if digits(frame) => (rest, Some(frame.parse().ok()?)),
+        _ => (stem, None),
+    };
     let Some((sample, rest)) = stem.split_once('_') else {
         return digits(stem)
             .then(|| stem.parse().ok().map(Owner::Sample))
@@ -144,6 +153,7 @@ fn owner_of(stem: &str) -> Option<Owner> {
             Some(c) => Some(c.parse().ok()?),
             None => None,
         },
+        frame,
     })
 }
 
@@ -463,7 +473,7 @@ fn each_line(
 fn sample_of(index: u64, mut files: Vec<String>) -> Result<Sample> {
     files.sort();
     files.dedup();
-    let mut views: BTreeMap<(u32, Option<u32>), View> = BTreeMap::new();
+    let mut views: BTreeMap<(u32, Option<u32>, Option<u32>), View> = BTreeMap::new();
     let mut own = Vec::new();
     for file in files {
         if file.contains("..") || file.starts_with('/') || file.contains('\\') {
@@ -473,11 +483,17 @@ fn sample_of(index: u64, mut files: Vec<String>) -> Result<Sample> {
         let stem = name.split('.').next().unwrap_or(name);
         match owner_of(stem) {
             Some(Owner::Sample(s)) if s == index => own.push(file),
-            Some(Owner::View { sample, view, copy }) if sample == index => {
-                let entry = views.entry((view, copy)).or_insert_with(|| View {
+            Some(Owner::View {
+                sample,
+                view,
+                copy,
+                frame,
+            }) if sample == index => {
+                let entry = views.entry((view, copy, frame)).or_insert_with(|| View {
                     sample,
                     view,
                     copy,
+                    frame,
                     stem: stem.to_string(),
                     files: Vec::new(),
                 });
@@ -508,18 +524,38 @@ mod tests {
             Some(Owner::View {
                 sample: 12,
                 view: 3,
-                copy: None
+                copy: None,
+                frame: None
             })
         ));
+        assert!(matches!(
+            owner_of("000012_03a1_f0042"),
+            Some(Owner::View {
+                sample: 12,
+                view: 3,
+                copy: Some(1),
+                frame: Some(42)
+            })
+        ));
+        assert!(matches!(owner_of("000012_f0007"), Some(Owner::Sample(12))));
         assert!(matches!(
             owner_of("1000000_10a2"),
             Some(Owner::View {
                 sample: 1_000_000,
                 view: 10,
-                copy: Some(2)
+                copy: Some(2),
+                frame: None
             })
         ));
-        for bad in ["", "x", "000012_", "000012_03a", "000012_x3", "12_3b1"] {
+        for bad in [
+            "",
+            "x",
+            "000012_",
+            "000012_03a",
+            "000012_x3",
+            "12_3b1",
+            "000012_03_f",
+        ] {
             assert!(owner_of(bad).is_none(), "{bad}");
         }
         assert_eq!(

@@ -22,10 +22,11 @@
 
 use super::{LinearBeam, Load, ModeShape, Support};
 use nalgebra::Matrix4;
+use serde::Serialize;
 use std::f64::consts::PI;
 
 /// One axle of a vehicle: its distance behind the front axle (m) and its force (N, downward).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Axle {
     /// Distance behind the leading axle, metres (0 for the leading axle).
     pub behind: f64,
@@ -35,7 +36,8 @@ pub struct Axle {
 
 /// A force history acting on the beam. Times in seconds, positions in metres from x = 0,
 /// forces in N (positive downward).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+#[serde(tag = "kind", rename_all = "snake_case")]
 pub enum TimeLoad {
     /// Axles crossing from x = 0 towards x = L at constant speed; each acts while on the span.
     Vehicle {
@@ -409,8 +411,8 @@ impl ModalBeam {
     }
 
     /// The loads acting just after time t as static span loads (outputs are right-continuous,
-    /// like the modal forces stored with them).
-    fn static_loads(&self, loads: &[TimeLoad], t: f64) -> Vec<Load> {
+    /// like the modal forces stored with them): the static part of the deflection at t.
+    pub fn static_loads(&self, loads: &[TimeLoad], t: f64) -> Vec<Load> {
         self.point_forces(loads, t, Side::After)
             .into_iter()
             .map(|(at, force)| Load::Point { at, force })
@@ -614,6 +616,18 @@ impl Response {
         self.snapshots[k].state.iter().map(|s| s[0]).collect()
     }
 
+    /// The dynamic part of the deflection at output `k`: (mode number from 1, q_n − f_n/ω_n²),
+    /// the amplitude of each normalised mode shape to add to the static deflection of
+    /// `ModalBeam::static_loads` at that instant (the mode-acceleration method).
+    pub fn dynamic_amplitudes(&self, beam: &ModalBeam, k: usize) -> Vec<(u32, f64)> {
+        let snap = &self.snapshots[k];
+        (1..)
+            .zip(&beam.modes)
+            .zip(snap.state.iter().zip(&snap.force))
+            .map(|((n, mode), ([q, _], f))| (n, dynamic_amplitude(mode, *q, *f)))
+            .collect()
+    }
+
     /// The motion at x (m) at output `k`, by the mode-acceleration method.
     pub fn at(&self, beam: &ModalBeam, loads: &[TimeLoad], k: usize, x: f64) -> Motion {
         let snap = &self.snapshots[k];
@@ -635,7 +649,7 @@ impl Response {
         for ((mode, [q, v]), f) in beam.modes.iter().zip(&snap.state).zip(&snap.force) {
             let (phi, _, curvature) = mode.shape.at(xi);
             let w2 = mode.omega * mode.omega;
-            let dynamic = q - f / w2;
+            let dynamic = dynamic_amplitude(mode, *q, *f);
             let accel = f - 2.0 * beam.damping * mode.omega * v - w2 * q;
             motion.deflection += dynamic * phi;
             motion.velocity += v * phi;
@@ -645,6 +659,12 @@ impl Response {
         }
         motion
     }
+}
+
+/// The part of modal coordinate q that the static solution of the same forces does not hold:
+/// q − f/ω², f the modal force (acceleration) at that instant.
+fn dynamic_amplitude(mode: &Mode, q: f64, f: f64) -> f64 {
+    q - f / (mode.omega * mode.omega)
 }
 
 #[cfg(test)]

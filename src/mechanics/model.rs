@@ -237,6 +237,12 @@ pub(super) enum Axis {
         beam: TensionBeam,
         scale: f64,
     },
+    /// A frame of a beam in motion: a static solution plus a sum of mode shapes.
+    Superposed {
+        base: Box<Axis>,
+        modes: Vec<(ModeShape, f64)>,
+        length: f64,
+    },
 }
 
 /// The solved beam: deflection of its axis in metres, and its labels.
@@ -247,37 +253,10 @@ pub struct Deformation {
     pub labels: Labels,
 }
 
-/// Stations used to locate extremes (plus every load point).
-const SEARCH_POINTS: usize = 512;
-
-impl Deformation {
-    /// Solves `p` with the theory it asks for (or the one `auto` picks) and derives the labels.
-    /// Fails when a target deflection cannot be reached, when static loads and a vibration snapshot
-    /// are mixed, when a theory or axial condition is asked for a case it does not cover, or when
-    /// the result lies outside what the theory that made it can represent (docs/mechanics.md
-    /// §5.3).
-    pub fn solve(p: &BeamProblem) -> Result<Deformation, String> {
-        check_axial(p)?;
-        if !p.vibration.is_empty() {
-            if !p.loads.is_empty() {
-                return Err(
-                    "a beam takes either static loads or a vibration snapshot, not both".into(),
-                );
-            }
-            let xs = modal_points(p);
-            let d = modal(p, &xs);
-            range::check(p, &d, &xs)?;
-            return Ok(d);
-        }
-        let xs = search_points(p);
-        let d = statics(p, &xs)?;
-        range::check(p, &d, &xs)?;
-        Ok(d)
-    }
-
+impl Axis {
     /// The deflected axis at x, in metres and radians-as-slopes.
-    pub fn at(&self, x: f64) -> super::AxisPoint {
-        match &self.axis {
+    fn at(&self, x: f64) -> super::AxisPoint {
+        match self {
             Axis::Static { beam, scale } => {
                 let s = beam.at(x);
                 super::AxisPoint {
@@ -297,17 +276,26 @@ impl Deformation {
                 }
             }
             Axis::Modal { modes, length } => {
-                let (v, slope) = modes
-                    .iter()
-                    .fold((0.0, 0.0), |(v, slope), (mode, amplitude)| {
-                        let (phi, dphi, _) = mode.at(x / length);
-                        (v + amplitude * phi, slope + amplitude * dphi / length)
-                    });
+                let (v, slope) = modal_at(modes, *length, x);
                 super::AxisPoint {
                     v,
                     slope,
                     rotation: slope,
                     axial: None,
+                }
+            }
+            Axis::Superposed {
+                base,
+                modes,
+                length,
+            } => {
+                let (v, slope) = modal_at(modes, *length, x);
+                let b = base.at(x);
+                super::AxisPoint {
+                    v: b.v + v,
+                    slope: b.slope + slope,
+                    rotation: b.rotation + slope,
+                    axial: b.axial,
                 }
             }
             Axis::Elastica {
@@ -341,11 +329,86 @@ impl Deformation {
             }
         }
     }
+}
 
+/// Deflection and slope of Σ A_n φ_n(x/L) at x.
+fn modal_at(modes: &[(ModeShape, f64)], length: f64, x: f64) -> (f64, f64) {
+    modes
+        .iter()
+        .fold((0.0, 0.0), |(v, slope), (mode, amplitude)| {
+            let (phi, dphi, _) = mode.at(x / length);
+            (v + amplitude * phi, slope + amplitude * dphi / length)
+        })
+}
+
+/// Stations used to locate extremes (plus every load point).
+const SEARCH_POINTS: usize = 512;
+
+impl Deformation {
+    /// Solves `p` with the theory it asks for (or the one `auto` picks) and derives the labels.
+    /// Fails when a target deflection cannot be reached, when static loads and a vibration snapshot
+    /// are mixed, when a theory or axial condition is asked for a case it does not cover, or when
+    /// the result lies outside what the theory that made it can represent (docs/mechanics.md
+    /// §5.3).
+    pub fn solve(p: &BeamProblem) -> Result<Deformation, String> {
+        check_axial(p)?;
+        if !p.vibration.is_empty() {
+            if !p.loads.is_empty() {
+                return Err(
+                    "a beam takes either static loads or a vibration snapshot, not both".into(),
+                );
+            }
+            let xs = modal_points(p);
+            let d = modal(p, &xs);
+            range::check(p, &d, &xs)?;
+            return Ok(d);
+        }
+        let xs = search_points(p);
+        let d = statics(p, &xs)?;
+        range::check(p, &d, &xs)?;
+        Ok(d)
+    }
+
+    /// The deflected axis at x, in metres and radians-as-slopes.
+    pub fn at(&self, x: f64) -> super::AxisPoint {
+        self.axis.at(x)
+    }
+
+    /// This solution plus a sum of mode shapes Σ A_n φ_n(x/L) (each φ_n normalised to a peak of
+    /// 1, as vibration snapshots are): a frame of a beam in motion by the mode-acceleration
+    /// method — the static solution of the loads acting at that instant plus the modes' dynamic
+    /// part (`dynamics::Response::dynamic_amplitudes`). The peak deflection label is found again
+    /// on the sum; the moment and stress labels stay those of the static part. No amplitudes:
+    /// the solution unchanged, bit for bit.
+    pub fn plus_modes(self, support: Support, length: f64, amplitudes: &[(u32, f64)]) -> Self {
+        if amplitudes.is_empty() {
+            return self;
+        }
+        let modes: Vec<(ModeShape, f64)> = amplitudes
+            .iter()
+            .map(|&(n, a)| (ModeShape::new(support, n), a))
+            .collect();
+        let highest = amplitudes.iter().map(|m| m.0 as usize).max().unwrap_or(1);
+        let points = SEARCH_POINTS.max(32 * highest);
+        let xs: Vec<f64> = (0..=points)
+            .map(|i| length * i as f64 / points as f64)
+            .collect();
+        let mut d = Deformation {
+            axis: Axis::Superposed {
+                base: Box::new(self.axis),
+                modes,
+                length,
+            },
+            labels: self.labels,
+        };
+        let (max, at) = extreme(&xs, length, |x| d.at(x).v);
+        (d.labels.max_deflection, d.labels.max_deflection_at) = (max, at);
+        d
+    }
     /// Largest |dψ/dx| (curvature of the sections' rotation), for tessellation.
     pub fn max_curvature(&self, length: f64) -> f64 {
         let highest_mode = match &self.axis {
-            Axis::Modal { modes, .. } => {
+            Axis::Modal { modes, .. } | Axis::Superposed { modes, .. } => {
                 modes.iter().map(|(m, _)| m.beta_l()).fold(0.0, f64::max) as usize
             }
             Axis::Static { .. } | Axis::Elastica { .. } | Axis::Tension { .. } => 0,

@@ -55,8 +55,27 @@ pub fn sample_file(sample: u64, kind: &str) -> String {
     format!("samples/{:04}/{sample:06}.{kind}", sample / 1000)
 }
 
+/// The path of a sample's or view's file (`view_file`, `sample_file`) in frame `frame` of a
+/// sequence: `_f{frame:04}` after the sample and view, before the kind, so the frames of a view
+/// sort together and WebDataset keys stay free of dots (`000007_01_f0042.rgb.png`).
+pub fn in_frame(path: &str, frame: u32) -> String {
+    let name_start = path.rfind('/').map_or(0, |i| i + 1);
+    let dot = path[name_start..]
+        .find('.')
+        .map_or(path.len(), |i| name_start + i);
+    format!("{}_f{frame:04}{}", &path[..dot], &path[dot..])
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn frame_files_keep_the_kind_after_the_first_dot() {
+        let f = super::in_frame(&super::view_file(1234, 7, Some(2), "depth.exr"), 42);
+        assert_eq!(f, "samples/0001/001234_07a2_f0042.depth.exr");
+        let m = super::in_frame(&super::sample_file(3, "mesh.ply"), 0);
+        assert_eq!(m, "samples/0000/000003_f0000.mesh.ply");
+    }
+
     #[test]
     fn layout_keys_have_no_dots_before_the_kind() {
         // WebDataset splits the key at the first dot of the file name.

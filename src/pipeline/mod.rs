@@ -14,14 +14,16 @@ mod heap;
 mod progress;
 mod record;
 mod sample;
+mod sequence;
 mod view;
 
 /// `shmgen status`: how far the shards of a run have got (read from the folder `output` owns).
 pub use crate::output::{EXIT_COMPLETE, EXIT_INCOMPLETE, EXIT_RUNNING, Status, status};
 pub use geometry::SampleGeometry;
-pub use record::ViewFacts;
+pub use record::{FrameRecord, ViewFacts};
 pub use record::{RunRecord, ViewRecord, json_bytes, run_json, run_schema, view_schema};
 pub use sample::{for_each_image, prepare, write_sample};
+pub use sequence::{MountOffset, SampleMotion, mount_offset};
 pub use view::{RenderedView, SampleRenderer, view_camera};
 
 use crate::output::DatasetFolder;

@@ -147,6 +147,29 @@ pub struct ViewRecord<'a> {
     /// drawn; left out when the dataset declares no sensor effects.
     #[serde(default, skip_serializing_if = "<[Applied]>::is_empty")]
     pub sensor: &'a [Applied],
+    /// For a frame of a sequence (`dataset.sequence`): which frame and when; absent for a still.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame: Option<FrameRecord>,
+}
+
+/// Which frame of a sequence a view shows and when. Every geometric layer and label is the
+/// structure at `time`; `displacement` is still measured from the unloaded structure.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct FrameRecord {
+    /// Frame index k, from 0.
+    pub index: u32,
+    /// Its instant t = k / fps, seconds from the start of the sequence.
+    pub time: f64,
+    /// How long the shutter was open, seconds (recorded; the image is rendered at `time`).
+    pub exposure: f64,
+    /// Frames in the sequence.
+    pub frames: u32,
+    /// Frame rate, frames per second.
+    pub fps: f64,
+    /// How this view's camera mount was displaced at this frame, in the camera's own axes
+    /// (already in `camera`'s poses); absent when the mounts are still.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mount: Option<super::sequence::MountOffset>,
 }
 
 /// How an augmented copy was made. Its camera (K and pose) is the one its files agree with.
@@ -527,6 +550,8 @@ pub struct SampleRecord<'a> {
     pub segmentation: Segmentation,
     /// The sample's own files (meshes, point cloud) by kind, once written.
     pub files: BTreeMap<&'static str, String>,
+    /// The frame of a sequence this record describes, if it is one.
+    pub frame: Option<FrameRecord>,
 }
 
 /// Pretty JSON with a final newline, as every record is written; a record holding a
@@ -671,6 +696,7 @@ impl<'a> SampleRecord<'a> {
                 encoding: "PNG grey, 8-bit when every id fits, else 16-bit; 0 = background",
             },
             files: BTreeMap::new(),
+            frame: None,
         }
     }
 
@@ -776,6 +802,10 @@ impl<'a> SampleRecord<'a> {
             visibility,
             augmentation: facts.augmentation,
             sensor: facts.sensor,
+            frame: self.frame.map(|f| FrameRecord {
+                mount: super::sequence::mount_offset(&recipe.dataset, sample.index, view, f.time),
+                ..f
+            }),
         }
     }
 }

@@ -5,15 +5,17 @@
 use super::augmented::{Applied, AugmentedView, copy_camera};
 use super::finite::check_finite;
 use super::geometry::SampleGeometry;
-use super::record::{AugmentationRecord, SampleRecord, ViewFacts, json_bytes};
+use super::record::{AugmentationRecord, FrameRecord, SampleRecord, ViewFacts, json_bytes};
+use super::sequence::{SampleMotion, mount_offset, shaken};
 use super::view::{RenderedLayers, SampleRenderer, view_camera};
-use crate::build::{BuiltSample, build_sample};
+use crate::build::{BuiltSample, build_framed, build_sample};
 use crate::output::{
-    MAX_SEGMENTATION_ID, SAMPLE_WRITERS, SampleStage, ViewLayers, WRITERS, sample_file, view_file,
+    MAX_SEGMENTATION_ID, SAMPLE_WRITERS, SampleStage, ViewLayers, WRITERS, in_frame, sample_file,
+    view_file,
 };
 use crate::recipe::Recipe;
 use crate::render::SharedTraceMeshes;
-use crate::scene::{DatasetSpec, GeometryMode};
+use crate::scene::{DatasetSpec, GeometryMode, SequenceSpec};
 use anyhow::{Result, bail};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -40,7 +42,21 @@ pub fn prepare(recipe: &Recipe, index: u64) -> Result<BuiltSample> {
         }
     }
     check_segmentation(recipe, &sample)?;
+    if let Some(sequence) = &recipe.dataset.sequence {
+        sample_motion(recipe, &sample, sequence)?;
+    }
     Ok(sample)
+}
+
+/// What the structures of `sample` do over `sequence`; an error points at the beam's call.
+fn sample_motion(
+    recipe: &Recipe,
+    sample: &BuiltSample,
+    sequence: &SequenceSpec,
+) -> Result<SampleMotion> {
+    let context = format!("while integrating the motion of sample {}", sample.index);
+    SampleMotion::new(&sample.scene, sequence)
+        .map_err(|e| recipe.locate(&e.message, e.site.as_ref(), &context).into())
 }
 
 /// Segmentation images hold ids up to 16 bits: a scene with more parts or structures than
@@ -69,6 +85,10 @@ fn check_segmentation(recipe: &Recipe, sample: &BuiltSample) -> Result<()> {
 /// run's last sample, or a run of fewer samples than threads, still keeps every core busy),
 /// and their files are staged in view order after each group: the staging, and the first
 /// error reported, are the same on any thread count, and memory holds one group's files.
+///
+/// A sample of a sequence writes every frame so, in order: the structures as they are at the
+/// frame's instant, filmed by the same cameras (framed by the sample as built, its static
+/// loads alone), each file named with the frame (`output::in_frame`).
 pub fn write_sample(
     recipe: &Recipe,
     sample: &BuiltSample,
@@ -76,17 +96,54 @@ pub fn write_sample(
     stage: &mut SampleStage,
 ) -> Result<u32> {
     let dataset = &recipe.dataset;
+    let Some(sequence) = &dataset.sequence else {
+        write_still(recipe, sample, shared, stage, None)?;
+        return Ok(dataset.images_per_sample());
+    };
+    let motion = sample_motion(recipe, sample, sequence)?;
+    let framing = sample.framing();
+    let context = format!("while building the frames of sample {}", sample.index);
+    for k in 0..motion.frames() {
+        let scene = motion.scene_at(&sample.scene, k);
+        let frame = build_framed(dataset, sample.index, scene, Some(framing))
+            .map_err(|e| recipe.locate(&e.message, e.site.as_ref(), &context))?;
+        let index = k as u32;
+        let record = FrameRecord {
+            index,
+            time: sequence.time(index),
+            exposure: sequence.exposure,
+            frames: sequence.frames(),
+            fps: sequence.fps,
+            mount: None,
+        };
+        write_still(recipe, &frame, shared, stage, Some(record))?;
+    }
+    Ok(dataset.images_per_sample())
+}
+
+/// Writes one still of the sample: its own files and every view, clean and augmented; in a
+/// sequence, frame `frame` of it.
+fn write_still(
+    recipe: &Recipe,
+    sample: &BuiltSample,
+    shared: &SharedTraceMeshes,
+    stage: &mut SampleStage,
+    frame: Option<FrameRecord>,
+) -> Result<()> {
+    let dataset = &recipe.dataset;
     let trace_mesh = shared.get(&sample.mesh, sample.structure_triangles());
     let renderer = SampleRenderer::with_trace_mesh(dataset, sample, trace_mesh);
     let mut record = SampleRecord::new(sample);
-    record.files = write_sample_files(dataset, sample, stage)?;
+    record.frame = frame;
+    record.files = write_sample_files(dataset, sample, stage, frame.map(|f| f.index))?;
     let views: Vec<u32> = (0..dataset.cameras_per_sample()).collect();
     for group in views.chunks(rayon::current_num_threads().max(1)) {
         let encoded: Vec<Result<Vec<StagedFile>>> = group
             .par_iter()
             .map(|&view| {
                 let mut files = Vec::new();
-                for_each_image(&renderer, view, |layers, copy, facts| {
+                let time = frame.map(|f| f.time);
+                for_each_image_at(&renderer, view, time, |layers, copy, facts| {
                     files.extend(encode_view(
                         recipe,
                         (sample, &record),
@@ -104,7 +161,7 @@ pub fn write_sample(
             }
         }
     }
-    Ok(dataset.images_per_sample())
+    Ok(())
 }
 
 /// A file of a view: its path in the dataset and its bytes.
@@ -115,11 +172,25 @@ type StagedFile = (String, Vec<u8>);
 pub fn for_each_image(
     renderer: &SampleRenderer,
     view: u32,
+    each: impl FnMut(&dyn RenderedLayers, Option<u32>, ViewFacts) -> Result<()>,
+) -> Result<()> {
+    for_each_image_at(renderer, view, None, each)
+}
+
+/// [`for_each_image`] at instant `time` of a sequence (None for a still): the camera's mount
+/// is displaced as the sequence's mount shake has it then.
+fn for_each_image_at(
+    renderer: &SampleRenderer,
+    view: u32,
+    time: Option<f64>,
     mut each: impl FnMut(&dyn RenderedLayers, Option<u32>, ViewFacts) -> Result<()>,
 ) -> Result<()> {
     let (dataset, sample) = (renderer.dataset(), renderer.sample());
     let augment = &dataset.augment;
-    let drawn = view_camera(dataset, sample, view)?;
+    let mut drawn = view_camera(dataset, sample, view)?;
+    if let Some(offset) = time.and_then(|t| mount_offset(dataset, sample.index, view, t)) {
+        drawn.camera = shaken(drawn.camera, &offset);
+    }
     let clean = renderer.view_with(view, drawn.camera, drawn);
     if augment.keep_clean {
         let facts = ViewFacts {
@@ -170,6 +241,7 @@ fn write_sample_files(
     dataset: &DatasetSpec,
     sample: &BuiltSample,
     stage: &mut SampleStage,
+    frame: Option<u32>,
 ) -> Result<BTreeMap<&'static str, String>> {
     let geometry = SampleGeometry::new(dataset, sample);
     let mut files = BTreeMap::new();
@@ -178,7 +250,7 @@ fn write_sample_files(
         .filter(|w| dataset.outputs.wants(w.output))
     {
         for (kind, bytes) in writer.files.iter().zip((writer.write)(&geometry)?) {
-            let path = sample_file(sample.index, kind);
+            let path = framed(sample_file(sample.index, kind), frame);
             stage.write(path.clone(), &bytes)?;
             files.insert(*kind, path);
         }
@@ -194,6 +266,7 @@ fn encode_view(
     facts: ViewFacts,
 ) -> Result<Vec<StagedFile>> {
     let view = facts.view;
+    let frame = record.frame.map(|f| f.index);
     let mut files = BTreeMap::new();
     let mut staged = Vec::new();
     for writer in WRITERS
@@ -202,13 +275,22 @@ fn encode_view(
     {
         let encoded = (writer.write)(layers as &dyn ViewLayers)?;
         for ((name, key), bytes) in writer.files.iter().zip(writer.keys()).zip(encoded) {
-            let path = view_file(sample.index, view, copy, name);
+            let path = framed(view_file(sample.index, view, copy, name), frame);
             files.insert(key, path.clone());
             staged.push((path, bytes));
         }
     }
     let found = layers.visibility();
     let json = json_bytes(&record.view(recipe, sample, facts, found, files))?;
-    staged.push((view_file(sample.index, view, copy, "json"), json));
+    let json_path = framed(view_file(sample.index, view, copy, "json"), frame);
+    staged.push((json_path, json));
     Ok(staged)
+}
+
+/// `path` as named in frame `frame` of a sequence; unchanged for a still.
+fn framed(path: String, frame: Option<u32>) -> String {
+    match frame {
+        Some(k) => in_frame(&path, k),
+        None => path,
+    }
 }

@@ -1,7 +1,7 @@
 //! A straight beam as a recipe declares it: section, supports, loads, theory, tessellation,
 //! material and placement. Solving and meshing it is the build stage's work.
 
-use super::{SourceSite, Tolerance};
+use super::{BeamMotion, SourceSite, Tolerance};
 use crate::materials::Material;
 use crate::mechanics::damage::DamageRequest;
 use crate::mechanics::{
@@ -105,6 +105,15 @@ pub struct BeamSpec {
     /// and what it did is in `damage` next to `labels`.
     #[serde(default, skip_serializing_if = "DamageRequest::is_empty")]
     pub damage_asked: DamageRequest,
+    /// How the beam moves over the dataset's sequence (time loads, damping, modes); absent: it
+    /// holds its static shape in every frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion: Option<BeamMotion>,
+    /// In a frame of a sequence: the dynamic part of the deflection at the frame's instant,
+    /// (mode number, amplitude in metres of the normalised mode shape), added to the static
+    /// solution of `loads` (which then hold the loads acting at that instant). Empty otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub frame_modes: Vec<(u32, f64)>,
     /// The recipe call that last changed the beam's mechanics (its construction, supports,
     /// loads, target or material constants), where errors found when solving it point.
     #[serde(skip)]
@@ -135,6 +144,8 @@ impl BeamSpec {
             yaw: 0.0,
             supports_drawn: false,
             damage_asked: DamageRequest::default(),
+            motion: None,
+            frame_modes: Vec::new(),
             declared_at: None,
         }
     }

@@ -12,6 +12,7 @@ mod beam;
 mod frame;
 mod ground;
 mod light;
+mod sequence;
 
 pub use assembly::{AssemblySpec, Bending, LabelledPattern, ShapeSpec};
 pub use augment::{
@@ -25,6 +26,10 @@ pub use ground::{GROUND_PART, GroundSpec, ground_radius};
 pub use light::{
     Background, EnvironmentLightSpec, EnvironmentSpec, GroundBounceSpec, ImageRecord, LightSpec,
     OUTDOOR_AMBIENT, SUN_DIAMETER, SkyGradient, SkySpec, SunSpec, Tone,
+};
+pub use sequence::{
+    BeamMotion, DEFAULT_DAMPING, DEFAULT_EXPOSURE_FRACTION, DEFAULT_MODES, MAX_FRAMES, MountShake,
+    STEEL_DENSITY, SequenceSpec,
 };
 
 use crate::cameras::CameraRig;
@@ -102,6 +107,9 @@ pub struct DatasetSpec {
     /// The ground the structures stand on, if any (none by default, as in the paper).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ground: Option<GroundSpec>,
+    /// The frames every sample films (`dataset.sequence`); absent: one still snapshot per view.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sequence: Option<SequenceSpec>,
 }
 
 /// How RGB evaluates the light that does not depend on the view (the recipe's
@@ -155,10 +163,13 @@ impl DatasetSpec {
         u32::try_from(self.camera.images(self.views)).unwrap_or(u32::MAX)
     }
 
-    /// Images written per sample: every camera view, clean and augmented (at most 2 × 10⁵
-    /// views × 1001, well inside u32).
+    /// Images written per sample: every camera view, clean and augmented, in every frame of a
+    /// sequence (saturating at u32::MAX).
     pub fn images_per_sample(&self) -> u32 {
-        let images = u64::from(self.cameras_per_sample()) * u64::from(self.augment.per_view());
+        let frames = self.sequence.as_ref().map_or(1, SequenceSpec::frames);
+        let images = u64::from(self.cameras_per_sample())
+            * u64::from(self.augment.per_view())
+            * u64::from(frames);
         u32::try_from(images).unwrap_or(u32::MAX)
     }
 }

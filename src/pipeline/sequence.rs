@@ -1,0 +1,228 @@
+//! The frames of a sequence: what each beam in motion does over the sequence, the scene of
+//! each frame, and how each fixed camera's mount shakes.
+//!
+//! Owns: turning a sample's scene and the dataset's `SequenceSpec` into one scene per frame
+//! (each beam's static loads plus the forces acting at the frame's instant, and the dynamic part
+//! of its deflection as mode amplitudes, which the build stage adds to the static solution),
+//! and the per-frame offset of every camera's mount. Must not touch: meshing, rendering or
+//! files (the sample pipeline builds and writes each frame as it builds a still).
+
+use crate::cameras::Camera;
+use crate::mechanics::Target;
+use crate::mechanics::dynamics::{ModalBeam, Response};
+use crate::scene::{BeamSpec, DatasetSpec, SceneSpec, SequenceSpec, SourceSite, Structure};
+use crate::seeds::{Scope, Stream};
+use glam::{DMat3, DVec3};
+use serde::Serialize;
+
+/// Integration steps per period of the fastest variation of a modal force: the force's linear
+/// interpolation between steps, the integration's only error, stays below (π/64)²/2 ≈ 0.12 % of
+/// its amplitude (`ModalBeam::respond`).
+const STEPS_PER_PERIOD: u32 = 64;
+
+/// Name of the random stream each view's mount shake is drawn from.
+const MOUNT_STREAM: &str = "mount";
+
+/// A beam in motion over the sequence: its modal model and response at every frame.
+struct MovingBeam {
+    modal: ModalBeam,
+    response: Response,
+}
+
+/// What the structures of one sample do over its sequence, ready to give each frame's scene.
+pub struct SampleMotion {
+    times: Vec<f64>,
+    /// Per structure, in scene order: the response of a beam in motion, None for the others.
+    beams: Vec<Option<MovingBeam>>,
+}
+
+/// Why a sample's motion cannot be computed, and the recipe call to point at.
+pub struct MotionError {
+    /// What is wrong, with the parameter and its value.
+    pub message: String,
+    /// Where the beam was declared, when known.
+    pub site: Option<SourceSite>,
+}
+
+impl SampleMotion {
+    /// Integrates every beam in motion of `scene` over `sequence` (from rest at t = 0).
+    pub fn new(scene: &SceneSpec, sequence: &SequenceSpec) -> Result<Self, MotionError> {
+        let times = sequence.times();
+        let beams = scene
+            .structures
+            .iter()
+            .enumerate()
+            .map(|(i, structure)| match structure {
+                Structure::Beam(b) if b.motion.is_some() => moving_beam(b, &times)
+                    .map(Some)
+                    .map_err(|message| MotionError {
+                        message: format!("structure {i}: {message}"),
+                        site: b.declared_at.clone(),
+                    }),
+                _ => Ok(None),
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(SampleMotion { times, beams })
+    }
+
+    /// Number of frames.
+    pub fn frames(&self) -> usize {
+        self.times.len()
+    }
+
+    /// The scene of frame `k`: every beam in motion carries its static loads plus the forces
+    /// acting at the frame's instant, and the dynamic part of its deflection (unless it is
+    /// quasi-static); everything else as in `scene`.
+    pub fn scene_at(&self, scene: &SceneSpec, k: usize) -> SceneSpec {
+        let mut frame = scene.clone();
+        for (structure, moving) in frame.structures.iter_mut().zip(&self.beams) {
+            if let (Structure::Beam(b), Some(m)) = (structure, moving) {
+                b.frame_modes = frame_modes(b, m, k);
+                let loads = b.motion.as_ref().map(|motion| &motion.loads[..]);
+                b.loads
+                    .extend(m.modal.static_loads(loads.unwrap_or(&[]), self.times[k]));
+            }
+        }
+        frame
+    }
+}
+
+fn frame_modes(beam: &BeamSpec, moving: &MovingBeam, k: usize) -> Vec<(u32, f64)> {
+    match &beam.motion {
+        Some(motion) if !motion.quasi_static => {
+            moving.response.dynamic_amplitudes(&moving.modal, k)
+        }
+        _ => Vec::new(),
+    }
+}
+
+/// The modal model of a beam in motion and its response at `times`. Its static loads act
+/// throughout, already in equilibrium at t = 0, so only the time loads are integrated; they add
+/// to the static loads linearly, which needs physical loads.
+fn moving_beam(beam: &BeamSpec, times: &[f64]) -> Result<MovingBeam, String> {
+    let motion = beam.motion.as_ref().expect("a beam in motion");
+    if beam.target != Target::Physical {
+        return Err(
+            "a beam with time loads takes physical static loads (point_force, distributed_load), not a target deflection: the time loads add to them in newtons"
+                .into(),
+        );
+    }
+    if !beam.vibration.is_empty() || !beam.damage_asked.is_empty() {
+        return Err(
+            "a beam with time loads cannot also take a vibration snapshot or damage: its frames are the response to its loads"
+                .into(),
+        );
+    }
+    let section = beam.section.properties(beam.poisson);
+    let modal = ModalBeam::new(
+        beam.support,
+        beam.length,
+        beam.elastic_modulus * section.second_moment,
+        motion.density * section.area,
+        motion.damping,
+        motion.modes,
+    )?;
+    for load in &motion.loads {
+        load.check(beam.length)?;
+    }
+    let response = modal.respond(&motion.loads, 0.0, times, STEPS_PER_PERIOD);
+    Ok(MovingBeam { modal, response })
+}
+
+/// How a view's camera mount is displaced at one frame, in the camera's own axes (OpenCV).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct MountOffset {
+    /// Small rotation about the camera's x, y and z axes, radians (applied x, then y, then z).
+    pub rotation: [f64; 3],
+    /// Translation along the camera's x, y and z axes, metres.
+    pub translation: [f64; 3],
+}
+
+/// The mount offset of view `view` of sample `sample` at `time`: six independent band-limited
+/// noises (`MountShake`), drawn from the view's own stream, read at `time`. None when the
+/// sequence's mounts are still.
+pub fn mount_offset(
+    dataset: &DatasetSpec,
+    sample: u64,
+    view: u32,
+    time: f64,
+) -> Option<MountOffset> {
+    let sequence = dataset.sequence.as_ref()?;
+    let shake = sequence.mount.as_ref()?;
+    let mut stream = Stream::new(dataset.seed, Scope::View(sample, view), MOUNT_STREAM);
+    let mut axis = |rms: f64| {
+        let (step, values) = stream.band_limited_noise(rms, shake.band, sequence.duration);
+        linear_at(&values, time / step)
+    };
+    let rotation = [(); 3].map(|()| axis(shake.rotation));
+    let translation = [(); 3].map(|()| axis(shake.translation));
+    Some(MountOffset {
+        rotation,
+        translation,
+    })
+}
+
+/// The piecewise-linear signal through `values` (one per unit of `s`) at `s`, held at the ends.
+fn linear_at(values: &[f64], s: f64) -> f64 {
+    let last = values.len() - 1;
+    let k = (s.floor().max(0.0) as usize).min(last.saturating_sub(1));
+    let w = (s - k as f64).clamp(0.0, 1.0);
+    values[k] * (1.0 - w) + values[(k + 1).min(last)] * w
+}
+
+/// `camera` moved by `offset`, in its own axes: the mount turns the camera about its centre of
+/// projection and shifts it.
+pub fn shaken(camera: Camera, offset: &MountOffset) -> Camera {
+    let [rx, ry, rz] = offset.rotation;
+    let turn = DMat3::from_rotation_z(rz) * DMat3::from_rotation_y(ry) * DMat3::from_rotation_x(rx);
+    Camera {
+        rotation: camera.rotation * turn,
+        position: camera.position + camera.rotation * DVec3::from_array(offset.translation),
+        ..camera
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn linear_reading_interpolates_and_holds_the_ends() {
+        let v = [0.0, 2.0, 4.0, 1.0];
+        assert_eq!(linear_at(&v, 0.5), 1.0);
+        assert_eq!(linear_at(&v, 2.25), 3.25);
+        assert_eq!(linear_at(&v, 3.0), 1.0);
+        assert_eq!(linear_at(&v, 7.0), 1.0);
+        assert_eq!(linear_at(&v, -1.0), 0.0);
+    }
+
+    #[test]
+    fn a_shaken_camera_turns_about_its_own_axes_and_moves_along_them() {
+        let camera = Camera::look_at(
+            crate::cameras::Intrinsics::from_fov_y(64, 64, 1.0),
+            DVec3::new(0.0, -5.0, 0.0),
+            DVec3::ZERO,
+            DVec3::Z,
+        );
+        // Along its own z (forward, world +y here) by 0.1 m.
+        let moved = shaken(
+            camera,
+            &MountOffset {
+                translation: [0.0, 0.0, 0.1],
+                ..MountOffset::default()
+            },
+        );
+        assert!((moved.position - DVec3::new(0.0, -4.9, 0.0)).length() < 1e-12);
+        // A turn about its y axis (down, world −z) swings the view direction sideways.
+        let turned = shaken(
+            camera,
+            &MountOffset {
+                rotation: [0.0, 0.01, 0.0],
+                ..MountOffset::default()
+            },
+        );
+        let forward = turned.rotation.col(2);
+        assert!((forward.x.abs() - 0.01f64.sin()).abs() < 1e-12, "{forward}");
+        assert!((turned.rotation.determinant() - 1.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,275 @@
+//! Monitoring sequences seen from outside: a recipe declaring `dataset.sequence` and time loads
+//! on a beam, run by the binary. Frames of a load history that has stopped changing are the
+//! still of that load, byte for byte; each frame's deflection is the modal response at its
+//! instant; runs are the same on any thread count and after a kill mid-sequence; bad values are
+//! refused at their line with their value.
+
+mod common;
+
+use common::{hashes, ok, read_json, render, run, stderr, write};
+use shmgen::mechanics::Support;
+use shmgen::mechanics::dynamics::{Axle, ModalBeam, TimeLoad};
+use std::path::Path;
+
+/// A 2 m steel beam 0.1 × 0.2 m, simply supported, filmed side-on by one fixed camera.
+/// `sequence` goes into `dataset(...)` (empty for a still), `calls` onto the beam.
+fn recipe(sequence: &str, calls: &str, outputs: &str) -> String {
+    format!(
+        r#"dataset(#{{
+    name: "seq", seed: 5, samples: 1, views: 1, outputs: [{outputs}],
+    {sequence}
+    camera: #{{ width: 64, height: 48, fov_y: deg(40),
+        fixed: [#{{ position: [1.0, -4.0, 0.3], target: [1.0, 0.0, 0.0] }}] }},
+    scene: |rng| {{
+        let b = beam(#{{ length: 2.0, width: 0.1, height: 0.2 }});
+        b.simply_supported();
+        b.theory("euler_bernoulli");
+        b.at(1.0, 0.0, 0.0);
+        {calls}
+        b
+    }},
+}});
+"#
+    )
+}
+
+const LAYERS: &str = r#""rgb", "depth", "mask", "displacement", "mesh""#;
+
+/// The file of frame `frame` of view 0 of sample 0 with kind `kind` (`rgb.png`, ...).
+fn frame_file(out: &Path, frame: u32, kind: &str) -> Vec<u8> {
+    std::fs::read(out.join(format!("samples/0000/000000_00_f{frame:04}.{kind}"))).unwrap()
+}
+
+fn still_file(out: &Path, kind: &str) -> Vec<u8> {
+    std::fs::read(out.join(format!("samples/0000/000000_00.{kind}"))).unwrap()
+}
+
+#[test]
+fn frames_of_a_finished_load_history_are_the_still_of_that_load_byte_for_byte() {
+    let (_a, still) = render(&recipe("", "b.point_force(0.7, 4e5);", LAYERS), &[]);
+    // Three histories that hold 4e5 N at 0.7 m: a step at t = 0 and a ramp finished by 0.05 s,
+    // both quasi-static (every frame, and frames from t = 0.05 on), and the load declared static
+    // on a beam in motion without time loads (every frame).
+    let sequence = "sequence: #{ duration: 0.1, fps: 60.0 },";
+    let step = recipe(
+        sequence,
+        "b.ramp(0.7, 4e5, 0.0, 0.0); b.quasi_static(true);",
+        LAYERS,
+    );
+    let ramp = recipe(
+        sequence,
+        "b.ramp(0.7, 4e5, 0.0, 0.05); b.quasi_static(true);",
+        LAYERS,
+    );
+    let constant = recipe(
+        sequence,
+        "b.point_force(0.7, 4e5); b.damping(0.05);",
+        LAYERS,
+    );
+    let (_b, step) = render(&step, &[]);
+    let (_c, ramp) = render(&ramp, &[]);
+    let (_d, constant) = render(&constant, &[]);
+    for kind in ["rgb.png", "depth.exr", "mask.png", "displacement.exr"] {
+        let expected = still_file(&still, kind);
+        for k in 0..6 {
+            assert!(
+                frame_file(&step, k, kind) == expected,
+                "step, frame {k}: {kind}"
+            );
+            assert!(
+                frame_file(&constant, k, kind) == expected,
+                "constant, frame {k}: {kind}"
+            );
+        }
+        for k in 3..6 {
+            assert!(
+                frame_file(&ramp, k, kind) == expected,
+                "ramp, frame {k}: {kind}"
+            );
+        }
+    }
+    // Before the ramp has finished the beam is less deflected: the comparison can tell (depth
+    // cannot, side-on: the beam moves across the view, not along it).
+    let displacement = still_file(&still, "displacement.exr");
+    assert!(frame_file(&ramp, 1, "displacement.exr") != displacement);
+    let mesh = std::fs::read(still.join("samples/0000/000000.mesh.ply")).unwrap();
+    let frame_mesh = std::fs::read(step.join("samples/0000/000000_f0004.mesh.ply")).unwrap();
+    assert!(mesh == frame_mesh);
+}
+
+/// The vehicle of the label test: two axles 0.5 m apart crossing the 2 m span at 8 m/s.
+const AXLES: [(f64, f64); 2] = [(0.0, 3e5), (0.5, 2e5)];
+const SPEED: f64 = 8.0;
+const ENTERS: f64 = 0.02;
+
+#[test]
+fn each_frame_deflects_as_the_modal_response_at_its_instant() {
+    let calls = format!(
+        "b.vehicle([[{}, {}], [{}, {}]], {SPEED}, {ENTERS}); b.damping(0.03); b.modes(6);",
+        AXLES[0].0, AXLES[0].1, AXLES[1].0, AXLES[1].1
+    );
+    let fps = 120.0;
+    let sequence = format!("sequence: #{{ duration: 0.5, fps: {fps} }},");
+    let (_dir, out) = render(&recipe(&sequence, &calls, r#""depth""#), &[]);
+
+    // The truth: ModalBeam directly, on the same beam (E = 210 GPa, steel 7850 kg/m³).
+    let (width, height, length): (f64, f64, f64) = (0.1, 0.2, 2.0);
+    let ei = 210e9 * width * height.powi(3) / 12.0;
+    let mass = 7850.0 * width * height;
+    let beam = ModalBeam::new(Support::SimplySupported, length, ei, mass, 0.03, 6).unwrap();
+    let loads = [TimeLoad::Vehicle {
+        axles: AXLES
+            .iter()
+            .map(|&(behind, force)| Axle { behind, force })
+            .collect(),
+        speed: SPEED,
+        enters: ENTERS,
+    }];
+    let frames = 60;
+    let times: Vec<f64> = (0..frames).map(|k| k as f64 / fps).collect();
+    let response = beam.respond(&loads, 0.0, &times, 64);
+    let mut dynamic_seen = 0.0f64;
+    for (k, &time) in times.iter().enumerate() {
+        let record = read_json(&out.join(format!("samples/0000/000000_00_f{k:04}.json")));
+        assert_eq!(record["frame"]["index"], k);
+        assert_eq!(record["frame"]["time"].as_f64().unwrap(), time);
+        let labels = &record["scene"]["structures"][0]["labels"];
+        let label = labels["max_deflection"].as_f64().unwrap();
+        // The truth's largest deflection, on a fine grid of the span plus every axle on it.
+        let axles_on = beam.static_loads(&loads, time);
+        let points = (0..=4000)
+            .map(|i| length * i as f64 / 4000.0)
+            .chain(axles_on.iter().map(|l| match *l {
+                shmgen::mechanics::Load::Point { at, .. } => at,
+                _ => 0.0,
+            }));
+        let truth = points
+            .map(|x| response.at(&beam, &loads, k, x).deflection)
+            .fold(0.0f64, |a, v| if v.abs() > a.abs() { v } else { a });
+        assert!(
+            (label - truth).abs() <= 1e-5 * truth.abs().max(1e-6),
+            "frame {k}: label {label} m, modal response {truth} m"
+        );
+        // The frames are dynamic: mid-span departs from the static deflection under the same
+        // forces (checked below to be a visible share of the deflection).
+        let mid = response.at(&beam, &loads, k, length / 2.0).deflection;
+        dynamic_seen = dynamic_seen.max((mid - static_mid(&beam, &loads, time)).abs());
+    }
+    assert!(dynamic_seen > 1e-6, "no dynamic part seen: {dynamic_seen}");
+}
+
+/// Mid-span deflection of the static solution under the forces acting at `t`: a single-step
+/// response with every mode's dynamic part removed, by superposing point-load closed forms.
+fn static_mid(beam: &ModalBeam, loads: &[TimeLoad], t: f64) -> f64 {
+    let (length, ei) = (2.0, 210e9 * 0.1 * 0.2f64.powi(3) / 12.0);
+    beam.static_loads(loads, t)
+        .iter()
+        .map(|load| match *load {
+            // Mid-span deflection of a simply supported span under P at a (a ≤ L/2 mirrored):
+            // P a (3L² − 4a²) / (48 EI).
+            shmgen::mechanics::Load::Point { at, force } => {
+                let a = at.min(length - at);
+                force * a * (3.0 * length * length - 4.0 * a * a) / (48.0 * ei)
+            }
+            _ => 0.0,
+        })
+        .sum()
+}
+
+/// A short, small run of `scripts/monitoring.rhai`: three crossings, 15 frames, 48 px.
+const MONITORING_SETS: [&str; 6] = [
+    "--set",
+    "size=48",
+    "--set",
+    "duration=0.25",
+    "--set",
+    "samples=3",
+];
+
+fn monitoring_recipe() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/monitoring.rhai")
+}
+
+fn monitoring(out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = MONITORING_SETS.to_vec();
+    args.extend(extra);
+    run(&monitoring_recipe(), out, &args)
+}
+
+#[test]
+fn sequences_are_the_same_bytes_on_any_thread_count_and_after_a_kill() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = dir.path().join("one");
+    let two = dir.path().join("two");
+    ok(monitoring(&one, &["--threads", "1"]));
+    ok(monitoring(&two, &["--threads", "2"]));
+    let reference = hashes(&one);
+    assert!(reference.keys().any(|f| f.ends_with("_01_f0014.rgb.png")));
+    assert_eq!(reference, hashes(&two));
+
+    // Killed once the first sample is listed: the second is then mid-sequence.
+    let killed = dir.path().join("killed");
+    let mut args = MONITORING_SETS.to_vec();
+    args.extend(["--threads", "1"]);
+    let child = common::spawn_run(&monitoring_recipe(), &killed, &args);
+    let done = common::kill_after_samples(child, &killed, 1);
+    assert!(
+        done < 3,
+        "the kill must land before the end ({done} samples done)"
+    );
+    ok(monitoring(&killed, &["--threads", "1"]));
+    assert_eq!(reference, hashes(&killed));
+}
+
+#[test]
+fn bad_sequences_and_time_loads_are_refused_at_their_line_with_their_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("sequence: #{ duration: 1.0, fps: 0 },", "", "fps = 0", 3),
+        (
+            "sequence: #{ duration: 1.0, fps: 30.0, exposure: 0.5 },",
+            "",
+            "exposure = 0.5",
+            3,
+        ),
+        (
+            "sequence: #{ duration: 1.0, fps: 30.0 },",
+            "b.vehicle([[0.0, 1e4]], -3.0, 0.0);",
+            "speed must be positive, got -3 m/s",
+            11,
+        ),
+        (
+            "sequence: #{ duration: 1.0, fps: 30.0 },",
+            "b.hammer(2.5, 1e4, 0.1, 0.01);",
+            "load position 2.5 m lies off the span",
+            11,
+        ),
+        (
+            "sequence: #{ duration: 1.0, fps: 30.0 },",
+            "b.damping(1.5);",
+            "damping ratio = 1.5",
+            11,
+        ),
+        (
+            "sequence: #{ duration: 1.0, fps: 30.0 },",
+            "b.ambient(rng, 1.0, -2.0, 10.0, 0.0, 1.0);",
+            "ambient rms = -2",
+            11,
+        ),
+    ];
+    for (i, (sequence, calls, says, line)) in cases.into_iter().enumerate() {
+        let path = write(
+            dir.path(),
+            &format!("bad{i}.rhai"),
+            recipe(sequence, calls, LAYERS),
+        );
+        let out = run(&path, &dir.path().join(format!("out{i}")), &[]);
+        assert!(!out.status.success(), "case {i} ran");
+        let text = stderr(&out);
+        assert!(text.contains(says), "case {i}: {text}");
+        assert!(
+            text.contains(&format!("bad{i}.rhai:{line}:")),
+            "case {i}: no line {line} in {text}"
+        );
+    }
+}
