@@ -46,7 +46,10 @@ pub fn mesh_frame(frame: &FrameSpec, pixel_footprint: f64) -> Result<BuiltFrame<
         ));
     }
     let model = &frame.model;
-    let solution = model.solve()?;
+    let solution = match &frame.displaced {
+        Some(displaced) => model.displaced_by(displaced.clone())?,
+        None => model.solve()?,
+    };
     let tolerance = chord_tolerance(frame.tessellation, pixel_footprint);
     let overhang = joint_overhangs(frame, &solution);
     let members = model
@@ -76,10 +79,11 @@ pub fn mesh_frame(frame: &FrameSpec, pixel_footprint: f64) -> Result<BuiltFrame<
             })
         })
         .collect::<Result<Vec<_>, String>>()?;
-    Ok(BuiltFrame {
-        members,
-        labels: FrameLabels::new(&solution),
-    })
+    let mut labels = FrameLabels::new(&solution);
+    if frame.displaced.is_some() {
+        labels.analysis = "modal_response";
+    }
+    Ok(BuiltFrame { members, labels })
 }
 
 /// How far each member runs on past its (start, end) node: as far as the other members meeting

@@ -465,9 +465,10 @@ pub(crate) fn integrate(
     let mut state: Vec<[f64; 2]> = vec![[0.0; 2]; omegas.len()];
     let mut force = forces(from, Side::After);
     let mut snapshots = Vec::with_capacity(times.len());
-    let mut next = 0;
-    let mut stepper = Stepper::default();
     let mut t = from;
+    // Output times at `from` itself see the state at rest, before any step.
+    record(&mut snapshots, times, t, &state, &force);
+    let mut stepper = Stepper::default();
     for &node in nodes {
         let h = node - t;
         if h > 0.0 {
@@ -478,16 +479,21 @@ pub(crate) fn integrate(
             }
         }
         (t, force) = (node, forces(node, Side::After));
-        while next < times.len() && times[next] <= t {
-            snapshots.push(Snapshot {
-                time: times[next],
-                state: state.clone(),
-                force: force.clone(),
-            });
-            next += 1;
-        }
+        record(&mut snapshots, times, t, &state, &force);
     }
     snapshots
+}
+
+/// Appends a snapshot of `state` for every output time not yet recorded that is at or before
+/// `t`.
+fn record(snapshots: &mut Vec<Snapshot>, times: &[f64], t: f64, state: &[[f64; 2]], force: &[f64]) {
+    while let Some(&time) = times.get(snapshots.len()).filter(|&&time| time <= t) {
+        snapshots.push(Snapshot {
+            time,
+            state: state.to_vec(),
+            force: force.to_vec(),
+        });
+    }
 }
 
 /// Mean of φ² over [0, 1] by 4-point Gauss–Legendre on panels finer than the mode's waves.

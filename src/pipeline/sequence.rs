@@ -10,7 +10,10 @@
 use crate::cameras::Camera;
 use crate::mechanics::Target;
 use crate::mechanics::dynamics::{ModalBeam, Response};
-use crate::scene::{BeamSpec, DatasetSpec, SceneSpec, SequenceSpec, SourceSite, Structure};
+use crate::mechanics::frame::Lane;
+use crate::scene::{
+    BeamSpec, DatasetSpec, FrameSpec, SceneSpec, SequenceSpec, SourceSite, Structure,
+};
 use crate::seeds::{Scope, Stream};
 use glam::{DMat3, DVec3};
 use serde::Serialize;
@@ -29,11 +32,25 @@ struct MovingBeam {
     response: Response,
 }
 
+/// A frame in motion over the sequence: its lane and, unless quasi-static, every node's
+/// displacement at every frame.
+struct MovingFrame {
+    lane: Lane,
+    displaced: Option<Vec<Vec<[f64; 6]>>>,
+}
+
+/// What one structure does over the sequence.
+enum Moving {
+    Beam(MovingBeam),
+    Frame(MovingFrame),
+}
+
 /// What the structures of one sample do over its sequence, ready to give each frame's scene.
 pub struct SampleMotion {
     times: Vec<f64>,
-    /// Per structure, in scene order: the response of a beam in motion, None for the others.
-    beams: Vec<Option<MovingBeam>>,
+    /// Per structure, in scene order: the response of a structure in motion, None for the
+    /// others.
+    structures: Vec<Option<Moving>>,
 }
 
 /// Why a sample's motion cannot be computed, and the recipe call to point at.
@@ -48,21 +65,28 @@ impl SampleMotion {
     /// Integrates every beam in motion of `scene` over `sequence` (from rest at t = 0).
     pub fn new(scene: &SceneSpec, sequence: &SequenceSpec) -> Result<Self, MotionError> {
         let times = sequence.times();
-        let beams = scene
+        let located = |i: usize, site: &Option<SourceSite>| {
+            let site = site.clone();
+            move |message| MotionError {
+                message: format!("structure {i}: {message}"),
+                site,
+            }
+        };
+        let structures = scene
             .structures
             .iter()
             .enumerate()
             .map(|(i, structure)| match structure {
                 Structure::Beam(b) if b.motion.is_some() => moving_beam(b, &times)
-                    .map(Some)
-                    .map_err(|message| MotionError {
-                        message: format!("structure {i}: {message}"),
-                        site: b.declared_at.clone(),
-                    }),
+                    .map(|m| Some(Moving::Beam(m)))
+                    .map_err(located(i, &b.declared_at)),
+                Structure::Frame(f) if f.motion.is_some() => moving_frame(f, &times)
+                    .map(|m| Some(Moving::Frame(m)))
+                    .map_err(located(i, &f.declared_at)),
                 _ => Ok(None),
             })
             .collect::<Result<_, _>>()?;
-        Ok(SampleMotion { times, beams })
+        Ok(SampleMotion { times, structures })
     }
 
     /// Number of frames.
@@ -75,12 +99,24 @@ impl SampleMotion {
     /// quasi-static); everything else as in `scene`.
     pub fn scene_at(&self, scene: &SceneSpec, k: usize) -> SceneSpec {
         let mut frame = scene.clone();
-        for (structure, moving) in frame.structures.iter_mut().zip(&self.beams) {
-            if let (Structure::Beam(b), Some(m)) = (structure, moving) {
-                b.frame_modes = frame_modes(b, m, k);
-                let loads = b.motion.as_ref().map(|motion| &motion.loads[..]);
-                b.loads
-                    .extend(m.modal.static_loads(loads.unwrap_or(&[]), self.times[k]));
+        let t = self.times[k];
+        for (structure, moving) in frame.structures.iter_mut().zip(&self.structures) {
+            match (structure, moving) {
+                (Structure::Beam(b), Some(Moving::Beam(m))) => {
+                    b.frame_modes = frame_modes(b, m, k);
+                    let loads = b.motion.as_ref().map(|motion| &motion.loads[..]);
+                    b.loads
+                        .extend(m.modal.static_loads(loads.unwrap_or(&[]), t));
+                }
+                (Structure::Frame(f), Some(Moving::Frame(m))) => {
+                    let loads = f
+                        .motion
+                        .as_ref()
+                        .map_or(&[][..], |motion| &motion.loads[..]);
+                    f.model = m.lane.loaded(&f.model, loads, t);
+                    f.displaced = m.displaced.as_ref().map(|d| d[k].clone());
+                }
+                _ => {}
             }
         }
         frame
@@ -127,6 +163,41 @@ fn moving_beam(beam: &BeamSpec, times: &[f64]) -> Result<MovingBeam, String> {
     }
     let response = modal.respond(&motion.loads, 0.0, times, STEPS_PER_PERIOD);
     Ok(MovingBeam { modal, response })
+}
+
+/// The lane of a frame in motion and, unless it is quasi-static, its response at `times`
+/// (from rest under its static loads at t = 0, by its own modes; `FrameModel::dynamics`).
+fn moving_frame(frame: &FrameSpec, times: &[f64]) -> Result<MovingFrame, String> {
+    let motion = frame.motion.as_ref().expect("a frame in motion");
+    let lane = Lane::new(&frame.model, &frame.lane)?;
+    if motion.quasi_static {
+        return Ok(MovingFrame {
+            lane,
+            displaced: None,
+        });
+    }
+    let dynamics = frame
+        .model
+        .dynamics(&frame.lane, motion.modes as usize, motion.damping)?;
+    let states = dynamics.respond(&motion.loads, 0.0, times, STEPS_PER_PERIOD)?;
+    let displaced = states
+        .iter()
+        .map(|state| {
+            let nodes = &state.solution.nodes;
+            nodes
+                .iter()
+                .map(|n| {
+                    let [ux, uy, uz] = n.displacement;
+                    let [rx, ry, rz] = n.rotation;
+                    [ux, uy, uz, rx, ry, rz]
+                })
+                .collect()
+        })
+        .collect();
+    Ok(MovingFrame {
+        lane,
+        displaced: Some(displaced),
+    })
 }
 
 /// How a view's camera mount is displaced at one frame, in the camera's own axes (OpenCV).

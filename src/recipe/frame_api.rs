@@ -8,8 +8,8 @@ use super::diagnostics::call_site;
 use super::options::{OptResult, Options, number};
 use super::result::{Fallible, fail};
 use crate::mechanics::frame::{
-    Axes, MassMatrix, Member, MemberLoad, MemberTheory, NodalLoad, NodalMass, NodeSupport, Plane,
-    Release,
+    Axes, Lane, MassMatrix, Member, MemberLoad, MemberTheory, NodalLoad, NodalMass, NodeSupport,
+    Plane, Release,
 };
 use crate::mechanics::{Load, Section};
 use crate::scene::FrameSpec;
@@ -50,6 +50,24 @@ fn register_vibration(engine: &mut Engine) {
         "mass",
         |ctx: NativeCallContext, f: &mut FrameSpec, n: INT, kg: Dynamic, inertia: Array| {
             nodal_mass(&ctx, f, n, &kg, &inertia)
+        },
+    );
+    // The members time loads move along, in order (a lane of the deck): f.lane([m1, m2, ...]).
+    engine.register_fn(
+        "lane",
+        |ctx: NativeCallContext, f: &mut FrameSpec, members: Array| -> Fallible<FrameSpec> {
+            changed(&ctx, f, |f| {
+                let lane = members
+                    .iter()
+                    .map(|m| match m.as_int() {
+                        Ok(m) => member(f, m, "lane"),
+                        Err(_) => Err(format!("lane: {m} must be a member index")),
+                    })
+                    .collect::<OptResult<Vec<usize>>>()?;
+                Lane::new(&f.model, &lane)?;
+                f.lane = lane;
+                Ok(())
+            })
         },
     );
     // A snapshot of free vibration of the whole frame: [[mode, amplitude], ...], amplitudes

@@ -1,6 +1,8 @@
 //! Time in the recipe API: the sequence a dataset films (`dataset.sequence`) and the force
-//! histories a beam carries over it (vehicles, hammer blows, ramps and steps, ambient
-//! excitation), with its modal damping, number of modes and density.
+//! histories a beam or a frame carries over it (vehicles, hammer blows, ramps and steps,
+//! ambient excitation), with its modal damping, number of modes and (for a beam) density. A
+//! beam's loads run along its span; a frame's along its lane (`f.lane([members])`), which must
+//! come first.
 //!
 //! Every call validates what it is given; a bad value fails the call, so the error points at it
 //! (file:line:col) with the parameter and its value. Ambient excitation is drawn here, from the
@@ -11,8 +13,12 @@ use super::diagnostics::call_site;
 use super::options::{OptResult, Options, number};
 use super::result::{Fallible, fail};
 use crate::mechanics::dynamics::{Axle, TimeLoad};
-use crate::scene::{BeamMotion, BeamSpec, DEFAULT_EXPOSURE_FRACTION, MountShake, SequenceSpec};
-use rhai::{Array, Dynamic, Engine, NativeCallContext};
+use crate::mechanics::frame::Lane;
+use crate::scene::{
+    BeamMotion, BeamSpec, DEFAULT_EXPOSURE_FRACTION, FrameSpec, MountShake, SequenceSpec,
+    SourceSite,
+};
+use rhai::{Array, Dynamic, Engine, NativeCallContext, Variant};
 
 /// `dataset.sequence`: `#{ duration, fps, exposure, mount: #{ rotation, translation, band } }`.
 /// Duration and fps are required; exposure defaults to half the frame interval.
@@ -49,21 +55,67 @@ pub(super) fn sequence(options: Option<Options>) -> OptResult<Option<SequenceSpe
 }
 
 pub fn register(engine: &mut Engine) {
-    register_time_loads(engine);
-    register_modal_model(engine);
+    register_time_loads::<BeamSpec>(engine);
+    register_modal_model::<BeamSpec>(engine);
+    register_time_loads::<FrameSpec>(engine);
+    register_modal_model::<FrameSpec>(engine);
+    engine.register_fn(
+        "density",
+        |ctx: NativeCallContext, b: &mut BeamSpec, rho: Dynamic| -> Fallible<BeamSpec> {
+            let rho = strictly_positive(&rho, "density", "kg/m³")?;
+            Ok(edit_motion(&ctx, b, |m| m.density = rho))
+        },
+    );
 }
 
-/// Adds `load` to the beam's motion after checking it against the span.
-fn add_load(ctx: &NativeCallContext, b: &mut BeamSpec, load: TimeLoad) -> Fallible<BeamSpec> {
-    b.declared_at = Some(call_site(ctx));
-    if let Err(why) = load.check(b.length) {
+/// A structure that carries time loads: a beam along its span, a frame along its lane.
+trait Moving: Variant + Clone {
+    /// The length load positions run over, metres; why there is none yet.
+    fn span(&self) -> Result<f64, String>;
+    /// Its motion, created with the defaults on first use.
+    fn motion(&mut self) -> &mut BeamMotion;
+    /// Records the call as the one errors found in its mechanics point at.
+    fn mark(&mut self, site: SourceSite);
+}
+
+impl Moving for BeamSpec {
+    fn span(&self) -> Result<f64, String> {
+        Ok(self.length)
+    }
+    fn motion(&mut self) -> &mut BeamMotion {
+        self.motion.get_or_insert_with(BeamMotion::default)
+    }
+    fn mark(&mut self, site: SourceSite) {
+        self.declared_at = Some(site);
+    }
+}
+
+impl Moving for FrameSpec {
+    fn span(&self) -> Result<f64, String> {
+        if self.lane.is_empty() {
+            return Err(
+                "a frame's time loads run along its lane: declare it first, f.lane([member, ...])"
+                    .into(),
+            );
+        }
+        Lane::new(&self.model, &self.lane).map(|lane| lane.length())
+    }
+    fn motion(&mut self) -> &mut BeamMotion {
+        self.motion.get_or_insert_with(BeamMotion::default)
+    }
+    fn mark(&mut self, site: SourceSite) {
+        self.declared_at = Some(site);
+    }
+}
+
+/// Adds `load` to the structure's motion after checking it against the span or lane.
+fn add_load<T: Moving>(ctx: &NativeCallContext, s: &mut T, load: TimeLoad) -> Fallible<T> {
+    s.mark(call_site(ctx));
+    if let Err(why) = s.span().and_then(|span| load.check(span)) {
         return fail(why);
     }
-    b.motion
-        .get_or_insert_with(BeamMotion::default)
-        .loads
-        .push(load);
-    Ok(b.clone())
+    s.motion().loads.push(load);
+    Ok(s.clone())
 }
 
 /// `[[behind, force], ...]`: the axles of a vehicle, leading axle first (behind = 0).
@@ -84,15 +136,15 @@ fn axles(list: &Array) -> OptResult<Vec<Axle>> {
         .collect()
 }
 
-fn register_time_loads(engine: &mut Engine) {
+fn register_time_loads<T: Moving>(engine: &mut Engine) {
     engine.register_fn(
         "vehicle",
         |ctx: NativeCallContext,
-         b: &mut BeamSpec,
+         b: &mut T,
          list: Array,
          speed: Dynamic,
          enters: Dynamic|
-         -> Fallible<BeamSpec> {
+         -> Fallible<T> {
             let load = TimeLoad::Vehicle {
                 axles: axles(&list)?,
                 speed: number(&speed, "vehicle speed")?,
@@ -103,7 +155,7 @@ fn register_time_loads(engine: &mut Engine) {
     );
     // Forces at one point, each given by (position, force, start, a time): `duration` of a
     // hammer blow, `rise` of a ramp.
-    point_history(
+    point_history::<T>(
         engine,
         "hammer",
         "duration",
@@ -114,7 +166,7 @@ fn register_time_loads(engine: &mut Engine) {
             duration,
         },
     );
-    point_history(engine, "ramp", "rise", |at, force, start, rise| {
+    point_history::<T>(engine, "ramp", "rise", |at, force, start, rise| {
         TimeLoad::Ramp {
             at,
             force,
@@ -125,14 +177,14 @@ fn register_time_loads(engine: &mut Engine) {
     engine.register_fn(
         "ambient",
         |ctx: NativeCallContext,
-         b: &mut BeamSpec,
+         b: &mut T,
          rng: ScriptRng,
          at: Dynamic,
          rms: Dynamic,
          band: Dynamic,
          start: Dynamic,
          duration: Dynamic|
-         -> Fallible<BeamSpec> {
+         -> Fallible<T> {
             let rms = non_negative(&rms, "ambient rms", "newtons")?;
             let band = strictly_positive(&band, "ambient band", "Hz")?;
             let duration = strictly_positive(&duration, "ambient duration", "seconds")?;
@@ -148,8 +200,8 @@ fn register_time_loads(engine: &mut Engine) {
     );
 }
 
-/// Registers `name(at, force, start, <time>)` on beams, adding the force history `make` builds.
-fn point_history(
+/// Registers `name(at, force, start, <time>)` on `T`, adding the force history `make` builds.
+fn point_history<T: Moving>(
     engine: &mut Engine,
     name: &'static str,
     time: &'static str,
@@ -158,12 +210,12 @@ fn point_history(
     engine.register_fn(
         name,
         move |ctx: NativeCallContext,
-              b: &mut BeamSpec,
+              b: &mut T,
               at: Dynamic,
               force: Dynamic,
               start: Dynamic,
               span: Dynamic|
-              -> Fallible<BeamSpec> {
+              -> Fallible<T> {
             let load = make(
                 number(&at, &format!("{name} position"))?,
                 number(&force, &format!("{name} force"))?,
@@ -193,21 +245,21 @@ fn strictly_positive(value: &Dynamic, name: &str, unit: &str) -> OptResult<f64> 
     }
 }
 
-/// Edits the beam's modal model through `edit`, recording the call as the beam's mechanics site.
-fn edit_motion(
+/// Edits the structure's modal model through `edit`, recording the call as its mechanics site.
+fn edit_motion<T: Moving>(
     ctx: &NativeCallContext,
-    b: &mut BeamSpec,
+    s: &mut T,
     edit: impl FnOnce(&mut BeamMotion),
-) -> BeamSpec {
-    b.declared_at = Some(call_site(ctx));
-    edit(b.motion.get_or_insert_with(BeamMotion::default));
-    b.clone()
+) -> T {
+    s.mark(call_site(ctx));
+    edit(s.motion());
+    s.clone()
 }
 
-fn register_modal_model(engine: &mut Engine) {
+fn register_modal_model<T: Moving>(engine: &mut Engine) {
     engine.register_fn(
         "damping",
-        |ctx: NativeCallContext, b: &mut BeamSpec, ratio: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext, b: &mut T, ratio: Dynamic| -> Fallible<T> {
             let ratio = number(&ratio, "damping ratio")?;
             if !(0.0..1.0).contains(&ratio) {
                 return fail(format!(
@@ -219,7 +271,7 @@ fn register_modal_model(engine: &mut Engine) {
     );
     engine.register_fn(
         "modes",
-        |ctx: NativeCallContext, b: &mut BeamSpec, n: Dynamic| -> Fallible<BeamSpec> {
+        |ctx: NativeCallContext, b: &mut T, n: Dynamic| -> Fallible<T> {
             let n = match n.as_int() {
                 Ok(n) if (1..=200).contains(&n) => n as u32,
                 _ => {
@@ -230,15 +282,8 @@ fn register_modal_model(engine: &mut Engine) {
         },
     );
     engine.register_fn(
-        "density",
-        |ctx: NativeCallContext, b: &mut BeamSpec, rho: Dynamic| -> Fallible<BeamSpec> {
-            let rho = strictly_positive(&rho, "density", "kg/m³")?;
-            Ok(edit_motion(&ctx, b, |m| m.density = rho))
-        },
-    );
-    engine.register_fn(
         "quasi_static",
-        |ctx: NativeCallContext, b: &mut BeamSpec, on: bool| -> BeamSpec {
+        |ctx: NativeCallContext, b: &mut T, on: bool| -> T {
             edit_motion(&ctx, b, |m| m.quasi_static = on)
         },
     );

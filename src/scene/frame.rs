@@ -2,7 +2,7 @@
 //! it: the structural model, its material and how finely it is meshed. Analysing and meshing
 //! it is the build stage's work.
 
-use super::{PIXEL_TOLERANCE, SourceSite, Tolerance};
+use super::{BeamMotion, PIXEL_TOLERANCE, SourceSite, Tolerance};
 use crate::materials::Material;
 use crate::mechanics::frame::FrameModel;
 use serde::Serialize;
@@ -22,6 +22,18 @@ pub struct FrameSpec {
     pub material: Material,
     /// How closely the deformed members are followed.
     pub tessellation: Tolerance,
+    /// Members in order that time loads move along (a lane of a deck), each sharing a node
+    /// with the next; positions of time loads are distances along it. Empty: no lane.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub lane: Vec<usize>,
+    /// The forces it carries in time along `lane` and its modal model, in a sequence (its
+    /// `density` is unused: each member has its own).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion: Option<BeamMotion>,
+    /// In a frame of a sequence: every node's displacement at the frame's instant, from the
+    /// response in time; the members' fields follow from them and the loads acting then.
+    #[serde(skip)]
+    pub displaced: Option<Vec<[f64; 6]>>,
     /// The recipe call that last changed the model, where errors found when analysing it point.
     #[serde(skip)]
     pub declared_at: Option<SourceSite>,
@@ -36,6 +48,9 @@ impl FrameSpec {
             display_scale: 1.0,
             material: Material::default(),
             tessellation: Tolerance::Pixels(PIXEL_TOLERANCE),
+            lane: Vec::new(),
+            motion: None,
+            displaced: None,
             declared_at: None,
         }
     }

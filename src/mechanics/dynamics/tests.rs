@@ -222,3 +222,20 @@ fn bad_parameters_are_refused_with_their_values() {
     };
     assert!(single.check(L).unwrap_err().contains("got 1"));
 }
+
+#[test]
+fn an_output_at_the_start_sees_the_beam_at_rest() {
+    // A ramp starting at t = 0: nothing acts yet, so the first output is the beam at rest,
+    // not its state one step later.
+    let beam = ModalBeam::new(Support::SimplySupported, L, EI, MASS, 0.02, 6).unwrap();
+    let loads = [TimeLoad::Ramp {
+        at: 0.5 * L,
+        force: 1e5,
+        start: 0.0,
+        rise: 0.5,
+    }];
+    let response = beam.respond(&loads, 0.0, &[0.0, 0.25], 64);
+    let start = response.at(&beam, &loads, 0, 0.5 * L);
+    assert_eq!((start.deflection, start.velocity), (0.0, 0.0));
+    assert!(response.at(&beam, &loads, 1, 0.5 * L).deflection > 0.0);
+}

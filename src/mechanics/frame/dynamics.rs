@@ -38,12 +38,18 @@ struct LaneSegment {
     length: f64,
 }
 
+/// A path over members that time loads follow: where each member lies along it.
+#[derive(Clone, Debug)]
+pub struct Lane {
+    segments: Vec<LaneSegment>,
+    length: f64,
+}
+
 /// A frame ready to respond to time loads on one lane: its modes and the lane resolved.
 #[derive(Clone, Debug)]
 pub struct FrameDynamics {
     model: FrameModel,
-    lane: Vec<LaneSegment>,
-    lane_length: f64,
+    lane: Lane,
     damping: f64,
     modes: NaturalModes,
     /// Each mode's field inside the members (the model without loads, displaced by φ_n).
@@ -85,7 +91,7 @@ impl FrameModel {
         if modes == 0 {
             return Err("at least one mode is needed".into());
         }
-        let (segments, lane_length) = self.resolve_lane(lane)?;
+        let lane = Lane::new(self, lane)?;
         let modes = self.natural_modes(modes)?;
         let unloaded = self.without_loads();
         let elements = unloaded.elements()?;
@@ -96,26 +102,39 @@ impl FrameModel {
             .collect();
         Ok(FrameDynamics {
             model: self.clone(),
-            lane: segments,
-            lane_length,
+            lane,
             damping,
             modes,
             fields,
         })
     }
 
-    /// The lane's members with their direction and where each begins along it.
-    fn resolve_lane(&self, lane: &[usize]) -> Result<(Vec<LaneSegment>, f64), String> {
+    /// The same structure with no loads at all: the members' fields of pure end motion.
+    fn without_loads(&self) -> FrameModel {
+        let mut m = self.clone();
+        m.loads.clear();
+        m.self_weight = false;
+        for member in &mut m.members {
+            member.loads.clear();
+        }
+        m
+    }
+}
+
+impl Lane {
+    /// The lane over `members` of `model`, in order; each must share a node with the next.
+    pub fn new(model: &FrameModel, lane: &[usize]) -> Result<Lane, String> {
+        let this = model;
         let Some(&first) = lane.first() else {
             return Err("a lane needs at least one member".into());
         };
-        if let Some(&bad) = lane.iter().find(|&&m| m >= self.members.len()) {
+        if let Some(&bad) = lane.iter().find(|&&m| m >= this.members.len()) {
             return Err(format!(
                 "lane member {bad} does not exist (the frame has {} members)",
-                self.members.len()
+                this.members.len()
             ));
         }
-        let ends = |m: usize| (self.members[m].start, self.members[m].end);
+        let ends = |m: usize| (this.members[m].start, this.members[m].end);
         // The lane enters the first member at the node it does not share with the second.
         let joins_next = |node: usize| {
             lane.get(1).is_some_and(|&next| {
@@ -144,7 +163,7 @@ impl FrameModel {
                 }
             };
             let length =
-                DVec3::from_array(self.nodes[s]).distance(DVec3::from_array(self.nodes[e]));
+                DVec3::from_array(this.nodes[s]).distance(DVec3::from_array(this.nodes[e]));
             segments.push(LaneSegment {
                 member: m,
                 reversed,
@@ -154,25 +173,61 @@ impl FrameModel {
             begins += length;
             at = if reversed { s } else { e };
         }
-        Ok((segments, begins))
+        Ok(Lane {
+            segments,
+            length: begins,
+        })
     }
 
-    /// The same structure with no loads at all: the members' fields of pure end motion.
-    fn without_loads(&self) -> FrameModel {
-        let mut m = self.clone();
-        m.loads.clear();
-        m.self_weight = false;
-        for member in &mut m.members {
-            member.loads.clear();
+    /// Length of the lane, metres.
+    pub fn length(&self) -> f64 {
+        self.length
+    }
+
+    /// Point forces (lane position, N downward) of `loads` acting on that side of t.
+    fn point_forces(&self, loads: &[TimeLoad], t: f64, side: Side) -> Vec<(f64, f64)> {
+        let mut forces = Vec::new();
+        for load in loads {
+            load.forces_at(t, side, self.length, &mut forces);
         }
-        m
+        forces
+    }
+
+    /// The member and the distance from its start node of lane position `s`.
+    fn on_member(&self, s: f64) -> (usize, f64) {
+        let k = self
+            .segments
+            .partition_point(|seg| seg.begins <= s)
+            .saturating_sub(1);
+        let seg = &self.segments[k];
+        let along = (s - seg.begins).clamp(0.0, seg.length);
+        let x = if seg.reversed {
+            seg.length - along
+        } else {
+            along
+        };
+        (seg.member, x)
+    }
+
+    /// `model` with `loads` acting just after `t` added as member point loads.
+    pub fn loaded(&self, model: &FrameModel, loads: &[TimeLoad], t: f64) -> FrameModel {
+        let mut model = model.clone();
+        for (s, force) in self.point_forces(loads, t, Side::After) {
+            let (m, at) = self.on_member(s);
+            model.members[m].loads.push(MemberLoad {
+                load: Load::Point { at, force },
+                direction: DOWN.to_array(),
+                axes: Axes::Global,
+            });
+        }
+        model
     }
 }
 
 impl FrameDynamics {
     /// Length of the lane, metres: positions of time loads run from 0 to this.
     pub fn lane_length(&self) -> f64 {
-        self.lane_length
+        self.lane.length
     }
 
     /// Natural frequencies of the kept modes, Hz.
@@ -195,7 +250,7 @@ impl FrameDynamics {
         per_period: u32,
     ) -> Result<Vec<FrameState>, String> {
         for load in loads {
-            load.check(self.lane_length)
+            load.check(self.lane.length)
                 .map_err(|e| format!("time load on the lane: {e}"))?;
         }
         let nodes = time_nodes(
@@ -224,7 +279,7 @@ impl FrameDynamics {
     fn corners(&self, loads: &[TimeLoad]) -> Vec<f64> {
         let mut corners = Vec::new();
         for load in loads {
-            load.corners(self.lane_length, &mut corners);
+            load.corners(self.lane.length, &mut corners);
             if let TimeLoad::Vehicle {
                 axles,
                 speed,
@@ -233,7 +288,7 @@ impl FrameDynamics {
             {
                 for axle in axles {
                     let on = enters + axle.behind / speed;
-                    corners.extend(self.lane.iter().map(|s| on + s.begins / speed));
+                    corners.extend(self.lane.segments.iter().map(|s| on + s.begins / speed));
                 }
             }
         }
@@ -243,53 +298,33 @@ impl FrameDynamics {
     /// The fastest variation of any modal force, rad/s: an axle crosses the shortest lane
     /// member, where the modes' cubic fields bend most, in about that member's length.
     fn forcing(&self, loads: &[TimeLoad]) -> f64 {
-        let shortest = self.lane.iter().map(|s| s.length).fold(f64::MAX, f64::min);
+        let shortest = self
+            .lane
+            .segments
+            .iter()
+            .map(|s| s.length)
+            .fold(f64::MAX, f64::min);
         let modes = self.modes.omega.len();
         loads
             .iter()
             .map(|l| match l {
                 TimeLoad::Vehicle { speed, .. } => (std::f64::consts::PI * speed / shortest)
-                    .max(l.variation(self.lane_length, modes)),
-                _ => l.variation(self.lane_length, modes),
+                    .max(l.variation(self.lane.length, modes)),
+                _ => l.variation(self.lane.length, modes),
             })
             .fold(0.0, f64::max)
     }
 
-    /// Point forces (lane position, N downward) acting on that side of t.
-    fn point_forces(&self, loads: &[TimeLoad], t: f64, side: Side) -> Vec<(f64, f64)> {
-        let mut forces = Vec::new();
-        for load in loads {
-            load.forces_at(t, side, self.lane_length, &mut forces);
-        }
-        forces
-    }
-
-    /// The member and the distance from its start node of lane position `s`.
-    fn on_member(&self, s: f64) -> (usize, f64) {
-        let k = self
-            .lane
-            .partition_point(|seg| seg.begins <= s)
-            .saturating_sub(1);
-        let seg = &self.lane[k];
-        let along = (s - seg.begins).clamp(0.0, seg.length);
-        let x = if seg.reversed {
-            seg.length - along
-        } else {
-            along
-        };
-        (seg.member, x)
-    }
-
     /// f_n = Σ F · φ_n(p) for every mode (the modes are M-orthonormal: unit modal mass).
     fn modal_forces(&self, loads: &[TimeLoad], t: f64, side: Side) -> Vec<f64> {
-        let forces = self.point_forces(loads, t, side);
+        let forces = self.lane.point_forces(loads, t, side);
         self.fields
             .iter()
             .map(|field| {
                 forces
                     .iter()
                     .map(|&(s, f)| {
-                        let (m, x) = self.on_member(s);
+                        let (m, x) = self.lane.on_member(s);
                         f * field.member_at(m, x).0.dot(DOWN)
                     })
                     .sum()
@@ -297,23 +332,9 @@ impl FrameDynamics {
             .collect()
     }
 
-    /// The model with the time loads acting at `t` (just after it) added as member loads.
-    fn loaded_at(&self, loads: &[TimeLoad], t: f64) -> FrameModel {
-        let mut model = self.model.clone();
-        for (s, force) in self.point_forces(loads, t, Side::After) {
-            let (m, at) = self.on_member(s);
-            model.members[m].loads.push(MemberLoad {
-                load: Load::Point { at, force },
-                direction: DOWN.to_array(),
-                axes: Axes::Global,
-            });
-        }
-        model
-    }
-
     /// The frame at one snapshot, by the mode-acceleration method.
     fn state(&self, loads: &[TimeLoad], snap: &Snapshot) -> Result<FrameState, String> {
-        let model = self.loaded_at(loads, snap.time);
+        let model = self.lane.loaded(&self.model, loads, snap.time);
         let elements = model.elements()?;
         let mut displacements = solve::displacements(&model, &elements, super::Solver::Auto)?;
         let mut velocity = vec![[0.0; 3]; model.nodes.len()];

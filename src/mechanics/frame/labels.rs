@@ -9,7 +9,9 @@ use serde::Serialize;
 pub struct FrameLabels {
     /// "linear_static": first-order elastic analysis by the direct stiffness method;
     /// "p_delta": second order, equilibrium in the displaced geometry; "vibration_snapshot":
-    /// a sum of natural modes (forces and stresses are those that hold that shape).
+    /// a sum of natural modes (forces and stresses are those that hold that shape);
+    /// "modal_response": a frame of a sequence, the response in time to its loads by modal
+    /// superposition (forces and stresses are the elastic ones holding that shape).
     pub analysis: &'static str,
     /// Each node's displacement and rotation, world axes, in the order of `model.nodes`.
     pub nodes: Vec<NodeResult>,

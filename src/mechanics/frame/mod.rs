@@ -30,7 +30,7 @@ mod solve;
 #[cfg(test)]
 mod tests;
 
-pub use dynamics::{FrameDynamics, FrameState};
+pub use dynamics::{FrameDynamics, FrameState, Lane};
 pub use labels::FrameLabels;
 pub use modes::{DENSE_MODES_MAX_DOFS, FrameModeLabel, ModalLabels, NaturalModes};
 pub use results::{FrameSolution, MemberResult, NodeResult, Reaction};
@@ -421,6 +421,25 @@ impl FrameModel {
             return self.p_delta(first, solver);
         }
         Ok(first)
+    }
+
+    /// The solution whose nodes have moved by `displacements` ([ux, uy, uz, rx, ry, rz] per
+    /// node, from a response in time) under the loads of the model: member fields, end forces
+    /// and peaks follow from them as in a static analysis.
+    pub fn displaced_by(&self, displacements: Vec<[f64; 6]>) -> Result<FrameSolution, String> {
+        self.validate()?;
+        if displacements.len() != self.nodes.len() {
+            return Err(format!(
+                "{} node displacements given for {} nodes",
+                displacements.len(),
+                self.nodes.len()
+            ));
+        }
+        Ok(results::FrameSolution::new(
+            self,
+            self.elements()?,
+            displacements,
+        ))
     }
 
     /// Iterates the analysis with each member's geometric stiffness for the axial force of the
