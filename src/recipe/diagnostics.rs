@@ -129,11 +129,10 @@ impl Warnings {
     }
 }
 
-/// Where the key is written of the option that `message` names (unknown, or with a value it
-/// refuses), the error being raised by the call at `at`.
+/// Where the key is written of the unknown option that `message` names, the error being
+/// raised by the call at `at`.
 fn option_key(message: &str, at: &Located, sources: &Sources) -> Option<Position> {
-    let path = super::options::unknown_option_path(message)
-        .or_else(|| super::options::valued_option_path(message))?;
+    let path = super::options::unknown_option_path(message)?;
     super::option_sites::key_position(&sources.text(&at.label)?, at.pos, path)
 }
 

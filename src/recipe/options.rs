@@ -19,15 +19,6 @@ pub fn unknown_option_path(message: &str) -> Option<&str> {
     rest.split_once('`').map(|(path, _)| path)
 }
 
-/// The path of the option whose value `message` refuses, when it begins with one as the readers
-/// here write it: `dataset.sequence.fps = 0 must be positive`. A path names its call and keys,
-/// so it holds a dot.
-pub fn valued_option_path(message: &str) -> Option<&str> {
-    let (path, _) = message.split_once(" = ")?;
-    let named = |c: char| c.is_alphanumeric() || "_.[]".contains(c);
-    (path.contains('.') && path.chars().all(named)).then_some(path)
-}
-
 pub struct Options {
     map: Map,
     context: String,
@@ -391,11 +382,5 @@ mod tests {
         );
         assert_eq!(unknown_option_path(&e), Some("beam.widht"));
         assert_eq!(unknown_option_path("beam.width = 0 must be positive"), None);
-        assert_eq!(
-            valued_option_path("dataset.sequence.fps = 0 must be positive"),
-            Some("dataset.sequence.fps")
-        );
-        assert_eq!(valued_option_path("ramp rise = -1 must be ≥ 0"), None);
-        assert_eq!(valued_option_path("speed = 3"), None);
     }
 }
