@@ -353,6 +353,16 @@ impl ModalBeam {
         })
     }
 
+    /// The span, m.
+    pub fn length(&self) -> f64 {
+        self.length
+    }
+
+    /// The bending stiffness EI, N·m².
+    pub fn ei(&self) -> f64 {
+        self.ei
+    }
+
     /// Natural frequencies of the kept modes, Hz.
     pub fn frequencies(&self) -> Vec<f64> {
         self.modes.iter().map(|m| m.omega / (2.0 * PI)).collect()
@@ -373,7 +383,18 @@ impl ModalBeam {
         let mut state: Vec<[f64; 2]> = vec![[0.0; 2]; self.modes.len()];
         let mut force = self.modal_forces(loads, from, Side::After);
         let mut snapshots = Vec::with_capacity(times.len());
-        let mut next = 0;
+        // Outputs at `from` itself are the rest state (the first node lies after it).
+        let mut pending = times.iter().copied().peekable();
+        let mut take = |t: f64, state: &[[f64; 2]], force: &[f64]| {
+            while let Some(time) = pending.next_if(|&time| time <= t) {
+                snapshots.push(Snapshot {
+                    time,
+                    state: state.to_vec(),
+                    force: force.to_vec(),
+                });
+            }
+        };
+        take(from, &state, &force);
         let mut stepper = Stepper::default();
         let mut t = from;
         for &node in &nodes {
@@ -386,14 +407,7 @@ impl ModalBeam {
                 }
             }
             (t, force) = (node, self.modal_forces(loads, node, Side::After));
-            while next < times.len() && times[next] <= t {
-                snapshots.push(Snapshot {
-                    time: times[next],
-                    state: state.clone(),
-                    force: force.clone(),
-                });
-                next += 1;
-            }
+            take(t, &state, &force);
         }
         Response { snapshots }
     }
@@ -570,6 +584,8 @@ pub struct Motion {
     pub deflection: f64,
     /// Velocity of the deflection, m/s.
     pub velocity: f64,
+    /// Slope of the axis dv/dx, rad (positive where the deflection grows with x).
+    pub slope: f64,
     /// Acceleration of the deflection, m/s².
     pub acceleration: f64,
     /// Bending moment, N·m, sagging positive.
@@ -606,17 +622,19 @@ impl Response {
         let mut motion = Motion {
             deflection: stat.v / beam.ei,
             velocity: 0.0,
+            slope: stat.slope / beam.ei,
             acceleration: 0.0,
             moment: stat.moment,
         };
         let l2 = beam.length * beam.length;
         for ((mode, [q, v]), f) in beam.modes.iter().zip(&snap.state).zip(&snap.force) {
-            let (phi, _, curvature) = mode.shape.at(xi);
+            let (phi, dphi, curvature) = mode.shape.at(xi);
             let w2 = mode.omega * mode.omega;
             let dynamic = q - f / w2;
             let accel = f - 2.0 * beam.damping * mode.omega * v - w2 * q;
             motion.deflection += dynamic * phi;
             motion.velocity += v * phi;
+            motion.slope += dynamic * dphi / beam.length;
             motion.acceleration += accel * phi;
             // v positive downward and M sagging positive: M = −EI v″.
             motion.moment -= beam.ei * dynamic * curvature / l2;
@@ -626,4 +644,4 @@ impl Response {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

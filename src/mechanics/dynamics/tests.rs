@@ -4,18 +4,18 @@
 
 use super::*;
 
-const L: f64 = 20.0;
-const EI: f64 = 2.0e9;
-const MASS: f64 = 4000.0;
+pub(crate) const L: f64 = 20.0;
+pub(crate) const EI: f64 = 2.0e9;
+pub(crate) const MASS: f64 = 4000.0;
 
-fn first_omega_simply_supported() -> f64 {
+pub(crate) fn first_omega_simply_supported() -> f64 {
     (PI / L).powi(2) * (EI / MASS).sqrt()
 }
 
 /// Frýba's undamped solution while the force is on the span, summed to `terms`:
 /// v(x, t) = v₀ Σ 1/(j²(j² − α²)) [sin jωt − (α/j) sin ω_j t] sin(jπx/L), v₀ = 2PL³/(π⁴EI),
 /// ω = πc/L, α = ω/ω₁.
-fn fryba(force: f64, speed: f64, x: f64, t: f64, terms: u32) -> f64 {
+pub(crate) fn fryba(force: f64, speed: f64, x: f64, t: f64, terms: u32) -> f64 {
     let v0 = 2.0 * force * L.powi(3) / (PI.powi(4) * EI);
     let omega = PI * speed / L;
     let alpha = omega / first_omega_simply_supported();
@@ -30,7 +30,7 @@ fn fryba(force: f64, speed: f64, x: f64, t: f64, terms: u32) -> f64 {
         * v0
 }
 
-fn crossing(force: f64, speed: f64) -> Vec<TimeLoad> {
+pub(crate) fn crossing(force: f64, speed: f64) -> Vec<TimeLoad> {
     vec![TimeLoad::Vehicle {
         axles: vec![Axle { behind: 0.0, force }],
         speed,
@@ -148,6 +148,23 @@ fn a_force_crossing_a_simply_supported_beam_follows_frybas_series() {
             "α {alpha}: {amplification}"
         );
     }
+}
+
+#[test]
+fn an_output_at_the_start_is_the_rest_state() {
+    // A step applied at the start: at t = 0 the beam has not moved yet (before, the output at
+    // the start instant took the state after the first step).
+    let beam = ModalBeam::new(Support::SimplySupported, L, EI, MASS, 0.0, 2).unwrap();
+    let loads = [TimeLoad::Ramp {
+        at: L / 2.0,
+        force: 1.0e5,
+        start: 0.0,
+        rise: 0.0,
+    }];
+    let response = beam.respond(&loads, 0.0, &[0.0, 0.05], 16);
+    assert_eq!(response.modal(0), [0.0, 0.0]);
+    assert_eq!(response.at(&beam, &loads, 0, L / 2.0).velocity, 0.0);
+    assert!(response.modal(1)[0] > 0.0);
 }
 
 #[test]
