@@ -73,6 +73,14 @@ impl Stream {
         }
     }
 
+    /// A standard normal value by Box–Muller (one of the pair, so each value costs exactly two
+    /// uniforms and the stream's position depends only on how many values were drawn).
+    pub fn normal(&mut self) -> f64 {
+        // 1 − u lies in (0, 1]: the logarithm is finite.
+        let radius = (-2.0 * (1.0 - self.unit()).ln()).sqrt();
+        radius * (std::f64::consts::TAU * self.unit()).cos()
+    }
+
     /// Uniform integer in [lo, hi] (inclusive), without modulo bias.
     pub fn integer(&mut self, lo: i64, hi: i64) -> i64 {
         let span = hi.wrapping_sub(lo) as u64;
@@ -106,6 +114,27 @@ mod tests {
             assert!(y.is_finite() && (-1e308..1e308).contains(&y));
         }
         assert_eq!(s.uniform(2.5, 2.5), 2.5);
+    }
+
+    #[test]
+    fn normal_draws_have_zero_mean_unit_variance_and_gaussian_tails() {
+        let mut s = Stream::new(3, Scope::Sample(1), "normal");
+        let n = 200_000;
+        let draws: Vec<f64> = (0..n).map(|_| s.normal()).collect();
+        let mean = draws.iter().sum::<f64>() / n as f64;
+        let variance = draws.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+        // Standard errors: 1/√n for the mean, √(2/n) for the variance; allow 4 of them.
+        assert!(mean.abs() < 4.0 / (n as f64).sqrt(), "{mean}");
+        assert!(
+            (variance - 1.0).abs() < 4.0 * (2.0 / n as f64).sqrt(),
+            "{variance}"
+        );
+        // P(|x| > 2) = 0.0455 for a normal (0 for a uniform of unit variance, whose bound is
+        // √3): within 4 standard errors of a binomial proportion.
+        let beyond = draws.iter().filter(|x| x.abs() > 2.0).count() as f64 / n as f64;
+        let se = (0.0455 * 0.9545 / n as f64).sqrt();
+        assert!((beyond - 0.0455).abs() < 4.0 * se, "{beyond}");
+        assert!(draws.iter().all(|x| x.is_finite()));
     }
 
     #[test]

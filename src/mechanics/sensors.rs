@@ -4,13 +4,11 @@
 //!
 //! Owns: the sensor description in the beam's frame (kind, position, rate, noise), the sample
 //! times of a record, and turning the modal response of `dynamics` into each sensor's series.
-//! Must not touch: files, recipes or meshes; the noise arrives as a random stream the caller
-//! derived (never global state). Signs follow `dynamics`: deflection positive downward, sagging
+//! Must not touch: files, recipes, meshes or random streams; the noise arrives as standard
+//! normal values the caller draws from a stream it derived (never global state). Signs follow `dynamics`: deflection positive downward, sagging
 //! moment positive; conventions and units are listed in `docs/sensors.md`.
 
 use super::dynamics::{ModalBeam, Motion, Response, TimeLoad};
-use crate::seeds::Stream;
-use std::f64::consts::PI;
 
 /// The most samples one sensor may record (10⁷: 80 MB of f64), so a mistyped rate or duration
 /// is refused instead of exhausting memory.
@@ -98,7 +96,7 @@ impl SensorKind {
 /// One sensor on a beam.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sensor {
-    /// Its name in file headers (unique on the sample).
+    /// Its name in file headers: letters, digits, `_` and `-` (unique on the sample).
     pub name: String,
     /// What it measures.
     pub kind: SensorKind,
@@ -115,6 +113,13 @@ impl Sensor {
     /// `duration` seconds; otherwise the parameter and its value.
     pub fn check(&self, length: f64, duration: f64) -> Result<(), String> {
         let name = &self.name;
+        // The name labels a column of a CSV file: no separators, quotes or spaces.
+        let plain = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
+        if name.is_empty() || !name.chars().all(plain) {
+            return Err(format!(
+                "sensor name {name:?} must be letters, digits, _ and - (at least one)"
+            ));
+        }
         if !(self.at.is_finite() && (0.0..=length).contains(&self.at)) {
             return Err(format!(
                 "sensor {name:?}: position at = {} m lies off the span 0 to {length} m",
@@ -173,14 +178,15 @@ pub struct Series {
 pub const STEPS_PER_PERIOD: u32 = 64;
 
 /// Each sensor's record of the beam from rest at t = 0 to `duration` under `loads`, in the
-/// order of `sensors`. Sensors sharing a rate share one integration. Noise is drawn from
-/// `noise` sensor by sensor in their order, so a sensor without noise draws nothing.
+/// order of `sensors`. Sensors sharing a rate share one integration. `normal` gives
+/// independent standard normal values; they are taken sensor by sensor in their order, one
+/// per sample, and a sensor without noise takes none.
 pub fn record(
     beam: &ModalBeam,
     loads: &[TimeLoad],
     duration: f64,
     sensors: &[Sensor],
-    noise: &mut Stream,
+    normal: &mut dyn FnMut() -> f64,
 ) -> Result<Vec<Series>, String> {
     if !(duration.is_finite() && duration >= 0.0) {
         return Err(format!("duration must be ≥ 0, got {duration} s"));
@@ -210,7 +216,7 @@ pub fn record(
     }
     let mut series: Vec<Series> = series.into_iter().flatten().collect();
     for (sensor, recorded) in sensors.iter().zip(&mut series) {
-        add_noise(&mut recorded.values, sensor.noise, noise);
+        add_noise(&mut recorded.values, sensor.noise, normal);
     }
     Ok(series)
 }
@@ -226,21 +232,13 @@ fn sample(beam: &ModalBeam, loads: &[TimeLoad], response: &Response, sensor: &Se
 }
 
 /// Adds white Gaussian noise of RMS `rms` (nothing is drawn when it is 0).
-fn add_noise(values: &mut [f64], rms: f64, stream: &mut Stream) {
+fn add_noise(values: &mut [f64], rms: f64, normal: &mut dyn FnMut() -> f64) {
     if rms == 0.0 {
         return;
     }
     for v in values {
-        *v += rms * standard_normal(stream);
+        *v += rms * normal();
     }
-}
-
-/// A standard normal value by Box–Muller (one of the pair, so each value costs two uniforms
-/// and the stream's position depends only on how many values were drawn).
-fn standard_normal(stream: &mut Stream) -> f64 {
-    // 1 − u lies in (0, 1]: the logarithm is finite.
-    let radius = (-2.0 * (1.0 - stream.unit()).ln()).sqrt();
-    radius * (2.0 * PI * stream.unit()).cos()
 }
 
 #[cfg(test)]

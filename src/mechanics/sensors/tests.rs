@@ -2,17 +2,22 @@
 //! (PL³/48EI, PL²/16EI, ±(PL/4)c/EI), the free decay of an accelerometer's signal at the
 //! damping ratio, Frýba's series for a constant force crossing the span (the helper of the
 //! dynamics tests), the accelerometer against the second difference of the displacement
-//! series, and the noise's stated RMS.
+//! series, and the noise added as stated.
 
 use super::*;
 use crate::mechanics::Support;
 use crate::mechanics::dynamics::tests::{
     EI, L, MASS, crossing, first_omega_simply_supported, fryba,
 };
-use crate::seeds::Scope;
+use std::f64::consts::PI;
 
-fn stream() -> Stream {
-    Stream::new(7, Scope::Sample(0), "sensor noise")
+/// A source of "normal" values that counts its draws: 1, 2, 3, …
+fn counting() -> impl FnMut() -> f64 {
+    let mut drawn = 0.0;
+    move || {
+        drawn += 1.0;
+        drawn
+    }
 }
 
 fn sensor(name: &str, kind: SensorKind, at: f64, rate: f64) -> Sensor {
@@ -44,7 +49,7 @@ fn a_step_load_settles_to_the_static_deflection_rotation_and_strains() {
         sensor("top", strain(Fibre::Top), L / 2.0, 50.0),
         sensor("bottom", strain(Fibre::Bottom), L / 2.0, 100.0),
     ];
-    let series = record(&beam, &loads, 6.0, &sensors, &mut stream()).unwrap();
+    let series = record(&beam, &loads, 6.0, &sensors, &mut counting()).unwrap();
     let last = |k: usize| *series[k].values.last().unwrap();
     let deflection = force * L.powi(3) / (48.0 * EI);
     let rotation = force * L * L / (16.0 * EI);
@@ -77,7 +82,14 @@ fn an_accelerometer_decays_at_the_damping_ratio_after_a_hammer_blow() {
     let period = 2.0 * PI / (w * (1.0 - zeta * zeta).sqrt());
     // 40 samples a damped period: sample k and k + 40 are one period apart.
     let accelerometer = sensor("a", SensorKind::Acceleration, L / 2.0, 40.0 / period);
-    let series = record(&beam, &loads, 6.0 * period, &[accelerometer], &mut stream()).unwrap();
+    let series = record(
+        &beam,
+        &loads,
+        6.0 * period,
+        &[accelerometer],
+        &mut counting(),
+    )
+    .unwrap();
     let a = &series[0].values;
     let ratio = (-zeta * w * period).exp();
     let peak = a.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
@@ -107,7 +119,7 @@ fn a_displacement_sensor_under_a_crossing_force_follows_frybas_series() {
         &crossing(force, speed),
         crossing_time,
         &sensors,
-        &mut stream(),
+        &mut counting(),
     )
     .unwrap();
     let static_peak = force * L.powi(3) / (48.0 * EI);
@@ -144,7 +156,7 @@ fn an_accelerometer_reads_the_second_difference_of_the_displacement() {
         sensor("v", SensorKind::Displacement, at, rate),
         sensor("a", SensorKind::Acceleration, at, rate),
     ];
-    let series = record(&beam, &loads, 2.0, &sensors, &mut stream()).unwrap();
+    let series = record(&beam, &loads, 2.0, &sensors, &mut counting()).unwrap();
     let (v, a) = (&series[0].values, &series[1].values);
     let peak = a.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     let h = 1.0 / rate;
@@ -159,36 +171,29 @@ fn an_accelerometer_reads_the_second_difference_of_the_displacement() {
 }
 
 #[test]
-fn noise_has_its_stated_rms_and_is_reproducible() {
+fn noise_is_its_rms_times_the_normal_values_drawn_in_sensor_order() {
     let beam = ModalBeam::new(Support::Cantilever, 5.0, 1.0e7, 50.0, 0.05, 2).unwrap();
-    let mut noisy = sensor("n", SensorKind::Acceleration, 5.0, 1000.0);
-    noisy.noise = 0.02;
-    let quiet = sensor("q", SensorKind::Acceleration, 5.0, 1000.0);
-    let sensors = [quiet.clone(), noisy, quiet];
-    let first = record(&beam, &[], 20.0, &sensors, &mut stream()).unwrap();
-    let values = &first[1].values;
-    let n = values.len() as f64;
-    let rms = (values.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
-    let mean = values.iter().sum::<f64>() / n;
-    // 20 001 draws: the sample RMS is within 3/√(2n) ≈ 1.5 % of σ, the mean within 3σ/√n.
-    assert!((rms / 0.02 - 1.0).abs() < 0.015, "{rms}");
-    assert!(mean.abs() < 3.0 * 0.02 / n.sqrt(), "{mean}");
-    assert!(
-        first[0]
-            .values
-            .iter()
-            .chain(&first[2].values)
-            .all(|&v| v == 0.0)
-    );
-    let again = record(&beam, &[], 20.0, &sensors, &mut stream()).unwrap();
-    assert_eq!(first, again);
+    let quiet = sensor("q", SensorKind::Acceleration, 5.0, 10.0);
+    let mut noisy = sensor("n", SensorKind::Displacement, 2.0, 4.0);
+    noisy.noise = 0.5;
+    let mut louder = sensor("l", SensorKind::Acceleration, 5.0, 10.0);
+    louder.noise = 2.0;
+    // No load: each value is its noise alone. 1 s: 11 samples at 10 Hz, 5 at 4 Hz.
+    let sensors = [quiet, noisy, louder];
+    let series = record(&beam, &[], 1.0, &sensors, &mut counting()).unwrap();
+    assert!(series[0].values.iter().all(|&v| v == 0.0));
+    let expected = |first: usize, n: usize, rms: f64| -> Vec<f64> {
+        (first..first + n).map(|k| rms * k as f64).collect()
+    };
+    assert_eq!(series[1].values, expected(1, 5, 0.5));
+    assert_eq!(series[2].values, expected(6, 11, 2.0));
 }
 
 #[test]
 fn bad_sensors_are_refused_with_their_values() {
     let beam = ModalBeam::new(Support::SimplySupported, L, EI, MASS, 0.0, 2).unwrap();
     let refused =
-        |s: Sensor, duration: f64| record(&beam, &[], duration, &[s], &mut stream()).unwrap_err();
+        |s: Sensor, duration: f64| record(&beam, &[], duration, &[s], &mut counting()).unwrap_err();
     let e = refused(sensor("s", SensorKind::Velocity, 25.0, 10.0), 1.0);
     assert!(e.contains("\"s\"") && e.contains("25"), "{e}");
     let e = refused(sensor("s", SensorKind::Velocity, 5.0, 0.0), 1.0);
@@ -200,6 +205,8 @@ fn bad_sensors_are_refused_with_their_values() {
         distance: f64::NAN,
     };
     assert!(refused(sensor("g", gauge, 5.0, 10.0), 1.0).contains("NaN"));
+    let e = refused(sensor("a,b", SensorKind::Velocity, 5.0, 10.0), 1.0);
+    assert!(e.contains("\"a,b\""), "{e}");
     let e = refused(sensor("s", SensorKind::Velocity, 5.0, 10.0), -1.0);
     assert!(e.contains("duration") && e.contains("-1"), "{e}");
 }
