@@ -22,10 +22,11 @@
 
 use super::{LinearBeam, Load, ModeShape, Support};
 use nalgebra::Matrix4;
+use serde::Serialize;
 use std::f64::consts::PI;
 
 /// One axle of a vehicle: its distance behind the front axle (m) and its force (N, downward).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Axle {
     /// Distance behind the leading axle, metres (0 for the leading axle).
     pub behind: f64,
@@ -35,7 +36,8 @@ pub struct Axle {
 
 /// A force history acting on the beam. Times in seconds, positions in metres from x = 0,
 /// forces in N (positive downward).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+#[serde(tag = "kind", rename_all = "snake_case")]
 pub enum TimeLoad {
     /// Axles crossing from x = 0 towards x = L at constant speed; each acts while on the span.
     Vehicle {

@@ -48,6 +48,11 @@ impl ScriptRng {
     pub fn new(stream: Stream, sample: u64) -> Self {
         ScriptRng(Arc::new(Mutex::new(stream)), sample)
     }
+
+    /// The sample's stream, for recipe calls that draw many values (ambient excitation).
+    pub(super) fn stream(&self) -> std::sync::MutexGuard<'_, Stream> {
+        self.0.lock().unwrap()
+    }
 }
 
 pub fn register(
@@ -75,6 +80,7 @@ pub fn register(
     super::beam_api::register(engine);
     super::damage_api::register(engine);
     super::frame_api::register(engine);
+    super::time_api::register(engine);
     super::shape_api::register(engine, files);
     super::material_api::register(engine, materials);
     register_rng(engine);
@@ -197,6 +203,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
     let ground = super::ground_api::ground(o.take("ground"))?;
     let augment = super::augment_api::augment(o.take("augment"))?;
     let sensor = super::augment_api::sensor(o.take("sensor"))?;
+    let sequence = super::time_api::sequence(o.sub("sequence")?)?;
     let outputs = outputs(o.take("outputs"))?;
     check_flow_warps(&outputs, &augment)?;
     let normals = normals_frame(o.string("normals", "camera")?)?;
@@ -233,6 +240,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
             normals,
             points,
             ground,
+            sequence,
         },
         scene,
         site,

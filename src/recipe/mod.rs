@@ -26,6 +26,7 @@ mod option_sites;
 mod options;
 mod result;
 mod shape_api;
+mod time_api;
 
 use diagnostics::Callable;
 pub use diagnostics::RecipeError;

@@ -1,7 +1,7 @@
 //! A straight beam as a recipe declares it: section, supports, loads, theory, tessellation,
 //! material and placement. Solving and meshing it is the build stage's work.
 
-use super::{SourceSite, Tolerance};
+use super::{BeamMotion, SourceSite, Tolerance};
 use crate::materials::Material;
 use crate::mechanics::damage::DamageRequest;
 use crate::mechanics::{
@@ -105,6 +105,10 @@ pub struct BeamSpec {
     /// and what it did is in `damage` next to `labels`.
     #[serde(default, skip_serializing_if = "DamageRequest::is_empty")]
     pub damage_asked: DamageRequest,
+    /// How the beam moves over the dataset's sequence (time loads, damping, modes); absent: it
+    /// holds its static shape in every frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion: Option<BeamMotion>,
     /// The recipe call that last changed the beam's mechanics (its construction, supports,
     /// loads, target or material constants), where errors found when solving it point.
     #[serde(skip)]
@@ -135,6 +139,7 @@ impl BeamSpec {
             yaw: 0.0,
             supports_drawn: false,
             damage_asked: DamageRequest::default(),
+            motion: None,
             declared_at: None,
         }
     }

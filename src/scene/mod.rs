@@ -12,6 +12,7 @@ mod beam;
 mod frame;
 mod ground;
 mod light;
+mod sequence;
 
 pub use assembly::{AssemblySpec, Bending, LabelledPattern, ShapeSpec};
 pub use augment::{
@@ -20,6 +21,10 @@ pub use augment::{
     WarpSpec, operation_path,
 };
 pub use beam::{BeamSpec, Tessellation};
+pub use sequence::{
+    BeamMotion, DEFAULT_DAMPING, DEFAULT_EXPOSURE_FRACTION, DEFAULT_MODES, MAX_FRAMES, MountShake,
+    STEEL_DENSITY, SequenceSpec,
+};
 pub use frame::FrameSpec;
 pub use ground::{GROUND_PART, GroundSpec, ground_radius};
 pub use light::{
@@ -102,6 +107,9 @@ pub struct DatasetSpec {
     /// The ground the structures stand on, if any (none by default, as in the paper).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ground: Option<GroundSpec>,
+    /// The frames every sample films (`dataset.sequence`); absent: one still snapshot per view.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sequence: Option<SequenceSpec>,
 }
 
 /// How RGB evaluates the light that does not depend on the view (the recipe's

@@ -1,0 +1,201 @@
+//! Time in a scene description: the sequence of frames a dataset films (duration, frame rate,
+//! exposure, how the camera mounts shake) and the force histories a beam carries over it.
+//!
+//! Owns: plain, validated data about time — where a sample's sequence and its beams' time loads
+//! live, for everything downstream (frames, virtual sensors). Must not touch: Rhai, integration
+//! of the motion (`mechanics::dynamics`), random streams or files. Random excitation arrives
+//! here already drawn (as `TimeLoad::Sampled` values) from the sample's seeded stream.
+//!
+//! Where to find it: `DatasetSpec::sequence` (every sample of a dataset films the same frames)
+//! and `BeamSpec::motion` (the time loads, damping and modes of each beam that moves).
+
+use crate::mechanics::dynamics::TimeLoad;
+use serde::Serialize;
+
+/// Default exposure time as a fraction of the frame interval when a recipe gives none: a
+/// shutter open half the frame time (the "180° shutter" of film cameras).
+pub const DEFAULT_EXPOSURE_FRACTION: f64 = 0.5;
+
+/// Most frames one sample may film: a recipe asking for more is refused (4 s at 60 fps is 240).
+pub const MAX_FRAMES: u32 = 100_000;
+
+/// The frames every sample of a dataset films: frame k is the scene at t = k / fps, k from 0 to
+/// `frames() − 1`.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct SequenceSpec {
+    /// Length of the sequence, seconds (positive).
+    pub duration: f64,
+    /// Frame rate, frames per second (positive).
+    pub fps: f64,
+    /// How long the shutter is open, seconds (0 < exposure ≤ 1 / fps). Recorded; images are
+    /// rendered at the frame's instant (no motion blur yet) and labels are at that instant.
+    pub exposure: f64,
+    /// How the camera mounts shake, if they do (absent: perfectly still tripods).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mount: Option<MountShake>,
+}
+
+impl SequenceSpec {
+    /// Number of frames: every k with k / fps < duration (at least one).
+    pub fn frames(&self) -> u32 {
+        let n = (self.duration * self.fps - 1e-9).ceil().max(1.0);
+        n.min(f64::from(MAX_FRAMES)) as u32
+    }
+
+    /// The instant of frame `k`, seconds.
+    pub fn time(&self, k: u32) -> f64 {
+        f64::from(k) / self.fps
+    }
+
+    /// The instants of every frame, in order.
+    pub fn times(&self) -> Vec<f64> {
+        (0..self.frames()).map(|k| self.time(k)).collect()
+    }
+
+    /// The problem with the values, naming the parameter and its value; None when they are fine.
+    pub fn problem(&self) -> Option<String> {
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !positive(self.duration) {
+            return Some(format!(
+                "sequence duration = {} s must be a positive number of seconds",
+                self.duration
+            ));
+        }
+        if !positive(self.fps) {
+            return Some(format!(
+                "sequence fps = {} must be a positive frame rate",
+                self.fps
+            ));
+        }
+        let frames = self.duration * self.fps;
+        if frames > f64::from(MAX_FRAMES) {
+            return Some(format!(
+                "sequence duration × fps = {frames} frames, more than the {MAX_FRAMES} a sample may film"
+            ));
+        }
+        if !(positive(self.exposure) && self.exposure <= 1.0 / self.fps) {
+            return Some(format!(
+                "sequence exposure = {} s must be positive and at most the frame interval 1/fps = {} s",
+                self.exposure,
+                1.0 / self.fps
+            ));
+        }
+        self.mount.as_ref().and_then(MountShake::problem)
+    }
+}
+
+/// Small random motions of each camera's mount about its drawn pose, frame by frame: band-limited
+/// white noise of the given RMS in each rotation and translation axis, drawn per sample and view
+/// from their seeded stream and recorded in each frame's camera.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct MountShake {
+    /// RMS rotation about each camera axis, radians.
+    pub rotation: f64,
+    /// RMS translation along each camera axis, metres.
+    pub translation: f64,
+    /// Highest frequency of the shake, Hz (the noise is white below it).
+    pub band: f64,
+}
+
+impl MountShake {
+    fn problem(&self) -> Option<String> {
+        let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+        if !non_negative(self.rotation) {
+            return Some(format!(
+                "mount rotation = {} rad must be a finite RMS ≥ 0",
+                self.rotation
+            ));
+        }
+        if !non_negative(self.translation) {
+            return Some(format!(
+                "mount translation = {} m must be a finite RMS ≥ 0",
+                self.translation
+            ));
+        }
+        if !(self.band.is_finite() && self.band > 0.0) {
+            return Some(format!(
+                "mount band = {} Hz must be a positive frequency",
+                self.band
+            ));
+        }
+        None
+    }
+}
+
+/// Default modal damping ratio of a beam in motion: 2 %, typical of steel and composite girders.
+pub const DEFAULT_DAMPING: f64 = 0.02;
+
+/// Default number of modes kept in a beam's response.
+pub const DEFAULT_MODES: u32 = 10;
+
+/// Default density of a beam's material, kg/m³ (structural steel).
+pub const STEEL_DENSITY: f64 = 7850.0;
+
+/// How a beam responds over a sequence: the forces acting on it in time (on top of its static
+/// loads, which act throughout) and its modal model.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct BeamMotion {
+    /// The force histories, in the order the recipe added them.
+    pub loads: Vec<TimeLoad>,
+    /// Modal damping ratio ζ of every mode, 0 ≤ ζ < 1.
+    pub damping: f64,
+    /// Number of modes kept, ≥ 1.
+    pub modes: u32,
+    /// Density of the material, kg/m³; the mass per length is density × section area.
+    pub density: f64,
+    /// The frames show the static response to the forces acting at their instant (no inertia)
+    /// instead of the dynamic response.
+    pub quasi_static: bool,
+}
+
+impl Default for BeamMotion {
+    fn default() -> Self {
+        BeamMotion {
+            loads: Vec::new(),
+            damping: DEFAULT_DAMPING,
+            modes: DEFAULT_MODES,
+            density: STEEL_DENSITY,
+            quasi_static: false,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sequence(duration: f64, fps: f64) -> SequenceSpec {
+        SequenceSpec {
+            duration,
+            fps,
+            exposure: 0.5 / fps,
+            mount: None,
+        }
+    }
+
+    #[test]
+    fn frames_are_the_instants_before_the_end() {
+        // 4 s at 60 fps: t = 0, 1/60, …, 239/60 — 240 frames, none at t = 4 itself.
+        let s = sequence(4.0, 60.0);
+        assert_eq!(s.frames(), 240);
+        assert_eq!(s.time(239), 239.0 / 60.0);
+        // A duration that is not a whole number of frames keeps the last partial interval.
+        assert_eq!(sequence(0.05, 60.0).frames(), 3);
+        assert_eq!(sequence(1e-6, 60.0).frames(), 1);
+    }
+
+    #[test]
+    fn bad_values_are_named_with_their_value() {
+        let mut s = sequence(4.0, 60.0);
+        assert_eq!(s.problem(), None);
+        s.exposure = 0.1;
+        let why = s.problem().unwrap();
+        assert!(why.contains("exposure = 0.1"), "{why}");
+        let why = sequence(-1.0, 60.0).problem().unwrap();
+        assert!(why.contains("duration = -1"), "{why}");
+        let why = sequence(1.0, f64::NAN).problem().unwrap();
+        assert!(why.contains("fps = NaN"), "{why}");
+        let why = sequence(1e4, 1e3).problem().unwrap();
+        assert!(why.contains("10000000 frames"), "{why}");
+    }
+}
