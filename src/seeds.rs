@@ -73,14 +73,6 @@ impl Stream {
         }
     }
 
-    /// A standard normal value by Box–Muller (one of the pair, so each value costs exactly two
-    /// uniforms and the stream's position depends only on how many values were drawn).
-    pub fn normal(&mut self) -> f64 {
-        // 1 − u lies in (0, 1]: the logarithm is finite.
-        let radius = (-2.0 * (1.0 - self.unit()).ln()).sqrt();
-        radius * (std::f64::consts::TAU * self.unit()).cos()
-    }
-
     /// Uniform integer in [lo, hi] (inclusive), without modulo bias.
     pub fn integer(&mut self, lo: i64, hi: i64) -> i64 {
         let span = hi.wrapping_sub(lo) as u64;
