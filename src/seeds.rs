@@ -18,6 +18,8 @@ pub const MATERIAL: &str = "material";
 pub const LIGHT: &str = "light";
 /// The stream of a view's background (scope: the view).
 pub const BACKGROUND: &str = "background";
+/// The stream of a sample's sensor noise (scope: the sample).
+pub const SENSORS: &str = "sensors";
 /// The stream the points of a sample's point cloud are drawn from (scope: the sample).
 pub const POINTS: &str = "points";
 
@@ -125,7 +127,11 @@ mod tests {
             .map(|w| (w[0] * w[0] + w[0] * w[1] + w[1] * w[1]) / 3.0)
             .sum::<f64>()
             / (values.len() - 1) as f64;
-        assert!((mean_square.sqrt() - 2.0).abs() < 0.05, "{}", mean_square.sqrt());
+        assert!(
+            (mean_square.sqrt() - 2.0).abs() < 0.05,
+            "{}",
+            mean_square.sqrt()
+        );
         let mean = values.iter().sum::<f64>() / values.len() as f64;
         assert!(mean.abs() < 0.1, "{mean}");
     }

@@ -154,12 +154,13 @@ impl Sensor {
         Ok(())
     }
 
-    /// The instants it samples in [0, duration]: k / rate for k = 0, 1, …
+    /// The instants it samples: k / rate for every k with k / rate < duration (at least
+    /// t = 0), as the frames of a sequence are.
     pub fn times(&self, duration: f64) -> Vec<f64> {
-        // The relative slack keeps the last sample when duration·rate is an integer up to
-        // rounding (4 s at 60 Hz is 240.00000000000003 or 239.99999999999997 samples).
-        let last = (duration * self.rate * (1.0 + 1e-12)).floor() as usize;
-        (0..=last).map(|k| k as f64 / self.rate).collect()
+        // The relative slack drops a last sample at t = duration when duration·rate is an
+        // integer up to rounding (4 s at 60 Hz is 240.00000000000003 or 239.99999999999997).
+        let count = (duration * self.rate * (1.0 - 1e-12)).ceil().max(1.0) as usize;
+        (0..count).map(|k| k as f64 / self.rate).collect()
     }
 }
 

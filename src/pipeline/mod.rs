@@ -14,6 +14,7 @@ mod heap;
 mod progress;
 mod record;
 mod sample;
+mod sensors;
 mod view;
 
 /// `shmgen status`: how far the shards of a run have got (read from the folder `output` owns).

@@ -1,7 +1,7 @@
 //! A straight beam as a recipe declares it: section, supports, loads, theory, tessellation,
 //! material and placement. Solving and meshing it is the build stage's work.
 
-use super::{BeamMotion, SourceSite, Tolerance};
+use super::{BeamMotion, SensorSpec, SourceSite, Tolerance};
 use crate::materials::Material;
 use crate::mechanics::damage::DamageRequest;
 use crate::mechanics::{
@@ -109,6 +109,9 @@ pub struct BeamSpec {
     /// holds its static shape in every frame.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motion: Option<BeamMotion>,
+    /// Virtual sensors on the beam (`.sensor(#{…})`), recorded over the dataset's sequence.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sensors: Vec<SensorSpec>,
     /// The recipe call that last changed the beam's mechanics (its construction, supports,
     /// loads, target or material constants), where errors found when solving it point.
     #[serde(skip)]
@@ -140,6 +143,7 @@ impl BeamSpec {
             supports_drawn: false,
             damage_asked: DamageRequest::default(),
             motion: None,
+            sensors: Vec::new(),
             declared_at: None,
         }
     }
