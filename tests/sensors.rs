@@ -1,7 +1,10 @@
 //! Virtual sensors through the CLI: a beam's sensors declared in a recipe are written beside
 //! the sample as CSV and `.npy` (one pair per rate) with the values the closed forms give (a
 //! step's static deflection PL³/48EI and bottom-fibre strain (PL/4)c/EI), the two files hold
-//! the same numbers, and a bad sensor is refused at its file, line and column with its value.
+//! the same numbers, and a bad sensor is refused at its file, line and column with its value;
+//! `shmgen eval` of histories: the truth as prediction scores 0, an offset scores its size, a
+//! missing file makes the evaluation partial, and the first frequency it identifies from a
+//! hammer test's record is the beam's closed form (π/2L²)√(EI/m).
 
 use std::path::Path;
 use std::process::Command;
@@ -118,4 +121,104 @@ fn a_bad_sensor_is_refused_at_its_call_with_its_value() {
             "{stderr}"
         );
     }
+}
+
+/// A hammer blow at mid-span of the same beam at ζ = 1 %, recorded at mid-span by a
+/// displacement sensor at 200 Hz and an accelerometer at 500 Hz for 4 s.
+fn hammer_test() -> String {
+    let sensors = r#"        .sensor(#{ name: "mid", kind: "displacement", at: 5.0, rate: 200.0 })
+        .sensor(#{ name: "acc", kind: "acceleration", at: 5.0, rate: 500.0 })"#;
+    recipe(sensors)
+        .replace(
+            ".ramp(5.0, 1e4, 0.5, 0.0).damping(0.6)",
+            ".hammer(5.0, 1e4, 0.1, 0.005).damping(0.01)",
+        )
+        .replace("duration: 3.0", "duration: 4.0")
+}
+
+fn eval(dir: &Path, predictions: &Path) -> (std::process::Output, serde_json::Value) {
+    let json = dir.join("report.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_shmgen"))
+        .arg("eval")
+        .arg(dir.join("out"))
+        .arg(predictions)
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    let report = std::fs::read_to_string(&json)
+        .map(|t| serde_json::from_str(&t).unwrap())
+        .unwrap_or_default();
+    (out, report)
+}
+
+#[test]
+fn eval_scores_histories_against_the_sensors() {
+    let dir = tempfile::tempdir().unwrap();
+    assert!(hammer_test().contains(".hammer(5.0, 1e4, 0.1, 0.005).damping(0.01)"));
+    let out = run(dir.path(), &hammer_test());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let truth = String::from_utf8(read(dir.path(), "sensors_200hz.csv")).unwrap();
+    let predictions = dir.path().join("pred/0000");
+    std::fs::create_dir_all(&predictions).unwrap();
+
+    // The truth itself: zero error, and complete only once every history is predicted.
+    std::fs::write(predictions.join("000000.sensors_200hz.csv"), &truth).unwrap();
+    let (out, report) = eval(dir.path(), &dir.path().join("pred"));
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "the 500 Hz file has no prediction"
+    );
+    assert_eq!(report["unscored"][0]["quantity"], "history");
+    assert_eq!(
+        report["unscored"][0]["first"][0],
+        "000000.sensors_500hz.csv"
+    );
+    let mid = &report["histories"]["files"][0]["sensors"][0];
+    assert_eq!(
+        (mid["rmse"].as_f64(), mid["peak_error"].as_f64()),
+        (Some(0.0), Some(0.0))
+    );
+
+    // The beam's first frequency, identified from the truth, against the closed form.
+    let ei = 210e9 * 0.2 * 0.5f64.powi(3) / 12.0;
+    let mass = 7850.0 * 0.2 * 0.5;
+    let f1 = std::f64::consts::PI / (2.0 * 100.0) * (ei / mass).sqrt();
+    let identified = mid["frequency_truth"].as_f64().unwrap();
+    assert!(
+        (identified / f1 - 1.0).abs() < 2e-3,
+        "{identified} Hz vs {f1} Hz"
+    );
+
+    // An offset of 0.1 mm: RMSE 0.1 mm; the accelerometer's truth as its own prediction.
+    let mut lines = truth.lines();
+    let mut shifted = format!("{}\n", lines.next().unwrap().split(',').next().unwrap());
+    shifted = shifted.replace('\n', ",mid\n");
+    for line in lines {
+        let (t, v) = line.split_once(',').unwrap();
+        shifted += &format!("{t},{}\n", v.parse::<f64>().unwrap() + 1e-4);
+    }
+    std::fs::write(predictions.join("000000.sensors_200hz.csv"), shifted).unwrap();
+    let fast = read(dir.path(), "sensors_500hz.csv");
+    std::fs::write(predictions.join("000000.sensors_500hz.csv"), fast).unwrap();
+    let (out, report) = eval(dir.path(), &dir.path().join("pred"));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mid = &report["histories"]["sensors"][0];
+    assert_eq!(mid["sensor"], "mid");
+    assert!(
+        (mid["rmse"].as_f64().unwrap() - 1e-4).abs() < 1e-12,
+        "{mid}"
+    );
+    assert!(mid["frequency_error"].as_f64().unwrap() < 1e-9);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("histories: 2 files"), "{text}");
 }
