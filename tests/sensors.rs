@@ -9,16 +9,13 @@
 use std::path::Path;
 use std::process::Command;
 
+mod common;
+
+/// `shmgen run` of `recipe` (written to `dir/recipe.rhai`) into `dir/out`.
 fn run(dir: &Path, recipe: &str) -> std::process::Output {
     let file = dir.join("recipe.rhai");
     std::fs::write(&file, recipe).unwrap();
-    Command::new(env!("CARGO_BIN_EXE_shmgen"))
-        .arg("run")
-        .arg(&file)
-        .arg("--out")
-        .arg(dir.join("out"))
-        .output()
-        .unwrap()
+    common::run(&file, &dir.join("out"), &[])
 }
 
 /// A 10 m steel beam 0.2 × 0.5 m under a step of `FORCE` at mid-span at 0.5 s, damped at ζ = 0.6 so it

@@ -38,6 +38,20 @@ pub(crate) fn crossing(force: f64, speed: f64) -> Vec<TimeLoad> {
     }]
 }
 
+/// A one-mode simply supported beam damped at `zeta`, a 10 ms blow at mid-span at t = 0, and
+/// the first mode's damped period.
+pub(crate) fn ringing_after_a_blow(zeta: f64) -> (ModalBeam, [TimeLoad; 1], f64) {
+    let beam = ModalBeam::new(Support::SimplySupported, L, EI, MASS, zeta, 1).unwrap();
+    let blow = TimeLoad::Pulse {
+        at: L / 2.0,
+        force: 5.0e4,
+        start: 0.0,
+        duration: 0.01,
+    };
+    let w = first_omega_simply_supported();
+    (beam, [blow], 2.0 * PI / (w * (1.0 - zeta * zeta).sqrt()))
+}
+
 #[test]
 fn frequencies_and_modal_masses_match_closed_forms() {
     let beam = ModalBeam::new(Support::SimplySupported, L, EI, MASS, 0.0, 5).unwrap();
@@ -88,15 +102,8 @@ fn a_step_force_gives_the_damped_oscillator_step_response() {
 #[test]
 fn free_vibration_decays_by_the_damping_ratio() {
     let zeta = 0.02;
-    let beam = ModalBeam::new(Support::SimplySupported, L, EI, MASS, zeta, 1).unwrap();
-    let loads = [TimeLoad::Pulse {
-        at: L / 2.0,
-        force: 5.0e4,
-        start: 0.0,
-        duration: 0.01,
-    }];
+    let (beam, loads, period) = ringing_after_a_blow(zeta);
     let w = first_omega_simply_supported();
-    let period = 2.0 * PI / (w * (1.0 - zeta * zeta).sqrt());
     let times: Vec<f64> = (0..6).map(|k| 0.05 + k as f64 * period).collect();
     let response = beam.respond(&loads, 0.0, &times, 64);
     let ratio = (-zeta * w * period).exp();
