@@ -18,6 +18,8 @@ pub const MATERIAL: &str = "material";
 pub const LIGHT: &str = "light";
 /// The stream of a view's background (scope: the view).
 pub const BACKGROUND: &str = "background";
+/// The stream of a sample's sensor noise (scope: the sample).
+pub const SENSORS: &str = "sensors";
 /// The stream the points of a sample's point cloud are drawn from (scope: the sample).
 pub const POINTS: &str = "points";
 
@@ -146,6 +148,27 @@ mod tests {
             assert!(y.is_finite() && (-1e308..1e308).contains(&y));
         }
         assert_eq!(s.uniform(2.5, 2.5), 2.5);
+    }
+
+    #[test]
+    fn normal_draws_have_zero_mean_unit_variance_and_gaussian_tails() {
+        let mut s = Stream::new(3, Scope::Sample(1), "normal");
+        let n = 200_000;
+        let draws: Vec<f64> = (0..n).map(|_| s.normal()).collect();
+        let mean = draws.iter().sum::<f64>() / n as f64;
+        let variance = draws.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+        // Standard errors: 1/√n for the mean, √(2/n) for the variance; allow 4 of them.
+        assert!(mean.abs() < 4.0 / (n as f64).sqrt(), "{mean}");
+        assert!(
+            (variance - 1.0).abs() < 4.0 * (2.0 / n as f64).sqrt(),
+            "{variance}"
+        );
+        // P(|x| > 2) = 0.0455 for a normal (0 for a uniform of unit variance, whose bound is
+        // √3): within 4 standard errors of a binomial proportion.
+        let beyond = draws.iter().filter(|x| x.abs() > 2.0).count() as f64 / n as f64;
+        let se = (0.0455 * 0.9545 / n as f64).sqrt();
+        assert!((beyond - 0.0455).abs() < 4.0 * se, "{beyond}");
+        assert!(draws.iter().all(|x| x.is_finite()));
     }
 
     #[test]

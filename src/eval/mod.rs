@@ -18,6 +18,7 @@
 
 mod depth;
 mod epe;
+mod history;
 mod misnamed;
 mod nearest;
 mod npy;
@@ -125,6 +126,8 @@ pub struct Report {
     pub flow: Option<EpeReport>,
     /// Displacement EPE (metres), when displacement was predicted.
     pub displacement: Option<EpeReport>,
+    /// Sensor histories (`{sample:06}.sensors_{rate}hz.csv`), when any was predicted.
+    pub histories: Option<history::HistoryReport>,
     /// Files under PREDICTIONS that look like predictions but that no view or sample reads.
     pub misnamed_files: Misnamed,
     /// Each scored view's values, in dataset order.
@@ -412,6 +415,13 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
         .iter()
         .map(|sample| score_surface(&dataset, &samples, sample, options))
         .collect::<Result<Vec<_>>>()?;
+    let histories = chosen_samples
+        .iter()
+        .map(|sample| history::score_sample(&dataset, &samples, sample))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>();
     let misnamed_files = misnamed::misnamed(predictions, &samples, &dataset)?;
 
     let (depth_counts, mut unscored) = tally("depth", &named(&views, &scores, |s| &s.depth));
@@ -427,12 +437,17 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
     unscored.extend(flow_unscored);
     unscored.extend(displacement_unscored);
     unscored.extend(surface_unscored);
+    let history_items: Vec<(String, &Outcome<Vec<history::ColumnScore>>)> =
+        histories.iter().map(|(n, o)| (n.clone(), o)).collect();
+    let (history_counts, history_unscored) = tally("history", &history_items);
+    unscored.extend(history_unscored);
     let surface = surface_report(&surfaces, &surface_counts);
 
     let anything_predicted = scores
         .iter()
         .any(|s| s.depth.predicted() || s.flow.predicted() || s.displacement.predicted())
-        || surfaces.iter().any(Outcome::predicted);
+        || surfaces.iter().any(Outcome::predicted)
+        || histories.iter().any(|(_, o)| o.predicted());
     if !anything_predicted {
         let expected = views.first().map_or(String::new(), |v| {
             format!(
@@ -483,6 +498,7 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
         surface,
         flow,
         displacement,
+        histories: history::report(&histories, history_counts),
         misnamed_files,
         images: image_results(&views, &scores, options.align),
         samples: chosen_samples
@@ -798,6 +814,9 @@ impl Report {
                     f(r.epe_median)
                 );
             }
+        }
+        if let Some(h) = &self.histories {
+            out += &h.text();
         }
         out
     }

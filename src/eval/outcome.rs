@@ -42,7 +42,7 @@ impl<T> Outcome<T> {
 /// A group of views or samples of one quantity not scored, for one reason.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct Unscored {
-    /// `depth`, `flow`, `displacement` or `surface`.
+    /// `depth`, `flow`, `displacement`, `surface` or `history` (files of a sample).
     pub quantity: &'static str,
     /// Why they were not scored.
     pub reason: String,
@@ -55,7 +55,7 @@ pub struct Unscored {
 impl Unscored {
     /// One line for a person: `depth: 3 views not scored: no prediction (e.g. 000001_00, …)`.
     pub fn describe(&self) -> String {
-        let unit = if self.quantity == "surface" {
+        let unit = if matches!(self.quantity, "surface" | "history") {
             "samples"
         } else {
             "views"

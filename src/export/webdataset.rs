@@ -28,6 +28,7 @@
 
 use super::Job;
 use crate::dataset::{Dataset, Hashing, View};
+use crate::output::npy;
 use anyhow::{Context, Result, bail};
 use flate2::write::GzEncoder;
 use flate2::{Compression, GzBuilder};
@@ -206,28 +207,6 @@ fn ids_npy(dataset: &Dataset, view: &View, kind: &str) -> Result<Vec<u8>> {
     Ok(npy("<i4", &[image.height, image.width], &data))
 }
 
-/// A NumPy `.npy` file (format 1.0, NEP 1) of C-ordered `data` of dtype `descr`: the magic,
-/// the version, the header's length and a header padded with spaces to a multiple of 64
-/// bytes, as NumPy writes it.
-fn npy(descr: &str, shape: &[usize], data: &[u8]) -> Vec<u8> {
-    let dims: Vec<String> = shape.iter().map(usize::to_string).collect();
-    let shape = match dims.as_slice() {
-        [one] => format!("({one},)"),
-        _ => format!("({})", dims.join(", ")),
-    };
-    let mut header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
-    let unpadded = 10 + header.len() + 1;
-    header.push_str(&" ".repeat(unpadded.next_multiple_of(64) - unpadded));
-    header.push('\n');
-    let mut bytes = Vec::with_capacity(10 + header.len() + data.len());
-    bytes.extend_from_slice(b"\x93NUMPY\x01\x00");
-    let length = u16::try_from(header.len()).expect("a short header");
-    bytes.extend_from_slice(&length.to_le_bytes());
-    bytes.extend_from_slice(header.as_bytes());
-    bytes.extend_from_slice(data);
-    bytes
-}
-
 /// A ustar header for a member of `size` bytes, with nothing of the machine in it.
 fn header(size: u64) -> Result<tar::Header> {
     let mut header = tar::Header::new_ustar();
@@ -306,17 +285,5 @@ mod tests {
         assert_eq!(ranges.len(), 101);
         assert!(sizes(&ranges).iter().all(|&n| n == 990 || n == 991));
         assert!(shard_ranges(0, None).is_empty());
-    }
-
-    #[test]
-    fn npy_headers_are_numpys() {
-        let bytes = npy("<f4", &[2, 3], &[0; 24]);
-        // NumPy's own header for np.zeros((2, 3), np.float32), padded to 64 bytes.
-        let header = "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }";
-        assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
-        assert_eq!(u16::from_le_bytes([bytes[8], bytes[9]]), 118);
-        assert_eq!(&bytes[10..10 + header.len()], header.as_bytes());
-        assert_eq!(bytes[127], b'\n');
-        assert_eq!(bytes.len(), 128 + 24);
     }
 }

@@ -25,6 +25,11 @@ use nalgebra::Matrix4;
 use serde::Serialize;
 use std::f64::consts::PI;
 
+/// Integration steps per period of the fastest variation of a modal force that frames and
+/// sensors use, so they agree: the forces' linear interpolation between steps, the only error,
+/// stays below (π/64)²/2 ≈ 0.12 % of their amplitude.
+pub const STEPS_PER_PERIOD: u32 = 64;
+
 /// One axle of a vehicle: its distance behind the front axle (m) and its force (N, downward).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Axle {
@@ -355,6 +360,16 @@ impl ModalBeam {
         })
     }
 
+    /// The span, m.
+    pub fn length(&self) -> f64 {
+        self.length
+    }
+
+    /// The bending stiffness EI, N·m².
+    pub fn ei(&self) -> f64 {
+        self.ei
+    }
+
     /// Natural frequencies of the kept modes, Hz.
     pub fn frequencies(&self) -> Vec<f64> {
         self.modes.iter().map(|m| m.omega / (2.0 * PI)).collect()
@@ -600,6 +615,8 @@ pub struct Motion {
     pub deflection: f64,
     /// Velocity of the deflection, m/s.
     pub velocity: f64,
+    /// Slope of the axis dv/dx, rad (positive where the deflection grows with x).
+    pub slope: f64,
     /// Acceleration of the deflection, m/s².
     pub acceleration: f64,
     /// Bending moment, N·m, sagging positive.
@@ -648,17 +665,19 @@ impl Response {
         let mut motion = Motion {
             deflection: stat.v / beam.ei,
             velocity: 0.0,
+            slope: stat.slope / beam.ei,
             acceleration: 0.0,
             moment: stat.moment,
         };
         let l2 = beam.length * beam.length;
         for ((mode, [q, v]), f) in beam.modes.iter().zip(&snap.state).zip(&snap.force) {
-            let (phi, _, curvature) = mode.shape.at(xi);
+            let (phi, dphi, curvature) = mode.shape.at(xi);
             let w2 = mode.omega * mode.omega;
             let dynamic = dynamic_amplitude(mode, *q, *f);
             let accel = f - 2.0 * beam.damping * mode.omega * v - w2 * q;
             motion.deflection += dynamic * phi;
             motion.velocity += v * phi;
+            motion.slope += dynamic * dphi / beam.length;
             motion.acceleration += accel * phi;
             // v positive downward and M sagging positive: M = −EI v″.
             motion.moment -= beam.ei * dynamic * curvature / l2;
@@ -674,4 +693,4 @@ fn dynamic_amplitude(mode: &Mode, q: f64, f: f64) -> f64 {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -10,7 +10,8 @@
 //! frames and trusses by the direct stiffness method); damage (`damage`: cracks, corrosion,
 //! spalls and dents as data, placed by a recipe or by the stresses, and the damaged stiffness);
 //! and beams in time (`dynamics`: moving axles, blows and sampled forces by modal
-//! superposition). Must not touch: meshes, cameras or files; it works on plain numbers in the
+//! superposition), and the virtual sensors that record it (`sensors`: displacement,
+//! velocity, acceleration, rotation and strain series at their own rates). Must not touch: meshes, cameras or files; it works on plain numbers in the
 //! beam's own frame (axis along x from 0 to L, deflection v positive downward).
 //!
 //! Formulas, reference values, floating-point traps and the primary literature:
@@ -28,6 +29,7 @@ mod modes;
 mod range;
 mod restrained;
 mod section;
+pub mod sensors;
 mod shell;
 
 pub use linear::{LinearBeam, Load, Station, kinks};

@@ -1,4 +1,4 @@
-//! Encoders: RGB and mask PNG (fast deflate), float OpenEXR (one float32 channel per
+//! Encoders: RGB and mask PNG (fast deflate), NumPy `.npy` arrays, float OpenEXR (one float32 channel per
 //! component, named so OpenCV reads every one: see [`ExrChannels`]; scanlines in increasing
 //! order, lossless ZIP), each into memory so callers decide where bytes go.
 //!
@@ -149,6 +149,28 @@ pub fn id_png(width: u32, height: u32, ids: &[u32]) -> anyhow::Result<Vec<u8>> {
     }
     let narrow: Vec<u16> = ids.iter().map(|&i| i as u16).collect();
     Ok(grey16_png(width, height, &narrow))
+}
+
+/// A NumPy `.npy` file (format 1.0, NEP 1) of C-ordered `data` of dtype `descr`: the magic,
+/// the version, the header's length and a header padded with spaces to a multiple of 64
+/// bytes, as NumPy writes it.
+pub fn npy(descr: &str, shape: &[usize], data: &[u8]) -> Vec<u8> {
+    let dims: Vec<String> = shape.iter().map(usize::to_string).collect();
+    let shape = match dims.as_slice() {
+        [one] => format!("({one},)"),
+        _ => format!("({})", dims.join(", ")),
+    };
+    let mut header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+    let unpadded = 10 + header.len() + 1;
+    header.push_str(&" ".repeat(unpadded.next_multiple_of(64) - unpadded));
+    header.push('\n');
+    let mut bytes = Vec::with_capacity(10 + header.len() + data.len());
+    bytes.extend_from_slice(b"\x93NUMPY\x01\x00");
+    let length = u16::try_from(header.len()).expect("a short header");
+    bytes.extend_from_slice(&length.to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    bytes.extend_from_slice(data);
+    bytes
 }
 
 /// Planar depth in metres, 0 where no surface was hit.
@@ -454,5 +476,17 @@ pub(super) mod tests {
             (w, h, ::png::ColorType::Rgb)
         );
         assert_eq!(&buf[..info.buffer_size()], &rgb[..]);
+    }
+
+    #[test]
+    fn npy_headers_are_numpys() {
+        let bytes = npy("<f4", &[2, 3], &[0; 24]);
+        // NumPy's own header for np.zeros((2, 3), np.float32), padded to 64 bytes.
+        let header = "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }";
+        assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
+        assert_eq!(u16::from_le_bytes([bytes[8], bytes[9]]), 118);
+        assert_eq!(&bytes[10..10 + header.len()], header.as_bytes());
+        assert_eq!(bytes[127], b'\n');
+        assert_eq!(bytes.len(), 128 + 24);
     }
 }

@@ -2,6 +2,8 @@
 //! encodings (PNG, EXR, PLY, GLB), the folder layout and the atomic, resumable commit of each
 //! sample.
 //!
+//! `series` writes the time series of virtual sensors (CSV and `.npy`).
+//!
 //! Owns: bytes on disk. Must not touch: recipes, mechanics or tracing; it receives finished
 //! per-pixel layers, a sample's meshes as plain arrays and serialised records, and imports
 //! nothing else of the crate. Every file
@@ -21,17 +23,19 @@ mod lock;
 mod merge;
 mod meshes;
 mod openexr;
+mod series;
 mod status;
 mod writers;
 
 pub use encode::{
     DEPTH_CHANNEL, ExrChannels, FLOW_CHANNELS, MAX_SEGMENTATION_ID, SCALAR_CHANNELS,
-    VECTOR_CHANNELS, depth_exr, grey16_png, id_png, mask_png, rgb_png, rgb16_png, vector_exr,
+    VECTOR_CHANNELS, depth_exr, grey16_png, id_png, mask_png, npy, rgb_png, rgb16_png, vector_exr,
 };
 pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, differences, write_atomic};
 pub use guard::refuse_data_target;
 pub use merge::{Arrival, MergeTarget, hard_link_opened};
 pub use meshes::{MeshLayer, PointLayer};
+pub use series::{RateGroup, SensorColumn, TIME_LABEL, series_files};
 pub use status::{EXIT_COMPLETE, EXIT_INCOMPLETE, EXIT_RUNNING, Status, status};
 pub use writers::{
     DEFAULT_OUTPUTS, Flow, SAMPLE_WRITERS, SampleLayers, SampleWriter, ViewLayers, WRITERS, Writer,

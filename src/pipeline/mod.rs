@@ -14,6 +14,7 @@ mod heap;
 mod progress;
 mod record;
 mod sample;
+mod sensors;
 mod sequence;
 mod view;
 

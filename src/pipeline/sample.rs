@@ -255,6 +255,10 @@ fn write_sample_files(
             files.insert(*kind, path);
         }
     }
+    // Virtual sensors: staged with the sample, not yet listed in its records by kind.
+    for (kind, bytes) in super::sensors::sensor_files(dataset, sample)? {
+        stage.write(sample_file(sample.index, &kind), &bytes)?;
+    }
     Ok(files)
 }
 

@@ -9,7 +9,7 @@
 
 use crate::cameras::Camera;
 use crate::mechanics::Target;
-use crate::mechanics::dynamics::{ModalBeam, Response};
+use crate::mechanics::dynamics::{ModalBeam, Response, STEPS_PER_PERIOD};
 use crate::mechanics::frame::Lane;
 use crate::scene::{
     BeamSpec, DatasetSpec, FrameSpec, SceneSpec, SequenceSpec, SourceSite, Structure,
@@ -17,11 +17,6 @@ use crate::scene::{
 use crate::seeds::{Scope, Stream};
 use glam::{DMat3, DVec3};
 use serde::Serialize;
-
-/// Integration steps per period of the fastest variation of a modal force: the force's linear
-/// interpolation between steps, the integration's only error, stays below (π/64)²/2 ≈ 0.12 % of
-/// its amplitude (`ModalBeam::respond`).
-const STEPS_PER_PERIOD: u32 = 64;
 
 /// Name of the random stream each view's mount shake is drawn from.
 const MOUNT_STREAM: &str = "mount";
@@ -149,15 +144,8 @@ fn moving_beam(beam: &BeamSpec, times: &[f64]) -> Result<MovingBeam, String> {
                 .into(),
         );
     }
-    let section = beam.section.properties(beam.poisson);
-    let modal = ModalBeam::new(
-        beam.support,
-        beam.length,
-        beam.elastic_modulus * section.second_moment,
-        motion.density * section.area,
-        motion.damping,
-        motion.modes,
-    )?;
+    // The sensors' model of the beam, so their series and the frames agree.
+    let modal = crate::scene::modal_beam(beam, motion)?;
     for load in &motion.loads {
         load.check(beam.length)?;
     }

@@ -81,6 +81,7 @@ pub fn register(
     super::damage_api::register(engine);
     super::frame_api::register(engine);
     super::time_api::register(engine);
+    super::sensor_api::register(engine);
     super::shape_api::register(engine, files);
     super::material_api::register(engine, materials);
     register_rng(engine);

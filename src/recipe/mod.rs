@@ -25,6 +25,7 @@ mod memory;
 mod option_sites;
 mod options;
 mod result;
+mod sensor_api;
 mod shape_api;
 mod time_api;
 

@@ -1,7 +1,7 @@
 //! A straight beam as a recipe declares it: section, supports, loads, theory, tessellation,
 //! material and placement. Solving and meshing it is the build stage's work.
 
-use super::{BeamMotion, SourceSite, Tolerance};
+use super::{BeamMotion, SensorSpec, SourceSite, Tolerance};
 use crate::materials::Material;
 use crate::mechanics::damage::DamageRequest;
 use crate::mechanics::{
@@ -114,6 +114,9 @@ pub struct BeamSpec {
     /// solution of `loads` (which then hold the loads acting at that instant). Empty otherwise.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub frame_modes: Vec<(u32, f64)>,
+    /// Virtual sensors on the beam (`.sensor(#{…})`), recorded over the dataset's sequence.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sensors: Vec<SensorSpec>,
     /// The recipe call that last changed the beam's mechanics (its construction, supports,
     /// loads, target or material constants), where errors found when solving it point.
     #[serde(skip)]
@@ -146,6 +149,7 @@ impl BeamSpec {
             damage_asked: DamageRequest::default(),
             motion: None,
             frame_modes: Vec::new(),
+            sensors: Vec::new(),
             declared_at: None,
         }
     }

@@ -24,7 +24,7 @@ pub struct FrameSpec {
     pub tessellation: Tolerance,
     /// Members in order that time loads move along (a lane of a deck), each sharing a node
     /// with the next; positions of time loads are distances along it. Empty: no lane.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub lane: Vec<usize>,
     /// The forces it carries in time along `lane` and its modal model, in a sequence (its
     /// `density` is unused: each member has its own).

@@ -12,6 +12,7 @@ mod beam;
 mod frame;
 mod ground;
 mod light;
+mod sensors;
 mod sequence;
 
 pub use assembly::{AssemblySpec, Bending, LabelledPattern, ShapeSpec};
@@ -27,6 +28,7 @@ pub use light::{
     Background, EnvironmentLightSpec, EnvironmentSpec, GroundBounceSpec, ImageRecord, LightSpec,
     OUTDOOR_AMBIENT, SUN_DIAMETER, SkyGradient, SkySpec, SunSpec, Tone,
 };
+pub use sensors::{SensorQuantity, SensorSpec, modal_beam, record_sensors};
 pub use sequence::{
     BeamMotion, DEFAULT_DAMPING, DEFAULT_EXPOSURE_FRACTION, DEFAULT_MODES, MAX_FRAMES, MountShake,
     STEEL_DENSITY, SequenceSpec,
