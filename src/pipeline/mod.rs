@@ -8,6 +8,7 @@
 //! function of (recipe, seed, sample index) and is committed atomically.
 
 mod augmented;
+mod damage;
 mod finite;
 mod geometry;
 mod heap;
