@@ -164,6 +164,11 @@ fn check_crack(s: &Setup) {
         rows_checked += 1;
     }
     assert!(rows_checked > 5, "{rows_checked}");
+    // The record names the class and the instance points at the damage item of that type.
+    let json = read_json(&view_path(&out, 0, 0, None, "json"));
+    let item = &json["scene"]["structures"][0]["damage"]["items"][0];
+    assert_eq!(json["damage"]["classes"][1], item["type"]);
+    assert_eq!(item["type"], "flexural_crack");
     // Drawn: the most covered pixel is darker than the sound beam's same pixel by about its
     // coverage (blended towards a near-black gap, in linear light).
     let (_dir2, sound_out) = render(&recipe(s, false), &[]);
@@ -294,6 +299,18 @@ fn damage_layers_are_the_same_on_one_and_two_threads() {
         [0u8, 1, 3, 4, 5].iter().all(|c| seen.contains(c)),
         "{seen:?}"
     );
+    // The webdataset export reads the damage EXRs by the record's channel.
+    let exported = tempfile::tempdir().unwrap();
+    let to = exported.path().join("wds");
+    let output = common::shmgen(&[
+        "export".as_ref(),
+        one.as_os_str(),
+        "--format".as_ref(),
+        "webdataset".as_ref(),
+        "--out".as_ref(),
+        to.as_os_str(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
 }
 
 #[test]

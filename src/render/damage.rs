@@ -40,6 +40,19 @@ pub enum DamageClass {
     Dent = 6,
 }
 
+impl DamageClass {
+    /// The name of each class by value, as the view record and the damage records call them.
+    pub const NAMES: [&'static str; 7] = [
+        "none",
+        "flexural_crack",
+        "shear_crack",
+        "map_cracking",
+        "corrosion",
+        "spall",
+        "dent",
+    ];
+}
+
 /// A face of a prismatic piece, in its own frame (x along the axis, y across, z up).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PieceFace {
