@@ -12,6 +12,7 @@
 //! from a hash of integer cell coordinates.
 
 use super::shade::Surfaces;
+use super::surfaces::affine_weights;
 use super::trace::{GBuffer, NO_HIT};
 use crate::cameras::Camera;
 use crate::geometry::Mesh;
@@ -593,21 +594,6 @@ impl SeenMesh<'_> {
         let t = n.dot(a - camera.position) / n.dot(dir);
         (t.is_finite() && t > 0.0).then(|| camera.position + t * dir)
     }
-}
-
-/// Barycentric weights of `p` on triangle (a, b, c), not clamped: the triangle's affine map
-/// carries points and vectors off the triangle too.
-fn affine_weights(a: DVec3, b: DVec3, c: DVec3, p: DVec3) -> [f64; 3] {
-    let (e1, e2, d) = (b - a, c - a, p - a);
-    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-    let (d1, d2) = (d.dot(e1), d.dot(e2));
-    let det = d11 * d22 - d12 * d12;
-    if det <= 0.0 {
-        return [1.0, 0.0, 0.0];
-    }
-    let v = (d22 * d1 - d12 * d2) / det;
-    let w = (d11 * d2 - d12 * d1) / det;
-    [1.0 - v - w, v, w]
 }
 
 /// The undeformed point of world point `p` of triangle `tri`.
