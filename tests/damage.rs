@@ -1,7 +1,8 @@
 //! Damage through the CLI: a reinforced-concrete beam is cracked by the mechanics where the
 //! moment exceeds the cracking moment and deflects more than the sound beam, its damage lands
 //! in the view JSON (valid against the published schema); damage that leaves the stiffness
-//! alone leaves every image byte unchanged; a wrong damage call points at the recipe.
+//! alone leaves depth and mask byte for byte unchanged (only the RGB draws it); a wrong damage
+//! call points at the recipe.
 
 mod common;
 
@@ -108,17 +109,22 @@ fn the_meshed_beam_follows_the_damaged_deflection() {
 }
 
 #[test]
-fn damage_that_leaves_the_stiffness_alone_leaves_the_images_alone() {
-    let images = |out: &Path| {
+fn damage_that_leaves_the_stiffness_alone_leaves_the_geometry_alone_and_is_drawn() {
+    let files = |out: &Path, ending: &str| {
         hashes(out)
             .into_iter()
-            .filter(|(k, _)| k.ends_with(".png") || k.ends_with(".exr"))
+            .filter(|(k, _)| k.ends_with(ending))
             .collect::<Vec<_>>()
     };
     let (_a, sound) = render(&recipe(""), &[]);
     let placed = ".crack(#{ at: 2.0, width_mm: 0.3 }).spall(#{ at: 4.0, depth: 0.02 }).dent(#{ at: 1.0, depth: 0.005 }).corrosion(#{ from: 0.0, to: 1.0, section_loss: 0.0 }).map_cracking(#{ from: 4.5, to: 5.5 })";
     let (_b, damaged) = render(&recipe(placed), &[]);
-    assert_eq!(images(&sound), images(&damaged));
+    for geometric in ["depth.exr", "mask.png"] {
+        assert_eq!(files(&sound, geometric), files(&damaged, geometric));
+    }
+    // The RGB shows it (docs/damage.md, "What is drawn").
+    let rgb = |out: &Path| files(out, "rgb.png");
+    assert!(rgb(&sound).iter().zip(rgb(&damaged)).any(|(a, b)| *a != b));
     let record = view_json(&damaged);
     schema_valid(&record);
     let items = record["scene"]["structures"][0]["damage"]["items"]

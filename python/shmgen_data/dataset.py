@@ -79,7 +79,10 @@ class _Layer:
 #: and ``displacement`` ``(H, W, 3)`` float32 (x, y, z); ``flow`` ``(H, W, 2)`` float32 pixels
 #: (u, v); the EXR channels are the ones the view's record names (``Y``; ``R G B``; ``R G``);
 #: the masks ``mask``, ``cracks``, ``erased``, ``valid`` and ``flow_valid`` ``(H, W)`` bool
-#: (True where the file holds 255); ``parts`` and ``instances`` ``(H, W)`` int32 ids.
+#: (True where the file holds 255); ``parts`` and ``instances`` ``(H, W)`` int32 ids;
+#: ``damage_class`` (0 none … 6 dent, names in the record's ``damage.classes``) and
+#: ``damage_instance`` (index + 1 in the structure's ``damage.items``) ``(H, W)`` int32,
+#: ``crack_width`` (millimetres) and ``crack_coverage`` (0–1) ``(H, W)`` float32.
 LAYERS = {
     "rgb": _Layer("rgb.png", "rgb"),
     "depth": _Layer("depth.exr", "exr", "depth", ("Y",), "depth"),
@@ -97,6 +100,12 @@ LAYERS = {
     # rest_depth follows the depth convention (the record's `depth` covers both files).
     "rest_depth": _Layer("rest_depth.exr", "exr", "depth", ("Y",), "depth"),
     "ray_distance": _Layer("ray_distance.exr", "exr", "ray_distance", ("Y",), "depth"),
+    # The damage layers (output "damage"; docs/damage.md): class by value, instance, crack
+    # width in millimetres and its coverage of the pixel, 0-1.
+    "damage_class": _Layer("damage_class.png", "ids", values="damage_class"),
+    "damage_instance": _Layer("damage_instance.png", "ids"),
+    "crack_width": _Layer("crack_width.exr", "exr", "damage", ("Y",), "depth"),
+    "crack_coverage": _Layer("crack_coverage.exr", "exr", "damage", ("Y",), "fraction"),
 }
 
 #: How far a normal's length may be from 1 (float32 rounding of a unit vector is ~1e-7).
@@ -193,8 +202,20 @@ def _check_ids(values: NDArray[Any], shown: str, record: Record, layer: _Layer) 
                    f"an id must index segmentation.{layer.ids_table} of the view's record ({len(table)} entries)")
 
 
+def _check_fraction(values: NDArray[Any], shown: str, record: Record, layer: _Layer) -> None:
+    if not (values.min() >= 0 and values.max() <= 1):
+        _first_bad(~((values >= 0) & (values <= 1)), values, shown, "a share must lie in [0, 1]")
+
+
+def _check_damage_class(values: NDArray[Any], shown: str, record: Record, layer: _Layer) -> None:
+    classes = (record.get("damage") or {}).get("classes")
+    count = len(classes) if isinstance(classes, list) else 7
+    _first_bad(values >= count, values, shown,
+               f"a damage class must index damage.classes of the view's record ({count} entries)")
+
+
 #: The value checks of :attr:`_Layer.values`: (values, file shown, record, layer) → None.
-_VALUE_CHECKS: dict[str, Callable[[NDArray[Any], str, Record, _Layer], None]] = {"depth": _check_depth, "unit": _check_unit, "finite": _check_finite, "ids": _check_ids}
+_VALUE_CHECKS: dict[str, Callable[[NDArray[Any], str, Record, _Layer], None]] = {"depth": _check_depth, "unit": _check_unit, "finite": _check_finite, "ids": _check_ids, "fraction": _check_fraction, "damage_class": _check_damage_class}
 
 
 @dataclass
@@ -290,7 +311,8 @@ class View:
     Images (see :data:`LAYERS` for shapes and dtypes), read on first access and kept:
     ``rgb``, ``depth``, ``mask``, ``parts``, ``instances``, ``cracks``, ``erased``, ``valid``,
     ``normals``, ``displacement``, ``flow``, ``flow_valid``, ``rest_rgb``, ``rest_depth``,
-    ``ray_distance``. Asking for one the view does not have raises :class:`MissingFileError`
+    ``ray_distance``, ``damage_class``, ``damage_instance``, ``crack_width``,
+    ``crack_coverage``. Asking for one the view does not have raises :class:`MissingFileError`
     naming the view and the output; :meth:`has` and :attr:`layers` tell which it has.
     """
 
@@ -315,6 +337,10 @@ class View:
     rest_rgb = _Output()
     rest_depth = _Output()
     ray_distance = _Output()
+    damage_class = _Output()
+    damage_instance = _Output()
+    crack_width = _Output()
+    crack_coverage = _Output()
 
     def __init__(self, root: Path, sample: int, view: int, copy: int | None, stem: str,
                  files: dict[str, Path], source: DatasetFiles | None = None):

@@ -136,7 +136,11 @@ fn write_shard(dataset: &Dataset, path: &Path, views: &[&View]) -> Result<()> {
 /// The EXR channels of `layer` as the view's record names them (`depth.channel`,
 /// `normals.channels`, …; `rest_depth` follows `depth`).
 fn exr_channels(record: &Value, layer: &str, relative: &str) -> Result<Vec<String>> {
-    let convention = &record[layer.strip_prefix("rest_").unwrap_or(layer)];
+    let convention = match layer {
+        // The damage layers share one convention.
+        "crack_width" | "crack_coverage" => &record["damage"],
+        _ => &record[layer.strip_prefix("rest_").unwrap_or(layer)],
+    };
     let names: Option<Vec<String>> = match (&convention["channels"], &convention["channel"]) {
         (Value::Array(list), _) => list
             .iter()

@@ -3,8 +3,8 @@
 //! geometry). Each returns its files; adding an output is adding a writer here.
 
 use super::encode::{
-    FLOW_CHANNELS, SCALAR_CHANNELS, VECTOR_CHANNELS, depth_exr, id_png, mask_png, rgb_png,
-    vector_exr,
+    FLOW_CHANNELS, SCALAR_CHANNELS, VECTOR_CHANNELS, depth_exr, grey16_png, id_png, mask_png,
+    rgb_png, vector_exr,
 };
 use super::meshes::{MeshLayer, PointLayer, mesh_glb, mesh_ply, points_ply};
 use anyhow::Result;
@@ -46,6 +46,8 @@ pub trait ViewLayers {
     fn rest_rgb(&self) -> &[u8];
     /// Planar depth of the unloaded structure, metres, 0 where no surface is seen.
     fn rest_depth(&self) -> &[f32];
+    /// The damage each pixel's surface point lies on (see `DamageLayers`).
+    fn damage(&self) -> DamageLayers;
 
     /// Share of the pixels that see a structure.
     fn coverage(&self) -> f64 {
@@ -60,6 +62,21 @@ pub struct Flow {
     pub vectors: Vec<[f32; 2]>,
     /// 255 where the point moves to a pixel inside the frame and is seen there, else 0.
     pub valid: Vec<u8>,
+}
+
+/// The per-pixel damage labels of a view, from its centre rays (docs/damage.md).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DamageLayers {
+    /// Damage class: 0 none, 1 flexural crack, 2 shear crack, 3 map cracking, 4 corrosion
+    /// (and its stains), 5 spall, 6 dent.
+    pub class: Vec<u8>,
+    /// Index + 1 of the damage in its structure's `damage.items` (the structure is the
+    /// pixel's instance id); 0 none.
+    pub instance: Vec<u16>,
+    /// Width of the crack the pixel's footprint touches, millimetres; 0 elsewhere.
+    pub crack_width_mm: Vec<f32>,
+    /// Share of the pixel's footprint the crack covers, 0–1.
+    pub crack_coverage: Vec<f32>,
 }
 
 /// An output kind: its name in `dataset.outputs`, the files it writes for each view and how
@@ -84,7 +101,7 @@ impl Writer {
 }
 
 /// Every output shmgen can write, in the order a view's files are written.
-pub const WRITERS: [Writer; 14] = [
+pub const WRITERS: [Writer; 15] = [
     Writer {
         output: "rgb",
         files: &["rgb.png"],
@@ -220,6 +237,32 @@ pub const WRITERS: [Writer; 14] = [
             )?])
         },
     },
+    Writer {
+        output: "damage",
+        files: &[
+            "damage_class.png",
+            "damage_instance.png",
+            "crack_width.exr",
+            "crack_coverage.exr",
+        ],
+        write: |v| {
+            let (w, h) = v.size();
+            let damage = v.damage();
+            let scalar = |values: &[f32], note| {
+                let values: Vec<[f32; 1]> = values.iter().map(|&x| [x]).collect();
+                vector_exr((w, h), SCALAR_CHANNELS.names, &values, note)
+            };
+            let width =
+                "Y = width of the crack the pixel's footprint touches, millimetres; 0 elsewhere";
+            let coverage = "Y = share of the pixel's footprint the crack covers, 0-1";
+            Ok(vec![
+                mask_png(w, h, &damage.class),
+                grey16_png(w, h, &damage.instance),
+                scalar(&damage.crack_width_mm, ("shmgen_crack_width", width))?,
+                scalar(&damage.crack_coverage, ("shmgen_crack_coverage", coverage))?,
+            ])
+        },
+    },
 ];
 
 /// The geometry of a built sample, for the per-sample writers.
@@ -328,6 +371,14 @@ mod tests {
         fn rest_depth(&self) -> &[f32] {
             &[2.45, 0.0]
         }
+        fn damage(&self) -> DamageLayers {
+            DamageLayers {
+                class: vec![1, 0],
+                instance: vec![3, 0],
+                crack_width_mm: vec![0.3, 0.0],
+                crack_coverage: vec![0.15, 0.0],
+            }
+        }
     }
 
     /// One triangle of part 1, lifted by 1 cm when loaded.
@@ -387,6 +438,8 @@ mod tests {
                     ("R", vec![1e-3, 0.0]),
                 ],
                 "flow.exr" => vec![("G", vec![1.5, 0.0]), ("R", vec![0.25, 0.0])],
+                "crack_width.exr" => vec![("Y", vec![0.3, 0.0])],
+                "crack_coverage.exr" => vec![("Y", vec![0.15, 0.0])],
                 other => panic!("no expected channels for {other}"),
             }
         };
@@ -405,7 +458,7 @@ mod tests {
                 checked += 1;
             }
         }
-        assert_eq!(checked, 6);
+        assert_eq!(checked, 8);
     }
 
     #[test]

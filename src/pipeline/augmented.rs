@@ -14,7 +14,7 @@ use crate::augment::{
     Vignette,
 };
 use crate::cameras::Camera;
-use crate::output::{Flow, ViewLayers};
+use crate::output::{DamageLayers, Flow, ViewLayers};
 use crate::render::ViewVisibility;
 use crate::scene::{AugmentSpec, DatasetSpec, GeometryMode, NormalsFrame, Operation};
 use crate::seeds::{Scope, Stream};
@@ -420,6 +420,16 @@ impl ViewLayers for AugmentedView<'_> {
     fn rest_depth(&self) -> &[f32] {
         self.rest_depth
             .get_or_init(|| self.moved(self.base.rest_depth().to_vec()))
+    }
+
+    fn damage(&self) -> DamageLayers {
+        let base = self.base.damage();
+        DamageLayers {
+            class: self.moved(base.class),
+            instance: self.moved(base.instance),
+            crack_width_mm: self.moved(base.crack_width_mm),
+            crack_coverage: self.moved(base.crack_coverage),
+        }
     }
 }
 

@@ -8,6 +8,7 @@
 //! function of (recipe, seed, sample index) and is committed atomically.
 
 mod augmented;
+mod damage;
 mod finite;
 mod geometry;
 mod heap;
@@ -20,6 +21,8 @@ mod view;
 
 /// `shmgen status`: how far the shards of a run have got (read from the folder `output` owns).
 pub use crate::output::{EXIT_COMPLETE, EXIT_INCOMPLETE, EXIT_RUNNING, Status, status};
+/// The damage classes by value, for readers of the damage layers.
+pub use crate::render::DamageClass;
 pub use geometry::SampleGeometry;
 pub use record::{FrameRecord, ViewFacts};
 pub use record::{RunRecord, ViewRecord, json_bytes, run_json, run_schema, view_schema};

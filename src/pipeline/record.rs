@@ -121,6 +121,10 @@ pub struct ViewRecord<'a> {
     pub mask: MaskConvention,
     /// How to read the crack file.
     pub cracks: CrackConvention,
+    /// How to read the damage files (`damage_class`, `damage_instance`, `crack_width`,
+    /// `crack_coverage`); only when the dataset writes them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damage: Option<DamageConvention>,
     /// The id tables of the part and instance images.
     pub segmentation: &'a Segmentation,
     /// What the RGB image shows where no structure is.
@@ -431,6 +435,24 @@ pub struct CrackConvention {
     /// Share of the pixel's footprint, 0–1, a crack must cover for the pixel to be labelled a
     /// crack.
     pub min_cover: f64,
+}
+
+/// How to read the damage files (docs/damage.md).
+#[derive(Serialize, schemars::JsonSchema)]
+pub struct DamageConvention {
+    /// The damage type of each value of `damage_class` (8-bit): index = value, 0 "none".
+    pub classes: [&'static str; 7],
+    /// What `damage_instance` (16-bit) holds.
+    pub instance: &'static str,
+    /// What `crack_width` (float32 channel Y) holds.
+    pub crack_width: &'static str,
+    /// What `crack_coverage` (float32 channel Y) holds.
+    pub crack_coverage: &'static str,
+    /// The EXR channel of `crack_width` and `crack_coverage` ("Y").
+    pub channel: &'static str,
+    /// Share of a pixel below which a crack counts as unresolved by a view (the run warns
+    /// when no view of a sample resolves a crack).
+    pub resolved_coverage: f64,
 }
 
 /// The id tables of the segmentation images, shared by every view of a sample.
@@ -778,6 +800,14 @@ impl<'a> SampleRecord<'a> {
                 structure: 255,
                 background: 0,
             },
+            damage: recipe.dataset.outputs.wants("damage").then_some(DamageConvention {
+                classes: crate::render::DamageClass::NAMES,
+                instance: "index + 1 of the damage in scene.structures[s].damage.items, where s + 1 is the pixel's value in instances; 0 = none",
+                crack_width: "width of the crack the pixel's footprint touches, millimetres; 0 elsewhere",
+                crack_coverage: "share of the pixel's footprint the crack covers, 0-1, from the crack's band over the footprint's parallelogram on the surface",
+                channel: SCALAR_CHANNELS.names[0],
+                resolved_coverage: super::damage::RESOLVED_COVERAGE,
+            }),
             cracks: CrackConvention {
                 crack: 255,
                 elsewhere: 0,

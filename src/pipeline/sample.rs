@@ -3,6 +3,7 @@
 //! files with the view's record.
 
 use super::augmented::{Applied, AugmentedView, copy_camera};
+use super::damage::{unresolved_cracks, unresolved_warning};
 use super::finite::check_finite;
 use super::geometry::SampleGeometry;
 use super::record::{AugmentationRecord, FrameRecord, SampleRecord, ViewFacts, json_bytes};
@@ -160,6 +161,23 @@ fn write_still(
                 stage.write(path, &bytes)?;
             }
         }
+    }
+    warn_unresolved_cracks(&renderer)?;
+    Ok(())
+}
+
+/// Warns (on stderr) about the sample's cracks no view of it resolves.
+fn warn_unresolved_cracks(renderer: &SampleRenderer) -> Result<()> {
+    let Some(damage) = renderer.damage() else {
+        return Ok(());
+    };
+    let (dataset, sample) = (renderer.dataset(), renderer.sample());
+    let cameras = (0..dataset.cameras_per_sample())
+        .map(|view| Ok(view_camera(dataset, sample, view)?.camera))
+        .collect::<Result<Vec<_>>>()?;
+    let cracks = unresolved_cracks(damage, &cameras);
+    if let Some(warning) = unresolved_warning(sample.index, &cracks) {
+        eprintln!("warning: {warning}");
     }
     Ok(())
 }

@@ -4,16 +4,17 @@
 //! BVH, built once per sample when a view first needs it.
 
 use super::augmented::{Applied, draw_sensor, photometric};
+use super::damage::sample_damage;
 use crate::augment::defocus_by_depth;
 use crate::build::{BackdropDraw, BuiltSample, draw_backdrop};
 use crate::cameras::{Camera, ViewDraw};
 use crate::materials::Backdrop;
 use crate::materials::cache::FieldCache;
-use crate::output::{Flow, ViewLayers};
+use crate::output::{DamageLayers, Flow, ViewLayers};
 use crate::render::{
-    CacheSettings, Deformed, GBuffer, ImageVisibility, LightCache, NO_HIT, SampleSurfaces,
-    SecondaryRays, Shaded, TraceMesh, Traced, ViewVisibility, displacement, flow, normals,
-    ray_distance, shade,
+    CacheSettings, DamagedSurfaces, Deformed, GBuffer, ImageVisibility, LightCache, NO_HIT,
+    SampleDamage, SampleSurfaces, SecondaryRays, SeenMesh, Shaded, Surfaces, TraceMesh, Traced,
+    ViewVisibility, displacement, flow, normals, ray_distance, shade,
 };
 use crate::scene::{DatasetSpec, NormalsFrame, Shading};
 use crate::seeds::{self, Scope, Stream};
@@ -123,6 +124,8 @@ pub struct SampleRenderer<'a> {
     /// The lighting caches of the loaded and the unloaded mesh, made on first use (none with
     /// `shading: "per_pixel"`), shared by every view and dropped with the sample.
     light_caches: [OnceLock<LightCache>; 2],
+    /// The sample's damage, drawn and labelled; None for a sound sample (drawn as before).
+    damage: Option<SampleDamage>,
 }
 
 /// One view of a sample: its camera and centre-ray trace, with the other layers rendered on
@@ -188,6 +191,7 @@ impl<'a> SampleRenderer<'a> {
             cache: None,
             rest: OnceLock::new(),
             light_caches: Default::default(),
+            damage: sample_damage(sample),
         }
     }
 
@@ -255,6 +259,11 @@ impl<'a> SampleRenderer<'a> {
     /// The sample being viewed.
     pub fn sample(&self) -> &'a BuiltSample {
         self.sample
+    }
+
+    /// The sample's damage as drawn; None for a sound sample.
+    pub fn damage(&self) -> Option<&SampleDamage> {
+        self.damage.as_ref()
     }
 
     /// Traces view `view` and draws its backdrop.
@@ -376,12 +385,37 @@ impl RenderedView<'_> {
     }
 
     /// RGB of what `g` saw through this view's camera in `mesh`, with the sample's
-    /// light and this view's backdrop, through the sensor.
+    /// light and this view's backdrop, through the sensor; the sample's damage drawn on
+    /// `surfaces` when it has some.
     fn shaded(
         &self,
         g: &GBuffer,
         mesh: &TraceMesh,
         surfaces: &SampleSurfaces,
+        cache: Option<&LightCache>,
+    ) -> Shaded {
+        match &self.renderer.damage {
+            Some(damage) => {
+                let damaged = DamagedSurfaces {
+                    inner: surfaces,
+                    damage,
+                    seen: SeenMesh {
+                        mesh: surfaces.mesh,
+                        rest: surfaces.rest,
+                        camera: &self.camera,
+                    },
+                };
+                self.shaded_surfaces(g, mesh, &damaged, cache)
+            }
+            None => self.shaded_surfaces(g, mesh, surfaces, cache),
+        }
+    }
+
+    fn shaded_surfaces(
+        &self,
+        g: &GBuffer,
+        mesh: &TraceMesh,
+        surfaces: &impl Surfaces,
         cache: Option<&LightCache>,
     ) -> Shaded {
         let r = self.renderer;
@@ -548,6 +582,31 @@ impl ViewLayers for RenderedView<'_> {
 
     fn rest_depth(&self) -> &[f32] {
         &self.rest_geometric().depth
+    }
+
+    fn damage(&self) -> DamageLayers {
+        let r = self.renderer;
+        let pixels = self.gbuffer.triangle.len();
+        let Some(damage) = &r.damage else {
+            return DamageLayers {
+                class: vec![0; pixels],
+                instance: vec![0; pixels],
+                crack_width_mm: vec![0.0; pixels],
+                crack_coverage: vec![0.0; pixels],
+            };
+        };
+        let seen = SeenMesh {
+            mesh: &r.sample.mesh,
+            rest: &r.sample.rest,
+            camera: &self.camera,
+        };
+        let labels = damage.labels(self.structure(), &self.camera, &seen);
+        DamageLayers {
+            class: labels.iter().map(|d| d.class as u8).collect(),
+            instance: labels.iter().map(|d| d.instance).collect(),
+            crack_width_mm: labels.iter().map(|d| d.crack_width_mm as f32).collect(),
+            crack_coverage: labels.iter().map(|d| d.crack_coverage as f32).collect(),
+        }
     }
 
     fn coverage(&self) -> f64 {

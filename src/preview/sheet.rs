@@ -17,7 +17,7 @@ use super::colours::{flow_colour, id_colour, normal_colour};
 use super::legend::{self, Legend, bar_colour};
 use crate::build::BuiltSample;
 use crate::output::{Flow, ViewLayers, rgb_png};
-use crate::pipeline::{SampleRenderer, for_each_image, prepare};
+use crate::pipeline::{DamageClass, SampleRenderer, for_each_image, prepare};
 use crate::recipe::Recipe;
 use crate::scene::{DatasetSpec, Structure};
 use anyhow::Result;
@@ -100,11 +100,12 @@ enum Layer {
     Normals,
     Flow,
     Displacement,
+    Damage,
 }
 
 /// Every column the sheet can show, in the sheet's order: the layer, its name in
 /// `dataset.outputs` and its title.
-const COLUMNS: [(Layer, &str, &str); 14] = [
+const COLUMNS: [(Layer, &str, &str); 15] = [
     (Layer::Rgb, "rgb", "RGB"),
     (Layer::RestRgb, "rest_rgb", "rest RGB"),
     (Layer::Depth, "depth", "depth"),
@@ -119,6 +120,7 @@ const COLUMNS: [(Layer, &str, &str); 14] = [
     (Layer::Normals, "normals", "normals"),
     (Layer::Flow, "flow", "flow"),
     (Layer::Displacement, "displacement", "displacement"),
+    (Layer::Damage, "damage", "damage class"),
 ];
 
 impl Layer {
@@ -170,6 +172,10 @@ impl Layer {
             Layer::Cracks => Cell::Mask(view.cracks().to_vec()),
             Layer::Parts => Cell::Labels(view.part_ids(), names.parts.clone()),
             Layer::Instances => Cell::Labels(view.instance_ids(), names.instances.clone()),
+            Layer::Damage => Cell::Labels(
+                view.damage().class.into_iter().map(u32::from).collect(),
+                names.damage.clone(),
+            ),
             Layer::Normals => Cell::Normals(view.normals()),
             Layer::Flow => Cell::Flow(view.flow()),
             Layer::Displacement => Cell::Displacement(
@@ -198,6 +204,8 @@ enum Cell {
 struct SampleNames {
     parts: Arc<Vec<String>>,
     instances: Arc<Vec<String>>,
+    /// The damage classes by value (0 = none).
+    damage: Arc<Vec<String>>,
 }
 
 impl SampleNames {
@@ -220,6 +228,7 @@ impl SampleNames {
         SampleNames {
             parts: Arc::new(parts),
             instances: Arc::new(instances),
+            damage: Arc::new(DamageClass::NAMES.map(String::from).to_vec()),
         }
     }
 }
@@ -345,7 +354,12 @@ fn needs_legend(layer: Layer) -> bool {
     layer.is_metres()
         || matches!(
             layer,
-            Layer::Parts | Layer::Instances | Layer::Normals | Layer::Flow | Layer::Displacement
+            Layer::Parts
+                | Layer::Instances
+                | Layer::Damage
+                | Layer::Normals
+                | Layer::Flow
+                | Layer::Displacement
         )
 }
 
@@ -844,7 +858,7 @@ impl Sheet<'_> {
                 }
                 Layer::Normals => Legend::Normals(self.dataset.normals),
                 Layer::Flow => Legend::Flow { max: ranges.flow },
-                Layer::Parts | Layer::Instances => Legend::Names {
+                Layer::Parts | Layer::Instances | Layer::Damage => Legend::Names {
                     title: layer.title(),
                     names: ranges.names.get(&column).cloned().unwrap_or_default(),
                 },

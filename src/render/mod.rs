@@ -15,6 +15,7 @@
 //! it sees meshes, cameras and materials only. One centre ray per pixel for every geometric
 //! label; nothing here draws random numbers.
 
+mod damage;
 mod daylight;
 mod fields;
 mod gloss;
@@ -28,6 +29,10 @@ mod trace;
 mod visibility;
 mod watertight;
 
+pub use damage::{
+    DamageAt, DamageClass, DamagedPiece, DamagedSurfaces, FaceSegment, Mark, MarkShape, PieceFace,
+    SampleDamage, SeenMesh,
+};
 pub use fields::{Deformed, displacement, flow, normals, ray_distance};
 pub use light_cache::{CacheSettings, LightCache};
 pub use shade::{Shaded, Surfaces, shade};

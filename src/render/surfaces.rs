@@ -128,6 +128,17 @@ const SHALLOW_CREASE_COS: f64 = 0.939_692_620_785_908_4;
 /// Barycentric weights of the point of triangle (a, b, c) nearest to `p`'s projection,
 /// clamped onto the triangle (a hit can stray outside it by the f32 rounding of tracing).
 pub(super) fn barycentric(a: DVec3, b: DVec3, c: DVec3, p: DVec3) -> [f64; 3] {
+    let [_, v, w] = affine_weights(a, b, c, p);
+    let (v, w) = (v.max(0.0), w.max(0.0));
+    let total = (v + w).max(1.0);
+    let (v, w) = (v / total, w / total);
+    [1.0 - v - w, v, w]
+}
+
+/// Barycentric weights of `p`'s projection on the plane of triangle (a, b, c), not clamped:
+/// the triangle's affine map carries points and vectors off the triangle too. A degenerate
+/// triangle gives its first corner.
+pub(super) fn affine_weights(a: DVec3, b: DVec3, c: DVec3, p: DVec3) -> [f64; 3] {
     let (e1, e2, d) = (b - a, c - a, p - a);
     let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
     let (d1, d2) = (d.dot(e1), d.dot(e2));
@@ -135,10 +146,8 @@ pub(super) fn barycentric(a: DVec3, b: DVec3, c: DVec3, p: DVec3) -> [f64; 3] {
     if det <= 0.0 {
         return [1.0, 0.0, 0.0];
     }
-    let v = ((d22 * d1 - d12 * d2) / det).max(0.0);
-    let w = ((d11 * d2 - d12 * d1) / det).max(0.0);
-    let total = (v + w).max(1.0);
-    let (v, w) = (v / total, w / total);
+    let v = (d22 * d1 - d12 * d2) / det;
+    let w = (d11 * d2 - d12 * d1) / det;
     [1.0 - v - w, v, w]
 }
 

@@ -1,0 +1,258 @@
+//! From the mechanics' damage records of a built sample to the marks the renderer draws and
+//! labels, and the warning for cracks no view of a sample can resolve.
+//!
+//! Owns: the translation (faces, surface coordinates, widths in metres, the strength rust is
+//! drawn with, instance ids = index + 1 in a structure's `damage.items`), and the resolution
+//! check. The drawing and the per-pixel labels are `render::damage`'s.
+
+use crate::build::BuiltSample;
+use crate::cameras::Camera;
+use crate::mechanics::damage::{Damage, DamageShape, Face, SurfacePoint};
+use crate::render::{
+    DamageClass, DamagedPiece, FaceSegment, Mark, MarkShape, PieceFace, SampleDamage,
+};
+use crate::scene::Structure;
+use glam::{DMat3, DVec2, DVec3};
+
+/// The part name of a beam's own triangles (the one its damage records name).
+const BEAM_PART: &str = "beam";
+
+/// The share of a pixel a crack must cover in some view for it to count as resolved.
+pub const RESOLVED_COVERAGE: f64 = 0.05;
+
+/// The damage of every damaged beam of `sample`, ready to draw; None for a sound sample.
+pub fn sample_damage(sample: &BuiltSample) -> Option<SampleDamage> {
+    let part = sample.parts.iter().position(|p| p == BEAM_PART)? as u32;
+    let pieces = damaged_pieces(sample, part);
+    SampleDamage::new(pieces, &sample.owner, &sample.part)
+}
+
+fn damaged_pieces(sample: &BuiltSample, part: u32) -> Vec<DamagedPiece> {
+    let structures = sample.scene.structures.iter().zip(&sample.beams);
+    structures
+        .enumerate()
+        .filter_map(|(i, (structure, outcome))| {
+            let (Structure::Beam(beam), Some(outcome)) = (structure, outcome) else {
+                return None;
+            };
+            let damage = outcome.damage.as_ref()?;
+            Some(DamagedPiece {
+                structure: i as u32,
+                part,
+                rotation: DMat3::from_rotation_z(beam.yaw),
+                centre: DVec3::from_array(beam.centre),
+                length: beam.length,
+                half_height: 0.5 * beam.section.height(),
+                marks: damage.items.iter().enumerate().map(mark).collect(),
+            })
+        })
+        .collect()
+}
+
+fn piece_face(face: Face) -> PieceFace {
+    match face {
+        Face::Bottom => PieceFace::Bottom,
+        Face::Top => PieceFace::Top,
+        Face::SideNegY => PieceFace::SideNegY,
+        Face::SidePosY => PieceFace::SidePosY,
+    }
+}
+
+fn on_face(p: &SurfacePoint) -> DVec2 {
+    DVec2::new(p.along, p.height)
+}
+
+/// A crack's polyline as straight pieces on single faces (a step from one face to the next
+/// is a corner, not a piece).
+fn crack_segments(path: &[SurfacePoint]) -> Vec<FaceSegment> {
+    path.windows(2)
+        .filter(|w| w[0].face == w[1].face)
+        .map(|w| FaceSegment {
+            face: piece_face(w[0].face),
+            from: on_face(&w[0]),
+            to: on_face(&w[1]),
+        })
+        .collect()
+}
+
+/// How strongly rust is drawn for a section loss: visible staining even with no measurable
+/// loss, dense dark rust from 15 % (the "severe" step) on.
+fn rust_strength(section_loss: f64) -> f64 {
+    (0.45 + 0.5 * (section_loss / 0.15)).min(0.95)
+}
+
+/// The mark of damage `index` of a beam.
+fn mark((index, damage): (usize, &Damage)) -> Mark {
+    let (class, shape) = match &damage.shape {
+        DamageShape::FlexuralCrack { path, width_mm } => (
+            DamageClass::FlexuralCrack,
+            MarkShape::Crack {
+                segments: crack_segments(path),
+                width: width_mm * 1e-3,
+            },
+        ),
+        DamageShape::ShearCrack { path, width_mm } => (
+            DamageClass::ShearCrack,
+            MarkShape::Crack {
+                segments: crack_segments(path),
+                width: width_mm * 1e-3,
+            },
+        ),
+        DamageShape::MapCracking {
+            from,
+            to,
+            face,
+            cell,
+            width_mm,
+        } => (
+            DamageClass::MapCracking,
+            MarkShape::Network {
+                face: piece_face(*face),
+                from: *from,
+                to: *to,
+                cell: *cell,
+                width: width_mm * 1e-3,
+            },
+        ),
+        DamageShape::Corrosion {
+            from,
+            to,
+            faces,
+            section_loss,
+            stain_length,
+            ..
+        } => (
+            DamageClass::Corrosion,
+            MarkShape::Corrosion {
+                faces: faces.iter().copied().map(piece_face).collect(),
+                from: *from,
+                to: *to,
+                strength: rust_strength(*section_loss),
+                stain_length: *stain_length,
+            },
+        ),
+        DamageShape::Spall { outline, .. } => (
+            DamageClass::Spall,
+            MarkShape::Spall {
+                face: piece_face(damage.position.face),
+                outline: outline.iter().map(on_face).collect(),
+            },
+        ),
+        DamageShape::Dent { radius, .. } => (
+            DamageClass::Dent,
+            MarkShape::Dent {
+                face: piece_face(damage.position.face),
+                centre: on_face(&damage.position),
+                radius: *radius,
+            },
+        ),
+    };
+    Mark {
+        class,
+        instance: u16::try_from(index + 1).unwrap_or(u16::MAX),
+        shape,
+    }
+}
+
+/// A crack no view resolves: which, how wide, and the smallest pixel footprint any view that
+/// sees it has there (None when no view sees it).
+#[derive(Debug, PartialEq)]
+pub struct Unresolved {
+    /// Structure index.
+    pub structure: u32,
+    /// Instance id (index + 1 in the structure's damage items).
+    pub instance: u16,
+    /// Width, millimetres.
+    pub width_mm: f64,
+    /// Smallest pixel footprint at the crack over the views that see it, millimetres.
+    pub footprint_mm: Option<f64>,
+}
+
+/// The cracks of `damage` whose best coverage over `cameras` stays below
+/// `RESOLVED_COVERAGE`. A view sees a crack piece when its midpoint (undeformed) lies in front
+/// of the camera, inside the frame, on a face turned to it; the best case is taken (the
+/// piece face-on, at its nearest point, occlusion not tested), so the warning errs towards
+/// silence.
+pub fn unresolved_cracks(damage: &SampleDamage, cameras: &[Camera]) -> Vec<Unresolved> {
+    let mut out = Vec::new();
+    for piece in damage.pieces() {
+        for mark in &piece.marks {
+            let MarkShape::Crack { segments, width } = &mark.shape else {
+                continue;
+            };
+            let footprint = segments
+                .iter()
+                .flat_map(|s| cameras.iter().filter_map(|c| seen_footprint(piece, s, c)))
+                .reduce(f64::min);
+            if footprint.is_none_or(|f| width / f < RESOLVED_COVERAGE) {
+                out.push(Unresolved {
+                    structure: piece.structure,
+                    instance: mark.instance,
+                    width_mm: width * 1e3,
+                    footprint_mm: footprint.map(|f| f * 1e3),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The pixel footprint (metres) at the middle of crack piece `s` through `camera`, if the
+/// camera sees that point.
+fn seen_footprint(piece: &DamagedPiece, s: &FaceSegment, camera: &Camera) -> Option<f64> {
+    let mid = 0.5 * (s.from + s.to);
+    // On a side the point is taken on the mid-plane (its depth differs by half the width).
+    let local = match s.face.is_side() {
+        true => DVec3::new(mid.x, 0.0, mid.y),
+        false => DVec3::new(mid.x, mid.y, 0.0) + piece.half_height * s.face.normal(),
+    };
+    let world = piece.world(local);
+    let normal = piece.rotation * s.face.normal();
+    if normal.dot(world - camera.position) >= 0.0 {
+        return None;
+    }
+    let seen = camera.world_to_camera(world);
+    if !(seen.z > 0.0) {
+        return None;
+    }
+    let k = camera.intrinsics;
+    let (u, v) = k.project(seen);
+    let inside = (0.0..f64::from(k.width)).contains(&u) && (0.0..f64::from(k.height)).contains(&v);
+    inside.then(|| seen.z / k.fx.max(k.fy))
+}
+
+/// The warning for a sample's cracks that no view resolves (None when every crack is
+/// resolved): the first three by name, width and the smallest pixel footprint, and how many
+/// more.
+pub fn unresolved_warning(sample: u64, cracks: &[Unresolved]) -> Option<String> {
+    cracks.first()?;
+    let named: Vec<String> = cracks
+        .iter()
+        .take(3)
+        .map(|c| {
+            let seen = match c.footprint_mm {
+                Some(f) => format!(
+                    "smallest pixel footprint {f:.1} mm, coverage at most {:.3}",
+                    c.width_mm / f
+                ),
+                None => "seen by no view".to_string(),
+            };
+            format!(
+                "structures[{}].damage.items[{}] ({:.2} mm wide; {seen})",
+                c.structure,
+                c.instance - 1,
+                c.width_mm
+            )
+        })
+        .collect();
+    let more = match cracks.len() {
+        n if n > 3 => format!(" and {} more", n - 3),
+        _ => String::new(),
+    };
+    Some(format!(
+        "sample {sample}: {} crack{} no view resolves (covering under {RESOLVED_COVERAGE} of a pixel, so drawn fainter than the image can show): {}{more}; bring the cameras closer (camera.distance) or raise the resolution (camera.width, camera.height) to see them",
+        cracks.len(),
+        if cracks.len() == 1 { "" } else { "s" },
+        named.join(", "),
+    ))
+}
