@@ -13,7 +13,7 @@
 //! first: the bytes are the same on any thread count, shard or resume. See docs/daylight.md,
 //! "The lighting cache".
 
-use super::daylight::{DiskPattern, LightRays, Openness, hashed_turn};
+use super::daylight::{DiskPattern, LightRays, Openness, hashed_turn, least_rise_facing_up};
 use super::trace::TraceMesh;
 use crate::materials::Lighting;
 use glam::DVec3;
@@ -74,6 +74,7 @@ const PLANE_STEPS: f64 = (1u64 << 20) as f64;
 /// How far a corner is lifted off its plane, in cells (see `Corner::point`).
 const CORNER_LIFT: f64 = 1.0 / 64.0;
 
+
 /// Stores the corner values in this many independently locked maps, so threads rarely wait.
 const SHARDS: usize = 16;
 
@@ -82,6 +83,8 @@ pub struct LightCache {
     settings: CacheSettings,
     sun_disk: DiskPattern,
     hemisphere: DiskPattern,
+    /// `least_rise_facing_up` of the corners' rays (see `open_up_to_sky`).
+    least_rise_up: Option<f64>,
     shards: Box<[Mutex<CornerMap>]>,
     /// Tells this cache's entries in a thread's `LAST_LEAVES` from another's.
     serial: u64,
@@ -117,10 +120,14 @@ impl LightCache {
             Some(e) => e.occlusion_rays,
             None => lighting.sky.map_or(0, |s| s.occlusion_rays),
         };
+        let sun_disk = rays(shadow_rays, settings.sun_ray_factor);
+        let hemisphere = rays(occlusion_rays, settings.sky_ray_factor);
+        let least_rise_up = least_rise_facing_up(lighting, &sun_disk, &hemisphere);
         LightCache {
             settings,
-            sun_disk: rays(shadow_rays, settings.sun_ray_factor),
-            hemisphere: rays(occlusion_rays, settings.sky_ray_factor),
+            sun_disk,
+            hemisphere,
+            least_rise_up,
             shards: (0..SHARDS).map(|_| Mutex::default()).collect(),
             serial: NEXT_SERIAL.fetch_add(1, Ordering::Relaxed),
         }
@@ -148,6 +155,9 @@ impl LightCache {
             sun_disk: &self.sun_disk,
             hemisphere: &self.hemisphere,
         };
+        if n == DVec3::Z && self.open_up_to_sky(mesh, p) {
+            return Openness::OPEN;
+        }
         let mut open = Openness::OPEN;
         let plane = PlaneKey::of(p, n);
         let at = plane.in_plane(p);
@@ -162,6 +172,15 @@ impl LightCache {
                 self.lookup(&rays, Term::Sky, (plane, levels, at), seen);
         }
         open
+    }
+
+    /// Whether point `p`, facing straight up, surely sees all of the sun's disk and of the
+    /// sky: every ray it casts rises at least `least_rise_up` and misses the structures
+    /// (a ground far from them). Then `Openness::OPEN` is exactly what tracing gives, at the
+    /// cost of one test instead of a lookup and the corners it would trace.
+    fn open_up_to_sky(&self, mesh: &TraceMesh, p: DVec3) -> bool {
+        self.least_rise_up
+            .is_some_and(|rise| mesh.rises_clear_of_structures(p, rise))
     }
 
     /// The `term` at in-plane point `at` of `plane`: from the coarsest cell of `levels`
@@ -612,6 +631,114 @@ mod tests {
             let cell = libm::scalbn(1.0, -level_within(size));
             assert!(cell <= size && size < 2.0 * cell, "{size}: cell {cell}");
         }
+    }
+
+    /// A unit cube standing on a 1 km ground square (its triangles after the cube's, as a
+    /// sample's scene mesh is laid out), under a sun 50° high with a 0.53° disk and a sky.
+    fn cube_on_ground_in_daylight() -> (TraceMesh, Lighting) {
+        let mut mesh = crate::geometry::import::tests::cube();
+        let core = mesh.triangles.len();
+        let ground = crate::build::ground_square(DVec3::new(0.5, 0.5, 0.0), 0.0, 1000.0);
+        let first = mesh.positions.len() as u32;
+        mesh.positions.extend(ground.positions);
+        mesh.triangles
+            .extend(ground.triangles.iter().map(|t| t.map(|i| i + first)));
+        let elevation = 50f64.to_radians();
+        let lighting = Lighting {
+            ambient: 0.0,
+            studio: None,
+            sun: Some(Sun {
+                direction: DVec3::new(
+                    0.6 * elevation.cos(),
+                    0.8 * elevation.cos(),
+                    elevation.sin(),
+                ),
+                colour: [1.0; 3],
+                angular_diameter: 0.53f64.to_radians(),
+                shadow_rays: 8,
+            }),
+            sky: Some(crate::materials::Sky {
+                sky: [0.5; 3],
+                ground: [0.2; 3],
+                occlusion_rays: 16,
+            }),
+            environment: None,
+            shadows: true,
+            ground: None,
+            film: Default::default(),
+        };
+        (TraceMesh::build_with_core(&mesh, core), lighting)
+    }
+
+    /// Ground far from the structures sees the whole sun and sky: the cache answers so
+    /// without tracing a corner, and tracing the point's own rays (the per-pixel path) agrees
+    /// exactly. Near the cube (its shadow, its foot) the cache still traces.
+    #[test]
+    fn open_ground_far_from_the_structures_traces_no_corner() {
+        let (mesh, lighting) = cube_on_ground_in_daylight();
+        let cache = LightCache::new(&lighting, CacheSettings::default());
+        let rays = LightRays {
+            mesh: &mesh,
+            lighting: &lighting,
+            sun_disk: &cache.sun_disk,
+            hemisphere: &cache.hemisphere,
+        };
+        for (x, y) in [(30.0, 0.5), (-25.0, -20.0), (0.5, 40.0), (300.0, -700.0)] {
+            let p = DVec3::new(x, y, 0.0);
+            let open = cache.openness(&mesh, &lighting, p, DVec3::Z, 1e-3);
+            assert_eq!(open, Openness::OPEN, "at {p}");
+            assert_eq!(
+                rays.openness(p, DVec3::Z, || (0.6, 0.8)),
+                Openness::OPEN,
+                "{p}"
+            );
+        }
+        assert_eq!(cache.corners(), 0, "corners traced for open ground");
+        // In the cube's shadow (the sun is towards +x +y) and at its foot.
+        let shadowed = DVec3::new(0.2, -0.1, 0.0);
+        assert!(
+            cache
+                .openness(&mesh, &lighting, shadowed, DVec3::Z, 1e-3)
+                .sun
+                < 0.5
+        );
+        assert!(cache.corners() > 0);
+    }
+
+    /// Where the test says every ray rising at least so high misses the structures, rays at
+    /// exactly that rise towards every azimuth (and steeper) are free; near the cube it
+    /// says no, and rays there are blocked.
+    #[test]
+    fn rising_clear_of_the_structures_is_never_wrong() {
+        let (mesh, lighting) = cube_on_ground_in_daylight();
+        let rise = least_rise_facing_up(&lighting, &DiskPattern::new(8), &DiskPattern::new(32))
+            .expect("the sun and sky are above the ground");
+        assert!(rise > 0.05 && rise < 0.2, "{rise}");
+        let (mut clear, mut blocked) = (0, 0);
+        for step in 0..400 {
+            let t = f64::from(step);
+            let p = DVec3::new(
+                0.5 + 40.0 * ((t * 0.618_034).fract() - 0.5),
+                0.5 + 40.0 * ((t * 0.414_214).fract() - 0.5),
+                0.0,
+            );
+            let says_clear = mesh.rises_clear_of_structures(p, rise);
+            clear += usize::from(says_clear);
+            for k in 0..64 {
+                let a = f64::from(k) * std::f64::consts::TAU / 64.0;
+                for z in [rise, 0.5, 0.99] {
+                    let flat = (1.0 - z * z).sqrt();
+                    let d = DVec3::new(flat * a.cos(), flat * a.sin(), z);
+                    let hit = mesh.occluded(p, DVec3::Z, d);
+                    assert!(!(says_clear && hit), "{p} towards {d} is blocked");
+                    blocked += usize::from(hit);
+                }
+            }
+        }
+        assert!(
+            clear > 100 && blocked > 0,
+            "{clear} points clear, {blocked} rays blocked"
+        );
     }
 
     /// A horizontal plate over x < 0 at height H under an overhead sun of angular diameter θ:
