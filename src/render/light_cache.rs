@@ -74,6 +74,10 @@ const PLANE_STEPS: f64 = (1u64 << 20) as f64;
 /// How far a corner is lifted off its plane, in cells (see `Corner::point`).
 const CORNER_LIFT: f64 = 1.0 / 64.0;
 
+/// The coarsest level a corner of a finer level is named at when it is a lattice point there
+/// too (`Corner::canonical`): that of the default's coarsest cells (¼ m), so a corner is never
+/// lifted more than 1/64 of those (4 mm) however far its lattice point reaches up the levels.
+const SHARED_LEVEL: i32 = 2;
 
 /// Stores the corner values in this many independently locked maps, so threads rarely wait.
 const SHARDS: usize = 16;
@@ -254,6 +258,7 @@ impl LightCache {
 
     /// The value at `corner`, traced on first use.
     fn corner(&self, rays: &LightRays, corner: Corner) -> Record {
+        let corner = corner.canonical();
         let key = Hashed {
             hash: corner.mix(),
             corner,
@@ -490,6 +495,23 @@ struct Corner {
 }
 
 impl Corner {
+    /// The same lattice point named at the coarsest level where it is one, down to
+    /// `SHARED_LEVEL`: corner (2i, 2j) of level ℓ + 1 is corner (i, j) of level ℓ. A cell
+    /// split in four then reuses its own four corners, and a shadow edge or a contact
+    /// refined over k levels traces each point of it once rather than once per level (along
+    /// an edge, about half the corners). The lift off the plane follows the canonical level,
+    /// so the point, and with it the value, is one per lattice point.
+    fn canonical(self) -> Corner {
+        let shared = i64::from(self.level - SHARED_LEVEL).max(0);
+        let even = (self.i.trailing_zeros().min(self.j.trailing_zeros()) as i64).min(shared);
+        Corner {
+            level: self.level - even as i32,
+            i: self.i >> even,
+            j: self.j >> even,
+            ..self
+        }
+    }
+
     /// The world point and the facing normal of the corner.
     fn point(self) -> (DVec3, DVec3) {
         let (n, offset) = self.plane.plane();
@@ -703,6 +725,38 @@ mod tests {
                 < 0.5
         );
         assert!(cache.corners() > 0);
+    }
+
+    /// A lattice point shared by levels is one corner, traced once: corner (4, −6) of level 5
+    /// is corner (2, −3) of level 4 (and of no coarser level), while (2, −3) of level 5 is
+    /// another point. Below the shared level, levels keep their own corners.
+    #[test]
+    fn a_lattice_point_of_several_levels_is_traced_once() {
+        let (mesh, lighting) = cube_on_ground_in_daylight();
+        let cache = LightCache::new(&lighting, CacheSettings::default());
+        let rays = LightRays {
+            mesh: &mesh,
+            lighting: &lighting,
+            sun_disk: &cache.sun_disk,
+            hemisphere: &cache.hemisphere,
+        };
+        let plane = PlaneKey::of(DVec3::new(0.5, 0.5, 1.0), DVec3::Z);
+        let corner = |level, i, j| Corner {
+            term: Term::Sky,
+            plane,
+            level,
+            i,
+            j,
+        };
+        let fine = cache.corner(&rays, corner(5, 4, -6));
+        assert_eq!(cache.corners(), 1);
+        assert_eq!(cache.corner(&rays, corner(4, 2, -3)), fine);
+        assert_eq!(cache.corners(), 1, "the same point traced twice");
+        cache.corner(&rays, corner(5, 2, -3));
+        assert_eq!(cache.corners(), 2);
+        assert_eq!(corner(9, 0, 64).canonical(), corner(3, 0, 1));
+        assert_eq!(corner(9, 0, 512).canonical(), corner(SHARED_LEVEL, 0, 4));
+        assert_eq!(corner(1, 2, 4).canonical(), corner(1, 2, 4));
     }
 
     /// Where the test says every ray rising at least so high misses the structures, rays at
