@@ -123,6 +123,8 @@ pub struct SampleRenderer<'a> {
     /// The lighting caches of the loaded and the unloaded mesh, made on first use (none with
     /// `shading: "per_pixel"`), shared by every view and dropped with the sample.
     light_caches: [OnceLock<LightCache>; 2],
+    /// How finely those caches sample the light (`with_light_cache_settings`).
+    light_settings: CacheSettings,
 }
 
 /// One view of a sample: its camera and centre-ray trace, with the other layers rendered on
@@ -188,6 +190,16 @@ impl<'a> SampleRenderer<'a> {
             cache: None,
             rest: OnceLock::new(),
             light_caches: Default::default(),
+            light_settings: CacheSettings::default(),
+        }
+    }
+
+    /// The same renderer with its lighting caches sampling the light as `settings` say
+    /// (previews use `CacheSettings::PREVIEW`; runs the default).
+    pub fn with_light_cache_settings(self, settings: CacheSettings) -> Self {
+        SampleRenderer {
+            light_settings: settings,
+            ..self
         }
     }
 
@@ -225,7 +237,7 @@ impl<'a> SampleRenderer<'a> {
         let lighting = &self.sample.lighting;
         (self.dataset.shading == Shading::Cached).then(|| {
             self.light_caches[usize::from(rest)]
-                .get_or_init(|| LightCache::new(lighting, CacheSettings::default()))
+                .get_or_init(|| LightCache::new(lighting, self.light_settings))
         })
     }
 
