@@ -123,7 +123,7 @@ pub struct SampleRenderer<'a> {
     /// The lighting caches of the loaded and the unloaded mesh, made on first use (none with
     /// `shading: "per_pixel"`), shared by every view and dropped with the sample.
     light_caches: [OnceLock<LightCache>; 2],
-    /// How finely those caches sample the light (`with_light_cache_settings`).
+    /// How finely those caches sample the light (the default, or `for_preview`'s).
     light_settings: CacheSettings,
 }
 
@@ -194,11 +194,11 @@ impl<'a> SampleRenderer<'a> {
         }
     }
 
-    /// The same renderer with its lighting caches sampling the light as `settings` say
-    /// (previews use `CacheSettings::PREVIEW`; runs the default).
-    pub fn with_light_cache_settings(self, settings: CacheSettings) -> Self {
+    /// The same renderer for a preview, which is looked at, not measured: its lighting
+    /// caches sample the light at `CacheSettings::PREVIEW` (runs keep the default).
+    pub fn for_preview(self) -> Self {
         SampleRenderer {
-            light_settings: settings,
+            light_settings: CacheSettings::PREVIEW,
             ..self
         }
     }

@@ -19,7 +19,6 @@ use crate::build::BuiltSample;
 use crate::output::{Flow, ViewLayers, rgb_png};
 use crate::pipeline::{SampleRenderer, for_each_image, prepare};
 use crate::recipe::Recipe;
-use crate::render::CacheSettings;
 use crate::scene::{DatasetSpec, Structure};
 use anyhow::Result;
 use rayon::prelude::*;
@@ -463,9 +462,7 @@ fn render_rows(
         .map(|index| -> Result<Vec<Row>> {
             let sample = prepare(recipe, index)?;
             let names = SampleNames::of(&sample);
-            // A preview is looked at, not measured: its light is sampled more coarsely.
-            let renderer = SampleRenderer::new(&recipe.dataset, &sample)
-                .with_light_cache_settings(CacheSettings::PREVIEW);
+            let renderer = SampleRenderer::new(&recipe.dataset, &sample).for_preview();
             let needed = (pairs - index * u64::from(views)).min(u64::from(views)) as u32;
             // One row per image: the clean view (if kept) and its augmented copies.
             (0..needed)
