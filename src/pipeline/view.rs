@@ -126,6 +126,8 @@ pub struct SampleRenderer<'a> {
     light_caches: [OnceLock<LightCache>; 2],
     /// The sample's damage, drawn and labelled; None for a sound sample (drawn as before).
     damage: Option<SampleDamage>,
+    /// How finely those caches sample the light (the default, or `for_preview`'s).
+    light_settings: CacheSettings,
 }
 
 /// One view of a sample: its camera and centre-ray trace, with the other layers rendered on
@@ -192,6 +194,16 @@ impl<'a> SampleRenderer<'a> {
             rest: OnceLock::new(),
             light_caches: Default::default(),
             damage: sample_damage(sample),
+            light_settings: CacheSettings::default(),
+        }
+    }
+
+    /// The same renderer for a preview, which is looked at, not measured: its lighting
+    /// caches sample the light at `CacheSettings::PREVIEW` (runs keep the default).
+    pub fn for_preview(self) -> Self {
+        SampleRenderer {
+            light_settings: CacheSettings::PREVIEW,
+            ..self
         }
     }
 
@@ -229,7 +241,7 @@ impl<'a> SampleRenderer<'a> {
         let lighting = &self.sample.lighting;
         (self.dataset.shading == Shading::Cached).then(|| {
             self.light_caches[usize::from(rest)]
-                .get_or_init(|| LightCache::new(lighting, CacheSettings::default()))
+                .get_or_init(|| LightCache::new(lighting, self.light_settings))
         })
     }
 

@@ -476,7 +476,7 @@ fn render_rows(
         .map(|index| -> Result<Vec<Row>> {
             let sample = prepare(recipe, index)?;
             let names = SampleNames::of(&sample);
-            let renderer = SampleRenderer::new(&recipe.dataset, &sample);
+            let renderer = SampleRenderer::new(&recipe.dataset, &sample).for_preview();
             let needed = (pairs - index * u64::from(views)).min(u64::from(views)) as u32;
             // One row per image: the clean view (if kept) and its augmented copies.
             (0..needed)

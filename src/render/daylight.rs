@@ -40,6 +40,15 @@ impl DiskPattern {
         )
     }
 
+    /// The largest distance of a point from the disk's centre (0 without points): turning
+    /// the pattern keeps it.
+    fn widest(&self) -> f64 {
+        self.0
+            .iter()
+            .map(|&(x, y)| libm::sqrt(x * x + y * y))
+            .fold(0.0, f64::max)
+    }
+
     /// The points turned by the angle whose (cos, sin) is `turn`.
     fn turned(&self, (c, s): (f64, f64)) -> impl Iterator<Item = (f64, f64)> + '_ {
         self.0
@@ -108,6 +117,56 @@ pub(super) fn sun_visibility(
     seen as f64 / disk.0.len() as f64
 }
 
+/// Whether a face turned to `n` traces shadow rays under `lighting` (`LightRays::traces_sun`).
+fn traces_sun(lighting: &Lighting, n: DVec3) -> bool {
+    lighting.shadows && lighting.sun.is_some_and(|sun| n.dot(sun.direction) > 0.0)
+}
+
+/// Whether points trace `hemisphere`'s rays under `lighting` (`LightRays::traces_sky`).
+fn traces_sky(lighting: &Lighting, hemisphere: &DiskPattern) -> bool {
+    let surrounding =
+        lighting.environment.is_some() || lighting.sky.is_some() || lighting.ground.is_some();
+    surrounding && !hemisphere.is_empty()
+}
+
+/// The least rise (the z of the unit direction) of any ray a point facing straight up (+z)
+/// casts under `lighting` with these patterns: towards the sun's disk (when it traces them)
+/// and over the hemisphere (when it traces them), less 10⁻⁹ of it for rounding; None when
+/// some such ray may run level or down (a sun at the horizon), or when the point casts none.
+pub(super) fn least_rise_facing_up(
+    lighting: &Lighting,
+    sun_disk: &DiskPattern,
+    hemisphere: &DiskPattern,
+) -> Option<f64> {
+    let sun = lighting
+        .sun
+        .filter(|_| traces_sun(lighting, DVec3::Z))
+        .map(|sun| sun_ray_rise(&sun, sun_disk));
+    // Malley's lift of a disk point at radius r rises √(1 − r²) off the face.
+    let sky = traces_sky(lighting, hemisphere).then(|| {
+        let r = hemisphere.widest();
+        libm::sqrt((1.0 - r * r).max(0.0))
+    });
+    let least = match (sun, sky) {
+        (Some(a), Some(b)) => a.min(b),
+        (a, b) => a.or(b)?,
+    };
+    let least = least * (1.0 - 1e-9);
+    (least > 0.0).then_some(least)
+}
+
+/// The least z of the unit directions `sun_visibility` casts towards `sun`'s disk: the centre
+/// tipped by at most `spread` = tan(θ/2) sideways, then normalised, loses at most
+/// (s_z − spread) / √(1 + spread²) of its rise (a lower bound: the pattern stays within the
+/// unit disk).
+fn sun_ray_rise(sun: &Sun, disk: &DiskPattern) -> f64 {
+    if disk.0.len() <= 1 || sun.angular_diameter <= 0.0 {
+        return sun.direction.z;
+    }
+    let spread = libm::tan(0.5 * sun.angular_diameter);
+    (sun.direction.z - spread) / libm::sqrt(1.0 + spread * spread)
+}
+
 /// Radiance of the ground as a face sees it from above, per channel, times π: the sky's own
 /// ground colour, or the light an infinite Lambertian plane of albedo ρ bounces up when lit by
 /// the ambient term, the whole sky and the unshadowed sun (ρ E_horizontal, Lambert's law).
@@ -173,16 +232,13 @@ impl LightRays<'_> {
     /// Whether a face turned to `n` traces shadow rays: when the sun casts shadows and the
     /// face is turned to it (a face turned away is unlit either way).
     pub fn traces_sun(&self, n: DVec3) -> bool {
-        let l = self.lighting;
-        l.shadows && l.sun.is_some_and(|sun| n.dot(sun.direction) > 0.0)
+        traces_sun(self.lighting, n)
     }
 
     /// Whether points trace hemisphere rays: when a sky, ground or environment lights them
     /// and the pattern has rays.
     pub fn traces_sky(&self) -> bool {
-        let l = self.lighting;
-        let surrounding = l.environment.is_some() || l.sky.is_some() || l.ground.is_some();
-        surrounding && !self.hemisphere.is_empty()
+        traces_sky(self.lighting, self.hemisphere)
     }
 
     /// The share of the sun's disk `p` sees (1 without a sun).

@@ -494,6 +494,23 @@ impl TraceMesh {
         })
     }
 
+    /// Whether every ray from world point `p` whose unit direction rises by at least `rise`
+    /// (its z, above 0) surely misses the structures' bounds, so that `occluded_within` finds
+    /// it free (a ground never blocks): seen from `p`, the bounds' top lies lower than that
+    /// rise climbs over the horizontal distance to them. The bounds are grown by a millionth
+    /// of the scene's scale beyond the slab test's, for its rounding; lifting the ray off the
+    /// surface only raises it.
+    pub fn rises_clear_of_structures(&self, p: DVec3, rise: f64) -> bool {
+        let q = p - self.anchor;
+        let slack = 1e-6 * (self.core_diagonal + q.length());
+        let (lo, hi) = self.core_bounds;
+        let outside = |x: f64, lo: f64, hi: f64| (lo - slack - x).max(x - hi - slack).max(0.0);
+        let (dx, dy) = (outside(q.x, lo.x, hi.x), outside(q.y, lo.y, hi.y));
+        let climb = hi.z + slack - q.z;
+        let slope = rise / (1.0 - rise * rise).max(0.0).sqrt();
+        rise > 0.0 && climb < (dx * dx + dy * dy).sqrt() * slope
+    }
+
     /// Planar depth and original triangle of the first surface along `dir` (unit camera z)
     /// from `origin` (relative to the anchor). The f32 ray starts where the ray enters the
     /// mesh's bounding sphere, so its origin is as precise as the vertices however far the
