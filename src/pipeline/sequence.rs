@@ -1,10 +1,11 @@
-//! The frames of a sequence: what each beam in motion does over the sequence, the scene of
-//! each frame, and how each fixed camera's mount shakes.
+//! The frames of a sequence: what each beam or frame in motion does over the sequence, the
+//! scene of each frame, and how each fixed camera's mount shakes.
 //!
 //! Owns: turning a sample's scene and the dataset's `SequenceSpec` into one scene per frame
 //! (each beam's static loads plus the forces acting at the frame's instant, and the dynamic part
-//! of its deflection as mode amplitudes, which the build stage adds to the static solution),
-//! and the per-frame offset of every camera's mount. Must not touch: meshing, rendering or
+//! of its deflection as mode amplitudes, which the build stage adds to the static solution; each
+//! frame's model with the forces acting then on its lane, and its nodes' displacements from its
+//! modal response), and the per-frame offset of every camera's mount. Must not touch: meshing, rendering or
 //! files (the sample pipeline builds and writes each frame as it builds a still).
 
 use crate::cameras::Camera;
