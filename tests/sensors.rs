@@ -108,16 +108,21 @@ fn a_bad_sensor_is_refused_at_its_call_with_its_value() {
             "\"a b\"",
         ),
     ] {
-        let dir = tempfile::tempdir().unwrap();
-        let out = run(dir.path(), &recipe(sensor));
-        assert!(!out.status.success());
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        // The sensor call is on line 7 of the recipe, its `.sensor` at column 9.
-        assert!(
-            stderr.contains("recipe.rhai:7:") && stderr.contains(expected),
-            "{stderr}"
-        );
+        // The sensor call is on line 7 of the recipe.
+        assert_refused(&recipe(sensor), "recipe.rhai:7:", expected);
     }
+}
+
+/// `recipe` fails, pointing at `site` and naming `expected`.
+fn assert_refused(recipe: &str, site: &str, expected: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run(dir.path(), recipe);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(site) && stderr.contains(expected),
+        "{stderr}"
+    );
 }
 
 /// A hammer blow at mid-span of the same beam at ζ = 1 %, recorded at mid-span by a
@@ -218,4 +223,100 @@ fn eval_scores_histories_against_the_sensors() {
     assert!(mid["frequency_error"].as_f64().unwrap() < 1e-9);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("histories: 2 files"), "{text}");
+}
+
+/// The 10 m chain of 16 steel members 0.1 × 0.2 m of `tests/frames.rs`, pinned and on a
+/// roller, its lane over every member, under a step of `FORCE` at mid-span at 0.5 s damped at
+/// ζ = 0.6, with the sensors `sensors` (Rhai calls on the frame `f`).
+fn frame_recipe(sensors: &str) -> String {
+    format!(
+        r#"dataset(#{{
+    name: "frame sensors", seed: 1, samples: 1, views: 1, outputs: ["mask"],
+    camera: #{{ width: 16, height: 16, fov_y: deg(60), distance: "frame" }},
+    sequence: #{{ duration: 3.0, fps: 10.0 }},
+    scene: |rng| {{
+        let f = frame("chain", #{{ plane: "xz" }});
+        let s = rectangle(0.1, 0.2);
+        let nodes = [];
+        for i in 0..17 {{ nodes.push(f.node(10.0 * i / 16.0, 0, 0)); }}
+        let lane = [];
+        for i in 0..16 {{ lane.push(f.member(nodes[i], nodes[i + 1], s)); }}
+        f.support(nodes[0], "pinned");
+        f.support(nodes[16], "roller");
+        f.lane(lane);
+        f.ramp(5.0, {FORCE:e}, 0.5, 0.0);
+        f.damping(0.6);
+{sensors}
+        f
+    }}
+}});
+"#
+    )
+}
+
+#[test]
+fn a_frames_sensors_are_written_with_their_members_and_the_closed_form_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let sensors = r#"        f.sensor(#{ name: "mid", kind: "displacement", member: 7, at: 0.625, rate: 50.0 });
+        f.sensor(#{ name: "gauge", kind: "strain_bottom", member: 8, at: 0.0, rate: 50.0 });
+        f.sensor(#{ name: "end", kind: "rotation", member: 0, at: 0.0, rate: 50.0 });
+        f.sensor(#{ name: "up", kind: "displacement", member: 7, at: 0.625, rate: 50.0,
+            direction: [0.0, 0.0, 1.0] });"#;
+    let out = run(dir.path(), &frame_recipe(sensors));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = String::from_utf8(read(dir.path(), "sensors_50hz.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time[s],mid:displacement[m]@member7+0.625m,gauge:strain_bottom[m/m]@member8+0m,\
+         end:rotation[rad]@member0+0m,up:displacement[m]@member7+0.625m"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 150);
+    assert_eq!(
+        rows[0], [0.0; 5],
+        "at rest under the self-weight: nothing yet"
+    );
+    // Settled: PL³/48EI, (PL/4)c/EI, PL²/16EI, and the same deflection measured upward.
+    let ei = 210e9 * 0.1 * 0.2f64.powi(3) / 12.0;
+    let exact = [
+        FORCE * 1000.0 / (48.0 * ei),
+        FORCE * 10.0 / 4.0 * 0.1 / ei,
+        FORCE * 100.0 / (16.0 * ei),
+        -FORCE * 1000.0 / (48.0 * ei),
+    ];
+    for (got, exact) in rows[149][1..].iter().zip(exact) {
+        assert!((got / exact - 1.0).abs() < 1e-6, "{got} vs {exact}");
+    }
+}
+
+#[test]
+fn a_bad_frame_sensor_is_refused_at_its_call_with_its_value() {
+    for (sensor, expected) in [
+        (
+            r#"        f.sensor(#{ kind: "velocity", member: 16, at: 0.1, rate: 50.0 });"#,
+            "16",
+        ),
+        (
+            r#"        f.sensor(#{ kind: "velocity", at: 0.1, rate: 50.0 });"#,
+            "sensor.member is needed",
+        ),
+        (
+            r#"        f.sensor(#{ kind: "velocity", member: 2, at: 0.7, rate: 50.0 });"#,
+            "0.7",
+        ),
+        (
+            r#"        f.sensor(#{ kind: "velocity", member: 2, at: 0.1, rate: 5.0, direction: [0, 0, 2] });"#,
+            "direction",
+        ),
+    ] {
+        // The sensor call is on line 17 of the recipe.
+        assert_refused(&frame_recipe(sensor), "recipe.rhai:17:", expected);
+    }
 }

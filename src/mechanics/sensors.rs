@@ -75,7 +75,7 @@ impl SensorKind {
     }
 
     /// The quantity this kind reads from the beam's motion at a point (`ei` for strain).
-    fn read(&self, motion: &Motion, ei: f64) -> f64 {
+    pub fn read(&self, motion: &Motion, ei: f64) -> f64 {
         match *self {
             SensorKind::Displacement => motion.deflection,
             SensorKind::Velocity => motion.velocity,
@@ -186,14 +186,32 @@ pub fn record(
     sensors: &[Sensor],
     normal: &mut dyn FnMut() -> f64,
 ) -> Result<Vec<Series>, String> {
-    if !(duration.is_finite() && duration >= 0.0) {
-        return Err(format!("duration must be ≥ 0, got {duration} s"));
-    }
     for sensor in sensors {
         sensor.check(beam.length(), duration)?;
     }
     for load in loads {
         load.check(beam.length())?;
+    }
+    record_by_rate(sensors, duration, normal, |times, same_rate| {
+        let response = beam.respond(loads, 0.0, times, STEPS_PER_PERIOD);
+        Ok(same_rate
+            .iter()
+            .map(|&j| sample(beam, loads, &response, &sensors[j]))
+            .collect())
+    })
+}
+
+/// Each sensor's series over `duration`, in the order of `sensors` (already checked), with
+/// their noise: `respond(times, indices)` gives the values of the sensors at `indices` (all
+/// those sampling at one rate) at those times, so the structure is integrated once per rate.
+pub fn record_by_rate(
+    sensors: &[Sensor],
+    duration: f64,
+    normal: &mut dyn FnMut() -> f64,
+    mut respond: impl FnMut(&[f64], &[usize]) -> Result<Vec<Vec<f64>>, String>,
+) -> Result<Vec<Series>, String> {
+    if !(duration.is_finite() && duration >= 0.0) {
+        return Err(format!("duration must be ≥ 0, got {duration} s"));
     }
     let mut series: Vec<Option<Series>> = vec![None; sensors.len()];
     for (i, sensor) in sensors.iter().enumerate() {
@@ -201,15 +219,15 @@ pub fn record(
             continue;
         }
         let times = sensor.times(duration);
-        let response = beam.respond(loads, 0.0, &times, STEPS_PER_PERIOD);
-        for (j, same_rate) in sensors.iter().enumerate().skip(i) {
-            if same_rate.rate == sensor.rate {
-                let values = sample(beam, loads, &response, same_rate);
-                series[j] = Some(Series {
-                    times: times.clone(),
-                    values,
-                });
-            }
+        let same_rate: Vec<usize> = (i..sensors.len())
+            .filter(|&j| sensors[j].rate == sensor.rate)
+            .collect();
+        let values = respond(&times, &same_rate)?;
+        for (j, values) in same_rate.into_iter().zip(values) {
+            series[j] = Some(Series {
+                times: times.clone(),
+                values,
+            });
         }
     }
     let mut series: Vec<Series> = series.into_iter().flatten().collect();

@@ -8,7 +8,7 @@
 //! writes the shortest exact decimal with `p` for the point (`200`, `62p5`), so no dot comes
 //! before the kind; the first column is the time in seconds, then one column per sensor at
 //! that rate, in the recipe's order. A CSV's header labels each column
-//! `{name}:{kind}[{unit}]@{x}m`; the `.npy` has shape `[samples, sensors + 1]` in the same
+//! `{name}:{kind}[{unit}]@{x}m` (`@member{m}+{x}m` on a frame); the `.npy` has shape `[samples, sensors + 1]` in the same
 //! column order (its labels are the CSV's).
 
 use super::encode::npy;
@@ -27,16 +27,23 @@ pub struct SensorColumn {
     pub kind: String,
     /// The values' SI unit.
     pub unit: String,
-    /// Position along its beam's axis, m.
+    /// On a frame: the member it is fixed to.
+    pub member: Option<usize>,
+    /// Position along its beam's axis, or along its member, m.
     pub at: f64,
     /// One value per sample time.
     pub values: Vec<f64>,
 }
 
 impl SensorColumn {
-    /// `{name}:{kind}[{unit}]@{x}m`, e.g. `mid:displacement[m]@10m`.
+    /// `{name}:{kind}[{unit}]@{x}m`, e.g. `mid:displacement[m]@10m`; on a frame's member
+    /// `{name}:{kind}[{unit}]@member{m}+{x}m`, e.g. `deck:acceleration[m/s^2]@member7+0.5m`.
     pub fn label(&self) -> String {
-        format!("{}:{}[{}]@{}m", self.name, self.kind, self.unit, self.at)
+        let (name, kind, unit, at) = (&self.name, &self.kind, &self.unit, self.at);
+        match self.member {
+            Some(m) => format!("{name}:{kind}[{unit}]@member{m}+{at}m"),
+            None => format!("{name}:{kind}[{unit}]@{at}m"),
+        }
     }
 }
 
@@ -145,6 +152,7 @@ mod tests {
             times: vec![0.0, 0.016, 0.032],
             columns: vec![
                 SensorColumn {
+                    member: None,
                     name: "mid".into(),
                     kind: "displacement".into(),
                     unit: "m".into(),
@@ -152,6 +160,7 @@ mod tests {
                     values: vec![0.0, 1.25e-3, -0.1],
                 },
                 SensorColumn {
+                    member: None,
                     name: "gauge-2".into(),
                     kind: "strain_bottom".into(),
                     unit: "m/m".into(),

@@ -1,43 +1,47 @@
-//! The hook that writes a sample's virtual sensors: every sensor of every beam recorded over
-//! the dataset's sequence, grouped by rate into the files of `output::series`.
+//! The hook that writes a sample's virtual sensors: every sensor of every beam and frame
+//! recorded over the dataset's sequence, grouped by rate into the files of `output::series`.
 //!
-//! Owns: the order of the columns (beams in scene order, then each beam's sensors in recipe
-//! order), the noise stream (`seeds::SENSORS`, scope: the sample) and the check that names are
+//! Owns: the order of the columns (structures in scene order, then each structure's sensors
+//! in recipe order), the noise stream (`seeds::SENSORS`, scope: the sample) and the check that names are
 //! unique in the sample. Must not touch: the mechanics (`scene::record_sensors`) or the bytes
 //! (`output::series_files`).
 
 use crate::build::BuiltSample;
 use crate::output::{RateGroup, SensorColumn, series_files};
-use crate::scene::{BeamSpec, DatasetSpec, Structure};
+use crate::scene::{DatasetSpec, SensorSpec, Structure};
 use crate::seeds::{SENSORS, Scope, Stream};
 use anyhow::{Result, anyhow, bail};
 
-/// The sensor files of `sample` as (kind, bytes), none when no beam has a sensor.
+/// The sensor files of `sample` as (kind, bytes), none when no structure has a sensor.
 pub(super) fn sensor_files(
     dataset: &DatasetSpec,
     sample: &BuiltSample,
 ) -> Result<Vec<(String, Vec<u8>)>> {
-    let beams: Vec<&BeamSpec> = (sample.scene.structures.iter())
-        .filter_map(|s| match s {
-            Structure::Beam(b) if !b.sensors.is_empty() => Some(b),
-            _ => None,
-        })
+    let instrumented: Vec<&Structure> = (sample.scene.structures.iter())
+        .filter(|s| !sensors_of(s).is_empty())
         .collect();
-    if beams.is_empty() {
+    let Some(first) = instrumented.first() else {
         return Ok(Vec::new());
-    }
+    };
     let Some(sequence) = &dataset.sequence else {
         bail!(
             "sensor {:?} needs a time to record over: set dataset.sequence (duration, fps)",
-            beams[0].sensors[0].name
+            sensors_of(first)[0].name
         );
     };
     let mut stream = Stream::new(dataset.seed, Scope::Sample(sample.index), SENSORS);
     let mut groups: Vec<RateGroup> = Vec::new();
-    for beam in beams {
-        let series = crate::scene::record_sensors(beam, sequence.duration, &mut || stream.normal())
-            .map_err(|why| anyhow!("sample {}: {why}", sample.index))?;
-        for (spec, recorded) in beam.sensors.iter().zip(series) {
+    for structure in instrumented {
+        let mut normal = || stream.normal();
+        let series = match structure {
+            Structure::Beam(b) => crate::scene::record_sensors(b, sequence.duration, &mut normal),
+            Structure::Frame(f) => {
+                crate::scene::record_frame_sensors(f, sequence.duration, &mut normal)
+            }
+            _ => unreachable!("only beams and frames carry sensors"),
+        }
+        .map_err(|why| anyhow!("sample {}: {why}", sample.index))?;
+        for (spec, recorded) in sensors_of(structure).iter().zip(series) {
             let taken = groups.iter().flat_map(|g| &g.columns);
             if taken.into_iter().any(|c| c.name == spec.name) {
                 bail!(
@@ -49,7 +53,8 @@ pub(super) fn sensor_files(
             let column = SensorColumn {
                 name: spec.name.clone(),
                 kind: spec.kind.name().to_string(),
-                unit: spec.sensor(beam).kind.unit().to_string(),
+                unit: spec.kind.unit().to_string(),
+                member: spec.member,
                 at: spec.at,
                 values: recorded.values,
             };
@@ -64,4 +69,13 @@ pub(super) fn sensor_files(
         }
     }
     series_files(&groups)
+}
+
+/// The sensors a structure carries (only beams and frames carry any).
+fn sensors_of(structure: &Structure) -> &[SensorSpec] {
+    match structure {
+        Structure::Beam(b) => &b.sensors,
+        Structure::Frame(f) => &f.sensors,
+        _ => &[],
+    }
 }

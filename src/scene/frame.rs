@@ -2,7 +2,7 @@
 //! it: the structural model, its material and how finely it is meshed. Analysing and meshing
 //! it is the build stage's work.
 
-use super::{BeamMotion, PIXEL_TOLERANCE, SourceSite, Tolerance};
+use super::{BeamMotion, PIXEL_TOLERANCE, SensorSpec, SourceSite, Tolerance};
 use crate::materials::Material;
 use crate::mechanics::frame::FrameModel;
 use serde::Serialize;
@@ -30,6 +30,10 @@ pub struct FrameSpec {
     /// `density` is unused: each member has its own).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub motion: Option<BeamMotion>,
+    /// Virtual sensors on its members (`.sensor(#{ member, … })`), recorded over the dataset's
+    /// sequence.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sensors: Vec<SensorSpec>,
     /// In a frame of a sequence: every node's displacement at the frame's instant, from the
     /// response in time; the members' fields follow from them and the loads acting then.
     #[serde(skip)]
@@ -50,6 +54,7 @@ impl FrameSpec {
             tessellation: Tolerance::Pixels(PIXEL_TOLERANCE),
             lane: Vec::new(),
             motion: None,
+            sensors: Vec::new(),
             displaced: None,
             declared_at: None,
         }

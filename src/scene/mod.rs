@@ -28,7 +28,7 @@ pub use light::{
     Background, EnvironmentLightSpec, EnvironmentSpec, GroundBounceSpec, ImageRecord, LightSpec,
     OUTDOOR_AMBIENT, SUN_DIAMETER, SkyGradient, SkySpec, SunSpec, Tone,
 };
-pub use sensors::{SensorQuantity, SensorSpec, modal_beam, record_sensors};
+pub use sensors::{SensorQuantity, SensorSpec, modal_beam, record_frame_sensors, record_sensors};
 pub use sequence::{
     BeamMotion, DEFAULT_DAMPING, DEFAULT_EXPOSURE_FRACTION, DEFAULT_MODES, MAX_FRAMES, MountShake,
     STEEL_DENSITY, SequenceSpec,

@@ -1,13 +1,15 @@
-//! Virtual sensors as a recipe declares them on a beam (`.sensor(#{…})`): what each measures,
-//! where, at which rate and with how much noise; and recording them over a sample's sequence.
+//! Virtual sensors as a recipe declares them on a beam or a frame's member (`.sensor(#{…})`):
+//! what each measures, where, at which rate and with how much noise; and recording them over a
+//! sample's sequence.
 //!
-//! Owns: the plain, serialisable description (`BeamSpec::sensors`), its translation into the
-//! mechanics' sensors, and the beam's modal model built from its declared section, material
-//! and motion. Must not touch: Rhai, random streams or files: noise arrives as standard normal
+//! Owns: the plain, serialisable description (`BeamSpec::sensors`, `FrameSpec::sensors`), its
+//! translation into the mechanics' sensors, and the beam's modal model built from its declared
+//! section, material and motion. Must not touch: Rhai, random streams or files: noise arrives as standard normal
 //! values the caller draws from the sample's stream, and the series leave as numbers.
 
-use super::{BeamMotion, BeamSpec};
+use super::{BeamMotion, BeamSpec, FrameSpec};
 use crate::mechanics::dynamics::ModalBeam;
+use crate::mechanics::frame::{FrameExcitation, MemberSensor, SpaceSection, record_members};
 use crate::mechanics::sensors::{Fibre, Sensor, SensorKind, Series, record};
 use serde::Serialize;
 
@@ -62,6 +64,11 @@ impl SensorQuantity {
     pub fn name(self) -> &'static str {
         self.kind(1.0).name()
     }
+
+    /// The SI unit of its values.
+    pub fn unit(self) -> &'static str {
+        self.kind(1.0).unit()
+    }
 }
 
 /// A sensor on a beam, as declared.
@@ -71,8 +78,16 @@ pub struct SensorSpec {
     pub name: String,
     /// What it measures.
     pub kind: SensorQuantity,
-    /// Position along the beam's axis from x = 0, m.
+    /// Position along the beam's axis from x = 0, or along its member from the member's start
+    /// node, m.
     pub at: f64,
+    /// On a frame: the member it is fixed to.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub member: Option<usize>,
+    /// On a frame, for displacement, velocity and acceleration: the world direction measured
+    /// along (a unit vector; absent: down, [0, 0, −1], a beam's sign).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f64; 3]>,
     /// Sampling rate, Hz.
     pub rate: f64,
     /// RMS of the white Gaussian noise added, in the kind's unit (0: none).
@@ -86,12 +101,32 @@ pub struct SensorSpec {
 impl SensorSpec {
     /// The mechanics' sensor on `beam`.
     pub fn sensor(&self, beam: &BeamSpec) -> Sensor {
-        let fibre = self
-            .fibre
-            .unwrap_or_else(|| beam.section.properties(beam.poisson).extreme_fibre);
+        self.with_face(beam.section.properties(beam.poisson).extreme_fibre)
+    }
+
+    /// The mechanics' sensor on a member of `frame` (the member must exist: the recipe checks
+    /// it); a strain gauge sits on the member's face in its strong plane unless told otherwise.
+    pub fn member_sensor(&self, frame: &FrameSpec) -> MemberSensor {
+        let member = self.member.unwrap_or(0);
+        let face = frame
+            .model
+            .members
+            .get(member)
+            .map_or(0.0, |m| SpaceSection::of(&m.section, m.poisson).fibre_z);
+        MemberSensor {
+            sensor: self.with_face(face),
+            member,
+            direction: self
+                .direction
+                .map_or(glam::DVec3::NEG_Z, glam::DVec3::from_array),
+        }
+    }
+
+    /// The mechanics' sensor with `face` as the default fibre distance.
+    fn with_face(&self, face: f64) -> Sensor {
         Sensor {
             name: self.name.clone(),
-            kind: self.kind.kind(fibre),
+            kind: self.kind.kind(self.fibre.unwrap_or(face)),
             at: self.at,
             rate: self.rate,
             noise: self.noise,
@@ -133,6 +168,29 @@ pub fn record_sensors(
     )
 }
 
+/// What the frame's sensors record over `duration` seconds from rest under its static loads,
+/// under the time loads of its motion on its lane, in the order they were declared (the
+/// response to the time loads, as for a beam).
+pub fn record_frame_sensors(
+    frame: &FrameSpec,
+    duration: f64,
+    normal: &mut dyn FnMut() -> f64,
+) -> Result<Vec<Series>, String> {
+    let motion = frame.motion.clone().unwrap_or_default();
+    let sensors: Vec<MemberSensor> = frame
+        .sensors
+        .iter()
+        .map(|s| s.member_sensor(frame))
+        .collect();
+    let excitation = FrameExcitation {
+        lane: &frame.lane,
+        loads: &motion.loads,
+        modes: motion.modes as usize,
+        damping: motion.damping,
+    };
+    record_members(&frame.model, excitation, duration, &sensors, normal)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -146,6 +204,8 @@ mod tests {
             rate: 100.0,
             noise: 0.0,
             fibre,
+            member: None,
+            direction: None,
         }
     }
 

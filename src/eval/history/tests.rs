@@ -124,6 +124,7 @@ fn written() -> RateGroup {
         rate: 4.0,
         times: vec![0.0, 0.25, 0.5],
         columns: vec![SensorColumn {
+            member: None,
             name: "mid".into(),
             kind: "displacement".into(),
             unit: "m".into(),

@@ -67,6 +67,8 @@ pub struct FrameState {
     pub velocity: Vec<[f64; 3]>,
     /// Each node's translational acceleration, world axes, m/s².
     pub acceleration: Vec<[f64; 3]>,
+    /// Each mode's velocity q̇_n, then its acceleration q̈_n (unit modal mass).
+    pub modal_rates: Vec<[f64; 2]>,
 }
 
 impl FrameModel {
@@ -339,11 +341,13 @@ impl FrameDynamics {
         let mut displacements = solve::displacements(&model, &elements, super::Solver::Auto)?;
         let mut velocity = vec![[0.0; 3]; model.nodes.len()];
         let mut acceleration = vec![[0.0; 3]; model.nodes.len()];
+        let mut modal_rates = Vec::with_capacity(self.modes.omega.len());
         let modes = self.modes.omega.iter().zip(&self.modes.shapes);
         for (((&omega, shape), [q, v]), &f) in modes.zip(&snap.state).zip(&snap.force) {
             let w2 = omega * omega;
             let dynamic = q - f / w2;
             let accel = f - 2.0 * self.damping * omega * v - w2 * q;
+            modal_rates.push([*v, accel]);
             for (node, phi) in shape.iter().enumerate() {
                 for (d, p) in displacements[node].iter_mut().zip(phi) {
                     *d += dynamic * p;
@@ -359,6 +363,18 @@ impl FrameDynamics {
             solution: FrameSolution::new(&model, elements, displacements),
             velocity,
             acceleration,
+            modal_rates,
         })
+    }
+
+    /// The velocity (`rate` 0) or acceleration (`rate` 1) of the point at `x` along member
+    /// `m` in `state`, world axes: Σ q̇_n φ_n(p) or Σ q̈_n φ_n(p), with each mode's field
+    /// inside the member, so a point between nodes is as exact as a node.
+    pub fn rate_at(&self, state: &FrameState, rate: usize, m: usize, x: f64) -> DVec3 {
+        self.fields
+            .iter()
+            .zip(&state.modal_rates)
+            .map(|(field, rates)| rates[rate] * field.member_at(m, x).0)
+            .sum()
     }
 }

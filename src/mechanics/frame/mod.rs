@@ -26,6 +26,7 @@ mod modes;
 mod modes_tests;
 mod results;
 mod section;
+mod sensors;
 mod solve;
 #[cfg(test)]
 mod tests;
@@ -33,8 +34,9 @@ mod tests;
 pub use dynamics::{FrameDynamics, FrameState, Lane};
 pub use labels::FrameLabels;
 pub use modes::{DENSE_MODES_MAX_DOFS, FrameModeLabel, ModalLabels, NaturalModes};
-pub use results::{FrameSolution, MemberResult, NodeResult, Reaction};
+pub use results::{FrameSolution, MemberResult, NodeResult, Reaction, StrongAxis};
 pub use section::SpaceSection;
+pub use sensors::{FrameExcitation, MemberSensor, record_members};
 pub use solve::{DENSE_MAX_DOFS, Solver};
 
 use super::{Load, STEEL_E, STEEL_FY, STEEL_NU, Section};

@@ -142,6 +142,37 @@ impl FrameSolution {
         let to_world = self.elements[m].axes.transpose();
         (to_world * u, to_world * r)
     }
+
+    /// Member `m` at distance `x` from its start, in its local x–z plane (the strong axis):
+    /// the section's rotation about local y (dv/dx of the deflection v along −z), the
+    /// sagging-positive bending moment about local y (N·m), its flexural rigidity E·I_y and
+    /// the distance of its extreme fibre from the neutral axis along z.
+    pub fn strong_axis_at(&self, m: usize, x: f64) -> StrongAxis {
+        let el = &self.elements[m];
+        let d = &self.local[m];
+        let (_, rotation) = local_field(el, d, x);
+        let ends = el.k_full * d + el.fixed_full;
+        let homogeneous = el.k_full * d;
+        StrongAxis {
+            rotation: rotation.y,
+            moment: internal(el, &homogeneous, ends[0], x).about_y,
+            rigidity: el.e * el.props.i_y,
+            extreme_fibre: el.props.fibre_z,
+        }
+    }
+}
+
+/// A member's section in its strong plane of bending (`FrameSolution::strong_axis_at`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StrongAxis {
+    /// Rotation about local y, rad, positive where the deflection along −z grows with x.
+    pub rotation: f64,
+    /// Bending moment about local y, N·m, sagging positive (stretching the −z face).
+    pub moment: f64,
+    /// E·I_y, N·m².
+    pub rigidity: f64,
+    /// Distance of the extreme fibre along z from the neutral axis, m.
+    pub extreme_fibre: f64,
 }
 
 /// Displacement and section rotation of a member at `x`, local axes.
