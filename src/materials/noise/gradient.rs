@@ -578,13 +578,16 @@ pub struct SpanLadder<'a> {
     done: [[Cell<u16>; LANES]; GROUPS],
     /// Per lane group, lane and rung, the values at the points (only those marked in `done`
     /// are written).
-    rungs: [[[Cell<MaybeUninit<[f32; LANES]>>; RUNGS]; LANES]; GROUPS],
+    rungs: [[[SpanValues; RUNGS]; LANES]; GROUPS],
     /// The `Field::key`s of the fields summed so far, in the order first asked for; 0 after
     /// the last.
     field_keys: [Cell<u32>; SPAN_FIELDS],
     /// Their values at every point (only those with a key are written).
     field_values: [Cell<MaybeUninit<[f64; LANES]>>; SPAN_FIELDS],
 }
+
+/// One lane of one rung at the points of a span, once evaluated.
+type SpanValues = Cell<MaybeUninit<[f32; LANES]>>;
 
 /// Fields a span keeps (a material reads at most a dozen; more are summed again when asked).
 const SPAN_FIELDS: usize = 16;
