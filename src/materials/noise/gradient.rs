@@ -9,9 +9,12 @@
 //! Fractal sums halve the wavelength and the amplitude octave by octave. A material's fields
 //! share one octave ladder (`Ladder`, rungs 1.28 m halved again and again): the rungs a point
 //! needs are each evaluated once, and every field of the material (steel mottle, rust patches,
-//! their ragged edges, the rust tone…) reads its lane from them.
+//! their ragged edges, the rust tone…) reads its lane from them. Up to four neighbouring
+//! pixels of a row share one `SpanLadder`, whose lanes run across the points instead: a rung
+//! then costs only the lanes the material reads, and gives each point the bits its own
+//! `Ladder` would.
 //!
-//! Owns: gradient noise, fractal sums, the ladder. Must not touch: cellular noise, materials.
+//! Owns: gradient noise, fractal sums, the ladders. Must not touch: cellular noise, materials.
 
 use super::lanes::{F4, U4};
 use super::{MemoTag, Noise, axis_word, cell, corner_hash};
