@@ -20,6 +20,7 @@ use super::trace::{GBuffer, NO_HIT, PixelSet, TraceMesh};
 use super::visibility::{SecondaryRays, Visibility};
 use crate::cameras::Camera;
 use crate::materials::light::turn_about_z;
+use crate::materials::noise::LANES;
 use crate::materials::{Backdrop, Film, Lighting, Surface, srgb_to_linear};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -30,6 +31,13 @@ pub trait Surfaces: Sync {
     /// The surface of triangle `tri` at world point `p`, seen with pixels `footprint` metres
     /// wide there.
     fn at(&self, tri: u32, p: DVec3, footprint: f64) -> Surface;
+    /// `at` for each of up to four `hits` (triangle, world point, footprint) seen side by side
+    /// along a row, into `out`: the same surfaces, found together where that is cheaper.
+    fn at_span(&self, hits: &[(u32, DVec3, f64)], out: &mut [Surface]) {
+        for (s, &(tri, p, footprint)) in out.iter_mut().zip(hits) {
+            *s = self.at(tri, p, footprint);
+        }
+    }
     /// Untextured linear albedo of the triangle: decides where anti-aliasing is needed.
     fn flat(&self, tri: u32) -> [f64; 3];
     /// Whether the surface varies over the triangle (else `flat` is all there is to it).
@@ -191,6 +199,43 @@ pub struct Shaded {
     pub secondary: Vec<SecondaryRays>,
 }
 
+/// Surfaces of the next pixels of a row, found together (`Shading::surface_ahead`).
+struct SurfacesAhead {
+    /// The columns they are for.
+    cols: std::ops::Range<usize>,
+    found: [Ahead; LANES],
+}
+
+/// A centre ray's hit on a textured surface, found ahead of its shading.
+#[derive(Clone, Copy)]
+struct Ahead {
+    /// Point, facing normal and footprint (`hit_geometry`).
+    geometry: (DVec3, DVec3, f64),
+    surface: Surface,
+}
+
+impl SurfacesAhead {
+    /// A placeholder surface.
+    const NONE: Surface = Surface {
+        albedo: [0.0; 3],
+        roughness: 1.0,
+        specular: 0.0,
+        crack: false,
+    };
+}
+
+impl Default for SurfacesAhead {
+    fn default() -> Self {
+        SurfacesAhead {
+            cols: 0..0,
+            found: [Ahead {
+                geometry: (DVec3::ZERO, DVec3::ZERO, 0.0),
+                surface: Self::NONE,
+            }; LANES],
+        }
+    }
+}
+
 /// RGB8 image (sRGB) of the G-buffer, under `lighting` with the sample's lighting cache (None:
 /// every pixel traces its own light rays, `shading: "per_pixel"`).
 pub fn shade(
@@ -339,7 +384,9 @@ impl<S: Surfaces> Shading<'_, S> {
         let k = self.camera.intrinsics;
         let row_y = k.ray_through_pixel(row as u32, 0).y;
         let mut last = LastMatte::default();
+        let mut ahead = SurfacesAhead::default();
         let (mut shaded, mut untextured) = (LastEncoded::default(), LastEncoded::default());
+        let end = span.end;
         for col in span {
             let i = row * width + col;
             let hit = (g.triangle[i] != NO_HIT).then(|| (g.depth[i], g.triangle[i]));
@@ -347,11 +394,14 @@ impl<S: Surfaces> Shading<'_, S> {
                 continue;
             }
             let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
-            let view = match &self.pinhole_columns {
-                Some(x) => DVec3::new(x[col], row_y, 1.0),
-                None => k.ray_through(u, v),
-            };
-            let (linear, unshadowed) = self.radiance_with_irradiance(hit, view, (u, v), &mut last);
+            let view = self.centre_view(row, col, row_y);
+            let found = hit.and_then(|(_, tri)| {
+                self.surfaces
+                    .textured(tri)
+                    .then(|| self.surface_ahead(g, row, col..end, &mut ahead))
+            });
+            let (linear, unshadowed) =
+                self.radiance_with_irradiance(hit, view, (u, v), &mut last, found.as_ref());
             let colour = shaded.encode(linear);
             out[3 * col..3 * col + 3].copy_from_slice(&colour);
             if let Some(keys) = edge_keys.as_deref_mut() {
@@ -371,6 +421,57 @@ impl<S: Surfaces> Shading<'_, S> {
                 keys[col] = edge_key(deciding);
             }
         }
+    }
+
+    /// The direction of the centre ray of pixel (`col`, `row`), camera axes; `row_y` is that
+    /// of the row's rays when the camera is a pinhole.
+    fn centre_view(&self, row: usize, col: usize, row_y: f64) -> DVec3 {
+        match &self.pinhole_columns {
+            Some(x) => DVec3::new(x[col], row_y, 1.0),
+            None => self
+                .camera
+                .intrinsics
+                .ray_through(col as f64 + 0.5, row as f64 + 0.5),
+        }
+    }
+
+    /// The surface the centre ray of the first pixel of `cols` (of row `row`, on a textured
+    /// triangle) meets: from `ahead` when it was found with the pixels before it, else found
+    /// now together with those after it that also meet textured triangles, up to `LANES` (the
+    /// material reads its fields for a span at once: `Surfaces::at_span`).
+    fn surface_ahead(
+        &self,
+        g: &GBuffer,
+        row: usize,
+        cols: std::ops::Range<usize>,
+        ahead: &mut SurfacesAhead,
+    ) -> Ahead {
+        let col = cols.start;
+        if !ahead.cols.contains(&col) {
+            let width = g.width as usize;
+            let row_y = self.camera.intrinsics.ray_through_pixel(row as u32, 0).y;
+            let mut hits = [(0, DVec3::ZERO, 0.0); LANES];
+            let mut n = 0;
+            for c in cols.take(LANES) {
+                let tri = g.triangle[row * width + c];
+                if tri == NO_HIT || !self.surfaces.textured(tri) {
+                    break;
+                }
+                let depth = f64::from(g.depth[row * width + c]);
+                let view = self.centre_view(row, c, row_y);
+                let geometry = hit_geometry(self.camera, self.mesh, tri, view, depth);
+                ahead.found[n].geometry = geometry;
+                hits[n] = (tri, geometry.0, geometry.2);
+                n += 1;
+            }
+            ahead.cols = col..col + n;
+            let mut surfaces = [SurfacesAhead::NONE; LANES];
+            self.surfaces.at_span(&hits[..n], &mut surfaces[..n]);
+            for (a, s) in ahead.found.iter_mut().zip(surfaces) {
+                a.surface = s;
+            }
+        }
+        ahead.found[col - ahead.cols.start]
     }
 
     /// Re-shades from four fixed sub-pixel rays every pixel (near the hits of `spans`, see
@@ -488,10 +589,12 @@ impl<S: Surfaces> Shading<'_, S> {
         view: DVec3,
         (u, v): (f64, f64),
         last: &mut LastMatte,
+        ahead: Option<&Ahead>,
     ) -> RadianceAndIrradiance {
-        match hit {
-            None => (self.backdrop(view, u, v), [0.0; 3]),
-            Some((depth, tri)) => self.matte_radiance(view, depth, tri, (u, v), last),
+        match (hit, ahead) {
+            (None, _) => (self.backdrop(view, u, v), [0.0; 3]),
+            (Some(_), Some(a)) => self.lit(view, &a.surface, a.geometry, (u, v)),
+            (Some((depth, tri)), None) => self.matte_radiance(view, depth, tri, (u, v), last),
         }
     }
 
@@ -553,7 +656,18 @@ impl<S: Surfaces> Shading<'_, S> {
         let (point, normal, footprint) =
             hit_geometry(self.camera, self.mesh, tri, view, f64::from(depth));
         let surface = given.unwrap_or_else(|| self.surfaces.at(tri, point, footprint));
-        let light = self.light(view, &surface, (point, normal, footprint), pixel);
+        self.lit(view, &surface, (point, normal, footprint), pixel)
+    }
+
+    /// `hit_radiance` of a hit whose geometry (`hit_geometry`) and surface are known.
+    fn lit(
+        &self,
+        view: DVec3,
+        surface: &Surface,
+        geometry: (DVec3, DVec3, f64),
+        pixel: (f64, f64),
+    ) -> RadianceAndIrradiance {
+        let light = self.light(view, surface, geometry, pixel);
         let film = &self.lighting.film;
         let radiance = reflected(film, surface.albedo, light.diffuse, light.specular);
         (radiance, light.unshadowed)

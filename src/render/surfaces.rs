@@ -10,6 +10,7 @@ use super::trace::{GBuffer, NO_HIT, TraceMesh};
 use crate::cameras::Camera;
 use crate::geometry::Mesh;
 use crate::materials::cache::{FieldCache, Plane};
+use crate::materials::noise::LANES;
 use crate::materials::{Grain, Shader, Surface, SurfacePoint};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -99,6 +100,34 @@ impl Surfaces for SampleSurfaces<'_> {
         match plane {
             Some((cache, plane)) => cache.surface(shader, grain, &plane, point.rest, footprint),
             None => shader.surface(&point, grain),
+        }
+    }
+
+    fn at_span(&self, hits: &[(u32, DVec3, f64)], out: &mut [Surface]) {
+        // Runs of hits on one piece (one material and grain) read the material together;
+        // with a field cache each hit reads it from the cache.
+        let mut start = 0;
+        while start < hits.len() {
+            let piece = self.piece[hits[start].0 as usize];
+            let end = start
+                + hits[start..]
+                    .iter()
+                    .take_while(|h| self.piece[h.0 as usize] == piece)
+                    .count();
+            let (shader, grain) = self.shader_of(hits[start].0);
+            if self.cache.is_some() || !shader.textured() || end - start < 2 {
+                for (s, &(tri, p, footprint)) in out[start..end].iter_mut().zip(&hits[start..end]) {
+                    *s = self.at(tri, p, footprint);
+                }
+            } else {
+                let run = &hits[start..end];
+                let mut points = [self.rest_point(run[0].0, run[0].1, run[0].2); LANES];
+                for (point, &(tri, p, footprint)) in points.iter_mut().zip(run).skip(1) {
+                    *point = self.rest_point(tri, p, footprint);
+                }
+                shader.surfaces(&points[..run.len()], grain, &mut out[start..end]);
+            }
+            start = end;
         }
     }
 

@@ -9,9 +9,12 @@
 //! Fractal sums halve the wavelength and the amplitude octave by octave. A material's fields
 //! share one octave ladder (`Ladder`, rungs 1.28 m halved again and again): the rungs a point
 //! needs are each evaluated once, and every field of the material (steel mottle, rust patches,
-//! their ragged edges, the rust tone…) reads its lane from them.
+//! their ragged edges, the rust tone…) reads its lane from them. Up to four neighbouring
+//! pixels of a row share one `SpanLadder`, whose lanes run across the points instead: a rung
+//! then costs only the lanes the material reads, and gives each point the bits its own
+//! `Ladder` would.
 //!
-//! Owns: gradient noise, fractal sums, the ladder. Must not touch: cellular noise, materials.
+//! Owns: gradient noise, fractal sums, the ladders. Must not touch: cellular noise, materials.
 
 use super::lanes::{F4, U4};
 use super::{MemoTag, Noise, axis_word, cell, corner_hash};
@@ -92,47 +95,110 @@ impl Noise {
     /// cell's corner gradients memoised in `slot` of the thread's `CellMemo`.
     #[inline(always)]
     fn lanes(&self, q: DVec3, key: u64, slot: usize) -> [f32; LANES] {
-        let (x, y, z) = (Axis::new(q.x), Axis::new(q.y), Axis::new(q.z));
+        let [(cx, fx), (cy, fy), (cz, fz)] = [q.x, q.y, q.z].map(cell);
+        let axes = [fx, fy, fz].map(|f| Axis::new(F4::splat(f as f32)));
         CELL_MEMO.with_borrow_mut(|memo| {
-            let g = memo.gradients(slot, key, [x.cell, y.cell, z.cell]);
-            let corner = |a: usize, b: usize, c: usize| {
-                g[a + 2 * b + 4 * c].dot([x.offsets[a], y.offsets[b], z.offsets[c]])
-            };
-            let near = lerp(
-                lerp(corner(0, 0, 0), corner(1, 0, 0), x.fade),
-                lerp(corner(0, 1, 0), corner(1, 1, 0), x.fade),
-                y.fade,
-            );
-            let far = lerp(
-                lerp(corner(0, 0, 1), corner(1, 0, 1), x.fade),
-                lerp(corner(0, 1, 1), corner(1, 1, 1), x.fade),
-                y.fade,
-            );
-            lerp(near, far, z.fade).mul(F4::splat(SCALE)).to_array()
+            let memo = memo.cell(slot, key, [cx, cy, cz]);
+            interpolate(&memo.gradients, &axes).to_array()
         })
+    }
+
+    /// The lattice cells of rung `index` of lane group `group` (lattice `scale` cells per
+    /// metre) around each of four points: what `octave` finds at each point before it
+    /// interpolates (the same IEEE operations on the same operands).
+    fn cells_across(
+        &self,
+        points: &[DVec3; LANES],
+        (scale, index): (f64, u32),
+        group: usize,
+        out: &mut MaybeUninit<CellsAcross>,
+    ) {
+        let shift = OCTAVE_SHIFT * f64::from(index);
+        let key = self.keys[group];
+        let slot = ladder_slot(group, index);
+        let mut offsets = [[0f32; LANES]; 3];
+        let out = out.as_mut_ptr();
+        // SAFETY: a place in `out`, written below before anything reads it.
+        let hashes = unsafe { &raw mut (*out).hashes }.cast::<u64>();
+        CELL_MEMO.with_borrow_mut(|memo| {
+            for (k, p) in points.iter().enumerate() {
+                let q = *p * scale + DVec3::splat(shift);
+                let [(cx, fx), (cy, fy), (cz, fz)] = [q.x, q.y, q.z].map(cell);
+                for (axis, f) in offsets.iter_mut().zip([fx, fy, fz]) {
+                    axis[k] = f as f32;
+                }
+                let memo = memo.cell(slot, key, [cx, cy, cz]);
+                for (corner, &h) in memo.hashes.iter().enumerate() {
+                    // SAFETY: corner < 8 and k < LANES index within `hashes`, [[u64; LANES]; 8].
+                    unsafe { hashes.add(corner * LANES + k).write(h) };
+                }
+            }
+        });
+        let axes = offsets.map(|f| Axis::new(F4::from_array(f)));
+        // SAFETY: as above; with the hashes written, every field of `out` is.
+        unsafe { (&raw mut (*out).axes).write(axes) };
     }
 }
 
-/// A lattice cell along one axis.
+/// The lattice cells of one rung around four points, lanes across the points.
+struct CellsAcross {
+    /// The points' positions in their cells along x, y and z.
+    axes: [Axis; 3],
+    /// The hash of each corner of each point's cell, corner by corner.
+    hashes: [[u64; LANES]; 8],
+}
+
+impl CellsAcross {
+    /// Lane `lane` of the rung's noises at each of the points: the value `octave` gives that
+    /// lane at each point, to the bit.
+    #[inline(always)]
+    fn lane(&self, lane: usize) -> [f32; LANES] {
+        let shift = 16 * lane;
+        let mut gradients = [Gradient::NONE; 8];
+        for (g, h) in gradients.iter_mut().zip(&self.hashes) {
+            let words = [0, 1, 2, 3].map(|k| (h[k] >> shift) as u32 & 0xffff);
+            *g = Gradient::of_words(U4::from_array(words));
+        }
+        interpolate(&gradients, &self.axes).to_array()
+    }
+}
+
+/// Gradient noise in four lanes from the corner gradients of a cell and the position in it
+/// along each axis: the dot products interpolated with the fade, scaled by `SCALE`.
+#[inline(always)]
+fn interpolate(g: &[Gradient; 8], [x, y, z]: &[Axis; 3]) -> F4 {
+    let corner = |a: usize, b: usize, c: usize| {
+        g[a + 2 * b + 4 * c].dot([x.offsets[a], y.offsets[b], z.offsets[c]])
+    };
+    let near = lerp(
+        lerp(corner(0, 0, 0), corner(1, 0, 0), x.fade),
+        lerp(corner(0, 1, 0), corner(1, 1, 0), x.fade),
+        y.fade,
+    );
+    let far = lerp(
+        lerp(corner(0, 0, 1), corner(1, 0, 1), x.fade),
+        lerp(corner(0, 1, 1), corner(1, 1, 1), x.fade),
+        y.fade,
+    );
+    lerp(near, far, z.fade).mul(F4::splat(SCALE))
+}
+
+/// The position in a lattice cell along one axis, in every lane.
 struct Axis {
-    /// Integer coordinate of the cell's lower face.
-    cell: i64,
-    /// Offsets from the two faces (the position in the cell, and that less one), as lane bits.
+    /// Offsets from the cell's two faces (the position in the cell, and that less one), as
+    /// lane bits.
     offsets: [U4; 2],
-    /// The fade of the position in the cell, in every lane.
+    /// The fade of the position in the cell.
     fade: F4,
 }
 
 impl Axis {
-    /// Along lattice coordinate `t`.
+    /// At position `f` in the cell (in [0, 1]).
     #[inline(always)]
-    fn new(t: f64) -> Axis {
-        let (i, f) = cell(t);
-        let f = f as f32;
+    fn new(f: F4) -> Axis {
         Axis {
-            cell: i,
-            offsets: [F4::splat(f).bits(), F4::splat(f - 1.0).bits()],
-            fade: F4::splat(fade(f)),
+            offsets: [f.bits(), f.sub(F4::splat(1.0)).bits()],
+            fade: fade(f),
         }
     }
 }
@@ -166,7 +232,12 @@ impl Gradient {
     /// The gradients of the corner whose hash is `h`.
     #[inline(always)]
     fn of(h: u64) -> Gradient {
-        let w = U4::words(h);
+        Self::of_words(U4::words(h))
+    }
+
+    /// The gradients whose 16-bit hash words are the lanes of `w`.
+    #[inline(always)]
+    fn of_words(w: U4) -> Gradient {
         let missing = w.shr::<12>().and(U4::splat(3));
         let sign = U4::splat(0x8000_0000);
         let flip_x = w.shl::<17>().and(sign);
@@ -222,37 +293,41 @@ struct CellMemo {
 #[derive(Clone, Copy)]
 struct MemoCell {
     tag: MemoTag,
-    /// Corner (a, b, c) ∈ {0, 1}³ at index a + 2b + 4c.
+    /// The hash of corner (a, b, c) ∈ {0, 1}³ at index a + 2b + 4c.
+    hashes: [u64; 8],
+    /// The gradients those hashes give, corner by corner.
     gradients: [Gradient; 8],
 }
 
 impl MemoCell {
     const EMPTY: MemoCell = MemoCell {
         tag: MemoTag::EMPTY,
+        hashes: [0; 8],
         gradients: [Gradient::NONE; 8],
     };
 }
 
 impl CellMemo {
-    /// The corner gradients of lattice cell `cell` under `key`, from `slot` or hashed into it.
+    /// The corner hashes and gradients of lattice cell `cell` under `key`, from `slot` or
+    /// hashed into it.
     #[inline(always)]
-    fn gradients(&mut self, slot: usize, key: u64, cell: [i64; 3]) -> &[Gradient; 8] {
+    fn cell(&mut self, slot: usize, key: u64, cell: [i64; 3]) -> &MemoCell {
         let memo = &mut self.cells[slot];
         if !memo.tag.holds(key, cell) {
             let words: [[u64; 2]; 3] = std::array::from_fn(|k| {
                 [axis_word(cell[k], k, key), axis_word(cell[k] + 1, k, key)]
             });
-            memo.gradients = std::array::from_fn(|i| {
-                let h = corner_hash(words[0][i & 1], words[1][(i >> 1) & 1], words[2][i >> 2]);
-                Gradient::of(h)
+            memo.hashes = std::array::from_fn(|i| {
+                corner_hash(words[0][i & 1], words[1][(i >> 1) & 1], words[2][i >> 2])
             });
+            memo.gradients = memo.hashes.map(Gradient::of);
             memo.tag = MemoTag {
                 key,
                 cell,
                 filled: true,
             };
         }
-        &memo.gradients
+        memo
     }
 }
 
@@ -264,10 +339,11 @@ thread_local! {
     };
 }
 
-/// Perlin's quintic fade 6t⁵ − 15t⁴ + 10t³ (Horner form).
+/// Perlin's quintic fade 6t⁵ − 15t⁴ + 10t³ (Horner form), lane by lane.
 #[inline(always)]
-fn fade(t: f32) -> f32 {
-    t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
+fn fade(t: F4) -> F4 {
+    let inner = t.mul(F4::splat(6.0)).sub(F4::splat(15.0));
+    t.mul(t).mul(t).mul(t.mul(inner).add(F4::splat(10.0)))
 }
 
 #[inline(always)]
@@ -403,6 +479,33 @@ impl Field {
             octaves,
         }
     }
+
+    /// A word that tells fields apart, never 0.
+    fn key(self) -> u32 {
+        1 << 24 | u32::from(self.lane) << 16 | u32::from(self.first) << 8 | u32::from(self.octaves)
+    }
+
+    /// The field's lane group, and its lane in the group.
+    fn group_and_lane(self) -> (usize, usize) {
+        (self.lane as usize / LANES, self.lane as usize % LANES)
+    }
+
+    /// The field's octaves summed and normalised as `Noise::fractal`, at a point whose top
+    /// rung has [`resolution`] `resolved_top`, reading the lane at rung `index` (lattice
+    /// `scale` cells per metre) through `rung`.
+    #[inline(always)]
+    fn sum(self, resolved_top: f64, mut rung: impl FnMut(u32, f64) -> f32) -> f64 {
+        let first = u32::from(self.first);
+        let octaves = u32::from(self.octaves);
+        let scale = rung_scale(first);
+        // 2^−first: the top rung's resolution halved `first` times, exactly.
+        let resolved = resolved_top * f64::from_bits((1023 - u64::from(first)) << 52);
+        let mut sum = 0f32;
+        for octave in Octaves::from_index(first, scale, octaves, resolved) {
+            sum += octave.weight * rung(octave.index, octave.scale);
+        }
+        f64::from(sum) * normaliser(octaves)
+    }
 }
 
 /// The rungs of the octave ladder at one point of a surface, each evaluated (for all four lanes
@@ -433,17 +536,10 @@ impl<'a> Ladder<'a> {
 
     /// The field's value here, normalised as `Noise::fractal`.
     pub fn get(&self, field: Field) -> f64 {
-        let (group, lane) = (field.lane as usize / LANES, field.lane as usize % LANES);
-        let first = u32::from(field.first);
-        let octaves = u32::from(field.octaves);
-        let scale = rung_scale(first);
-        // 2^−first: the top rung's resolution halved `first` times, exactly.
-        let resolved = self.resolved_top * f64::from_bits((1023 - u64::from(first)) << 52);
-        let mut sum = 0f32;
-        for octave in Octaves::from_index(first, scale, octaves, resolved) {
-            sum += octave.weight * self.rung(group, octave.index, octave.scale)[lane];
-        }
-        f64::from(sum) * normaliser(octaves)
+        let (group, lane) = field.group_and_lane();
+        field.sum(self.resolved_top, |index, scale| {
+            self.rung(group, index, scale)[lane]
+        })
     }
 
     /// The four noises of a group at rung `index` (lattice `scale` cells per metre).
@@ -460,6 +556,145 @@ impl<'a> Ladder<'a> {
         }
         // SAFETY: the rung's bit in `done` is set only once the rung has been written.
         unsafe { cell.get().assume_init() }
+    }
+}
+
+/// The octave ladders of up to four points of one material seen side by side (neighbouring
+/// pixels of a row), evaluated together: the lattice cells of a rung are found once for the
+/// four points (`Noise::cells_across`), and each lane a field reads is then interpolated at
+/// all four points at once, where a point's own `Ladder` interpolates all four lanes of the
+/// rung at that point. Materials mostly read one or two of a rung's four lanes, so this does
+/// less of the lattice work, and shares the rest between the points. Every value is the bit
+/// its point's own `Ladder` gives.
+pub struct SpanLadder<'a> {
+    noise: &'a Noise,
+    /// The points (metres); a span of fewer than four repeats its last point in the rest.
+    points: [DVec3; LANES],
+    /// [`resolution`] of the top rung at each point's footprint.
+    resolved_top: [f64; LANES],
+    /// Per lane group, a bit for every rung whose cells are found.
+    found: [Cell<u16>; GROUPS],
+    /// Per lane group, the cells of every rung (only those marked in `found` are written;
+    /// see `Ladder::rungs`).
+    cells: [[Cell<MaybeUninit<CellsAcross>>; RUNGS]; GROUPS],
+    /// Per lane group and lane, a bit for every rung evaluated.
+    done: [[Cell<u16>; LANES]; GROUPS],
+    /// Per lane group, lane and rung, the values at the points (only those marked in `done`
+    /// are written).
+    rungs: [[[SpanValues; RUNGS]; LANES]; GROUPS],
+    /// The `Field::key`s of the fields summed so far, in the order first asked for; 0 after
+    /// the last.
+    field_keys: [Cell<u32>; SPAN_FIELDS],
+    /// Their values at every point (only those with a key are written).
+    field_values: [Cell<MaybeUninit<[f64; LANES]>>; SPAN_FIELDS],
+}
+
+/// One lane of one rung at the points of a span, once evaluated.
+type SpanValues = Cell<MaybeUninit<[f32; LANES]>>;
+
+/// Fields a span keeps (a material reads at most a dozen; more are summed again when asked).
+const SPAN_FIELDS: usize = 16;
+
+impl<'a> SpanLadder<'a> {
+    /// The ladders of `noise` at `points` (metres, one to four), seen with pixels
+    /// `footprints` metres wide.
+    pub fn new(noise: &'a Noise, points: &[DVec3], footprints: &[f64]) -> Self {
+        assert!(
+            (1..=LANES).contains(&points.len()) && points.len() == footprints.len(),
+            "a span of one to four points, each with its footprint"
+        );
+        let last = points.len() - 1;
+        SpanLadder {
+            noise,
+            points: std::array::from_fn(|k| points[k.min(last)]),
+            resolved_top: std::array::from_fn(|k| {
+                resolution(rung_scale(0), footprints[k.min(last)])
+            }),
+            found: [const { Cell::new(0) }; GROUPS],
+            cells: [const { [const { Cell::new(MaybeUninit::uninit()) }; RUNGS] }; GROUPS],
+            done: [const { [const { Cell::new(0) }; LANES] }; GROUPS],
+            rungs: [const { [const { [const { Cell::new(MaybeUninit::uninit()) }; RUNGS] }; LANES] };
+                GROUPS],
+            field_keys: [const { Cell::new(0) }; SPAN_FIELDS],
+            field_values: [const { Cell::new(MaybeUninit::uninit()) }; SPAN_FIELDS],
+        }
+    }
+
+    /// The field's value at point `k`, normalised as `Noise::fractal`: what
+    /// `Ladder::get` gives at that point. The points of a span read the same fields (one
+    /// material), so the first to ask for a field sums it at every point.
+    pub fn get(&self, k: usize, field: Field) -> f64 {
+        let key = field.key();
+        for (slot, values) in self.field_keys.iter().zip(&self.field_values) {
+            let held = slot.get();
+            if held == key {
+                // SAFETY: a slot's key is set only once its values are written.
+                return unsafe { (*values.as_ptr()).assume_init_ref()[k] };
+            }
+            if held == 0 {
+                let sums = self.sums(field);
+                values.set(MaybeUninit::new(sums));
+                slot.set(key);
+                return sums[k];
+            }
+        }
+        self.sums(field)[k]
+    }
+
+    /// The field at every point: `Field::sum` at each, the rungs read once for all. A point
+    /// whose octaves have faded out by a rung others still read adds nothing from it
+    /// (0 · v is a zero, and adding a zero leaves a sum that is never −0 unchanged), and
+    /// a fade is 0 from the first octave it is 0 on, where `Octaves` stops.
+    fn sums(&self, field: Field) -> [f64; LANES] {
+        let (group, lane) = field.group_and_lane();
+        let first = u32::from(field.first);
+        let octaves = u32::from(field.octaves);
+        let mut scale = rung_scale(first);
+        // 2^−first: the top rung's resolution halved `first` times, exactly.
+        let halvings = f64::from_bits((1023 - u64::from(first)) << 52);
+        let mut resolved = self.resolved_top.map(|r| r * halvings);
+        let mut weight = 1f32;
+        let mut sum = [0f32; LANES];
+        for index in first..first + octaves {
+            let fades = resolved.map(|r| (r - 1.0).clamp(0.0, 1.0));
+            if fades.iter().all(|&f| f == 0.0) {
+                break;
+            }
+            let values = self.rung(group, lane, index, scale);
+            for k in 0..LANES {
+                sum[k] += weight * fades[k] as f32 * values[k];
+            }
+            scale *= 2.0;
+            weight *= 0.5;
+            resolved = resolved.map(|r| r * 0.5);
+        }
+        sum.map(|s| f64::from(s) * normaliser(octaves))
+    }
+
+    /// Lane `lane` of group `group` at rung `index` (lattice `scale` cells per metre), at
+    /// every point.
+    fn rung(&self, group: usize, lane: usize, index: u32, scale: f64) -> [f32; LANES] {
+        let bit = 1 << index;
+        let done = &self.done[group][lane];
+        let value = &self.rungs[group][lane][index as usize];
+        if done.get() & bit == 0 {
+            let found = &self.found[group];
+            let cells = self.cells[group][index as usize].as_ptr();
+            if found.get() & bit == 0 {
+                // SAFETY: `cells` points into `self`, borrowed by no one else (these `Cell`s
+                // are read and written here only, through this pointer).
+                let out = unsafe { &mut *cells };
+                self.noise
+                    .cells_across(&self.points, (scale, index), group, out);
+                found.set(found.get() | bit);
+            }
+            // SAFETY: the rung's bit in `found` is set only once its cells are written.
+            let values = unsafe { (*cells).assume_init_ref() }.lane(lane);
+            value.set(MaybeUninit::new(values));
+            done.set(done.get() | bit);
+        }
+        // SAFETY: the rung's bit in `done` is set only once the rung has been written.
+        unsafe { value.get().assume_init() }
     }
 }
 
@@ -556,6 +791,51 @@ mod tests {
         }
         // A footprint larger than twice the first wavelength leaves nothing to see.
         assert_eq!(n.fractal(DVec3::new(0.1, 0.2, 0.3), 0.3, 6, 0.7), 0.0);
+    }
+
+    #[test]
+    fn span_ladders_give_each_points_own_ladder_bits() {
+        // Spans of one to four points: neighbours 1 mm apart (mostly in one cell of the
+        // coarse rungs, in different cells of the fine ones) and scattered points, with
+        // footprints from 10 µm to 4 cm (every octave shown, to most faded out, and faded at
+        // different rungs at different points of one span), over every lane of both groups.
+        let n = Noise::new(17);
+        let fields: Vec<Field> = (0..8u8)
+            .flat_map(|lane| {
+                [
+                    Field::new(lane, 1.28, 16),
+                    Field::new(lane, 0.32, 4),
+                    Field::new(lane, 0.02, 3),
+                ]
+            })
+            .collect();
+        let scattered: Vec<DVec3> = spread_points(40, DVec3::new(-3.0, 2.0, 0.5)).collect();
+        for (i, start) in spread_points(120, DVec3::ZERO).enumerate() {
+            let len = 1 + i % 4;
+            let footprints: Vec<f64> = (0..len)
+                .map(|k| 1e-5 * 2f64.powi((i % 12) as i32) * (1.0 + 0.7 * k as f64))
+                .collect();
+            let row: Vec<DVec3> = (0..len)
+                .map(|k| start + DVec3::new(1e-3 * k as f64, 0.0, 0.0))
+                .collect();
+            let chunk = i % 9 * 4;
+            for points in [&row[..], &scattered[chunk..chunk + len]] {
+                let span = SpanLadder::new(&n, points, &footprints);
+                // In an order that differs from point to point, so each reads rungs and
+                // fields that another point of the span evaluated first, or not.
+                for (k, (&p, &footprint)) in points.iter().zip(&footprints).enumerate() {
+                    let own = Ladder::new(&n, p, footprint);
+                    for j in 0..fields.len() {
+                        let field = fields[(j * 7 + k * 5) % fields.len()];
+                        assert_eq!(
+                            span.get(k, field).to_bits(),
+                            own.get(field).to_bits(),
+                            "{field:?} at {p} ({footprint} m)"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]

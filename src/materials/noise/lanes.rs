@@ -35,6 +35,13 @@ impl F4 {
         F4(unsafe { _mm_set1_ps(x) })
     }
 
+    /// The lanes `x`, lowest first.
+    #[inline(always)]
+    pub fn from_array(x: [f32; 4]) -> F4 {
+        // SAFETY: `_mm_loadu_ps` reads 16 bytes from any alignment; `x` has 16.
+        F4(unsafe { _mm_loadu_ps(x.as_ptr()) })
+    }
+
     #[inline(always)]
     pub fn to_array(self) -> [f32; 4] {
         // SAFETY: `__m128` and `[f32; 4]` have the same size, and every bit pattern is valid.
@@ -76,6 +83,13 @@ impl U4 {
     #[inline(always)]
     pub fn splat(x: u32) -> U4 {
         U4(unsafe { _mm_set1_epi32(x as i32) })
+    }
+
+    /// The lanes `x`, lowest first.
+    #[inline(always)]
+    pub fn from_array(x: [u32; 4]) -> U4 {
+        // SAFETY: `_mm_loadu_si128` reads 16 bytes from any alignment; `x` has 16.
+        U4(unsafe { _mm_loadu_si128(x.as_ptr().cast()) })
     }
 
     /// The four 16-bit words of `h`, lowest first, one per lane.
@@ -129,6 +143,12 @@ impl F4 {
         F4([x; 4])
     }
 
+    /// The lanes `x`, lowest first.
+    #[inline(always)]
+    pub fn from_array(x: [f32; 4]) -> F4 {
+        F4(x)
+    }
+
     #[inline(always)]
     pub fn to_array(self) -> [f32; 4] {
         self.0
@@ -168,6 +188,12 @@ impl U4 {
     #[inline(always)]
     pub fn splat(x: u32) -> U4 {
         U4([x; 4])
+    }
+
+    /// The lanes `x`, lowest first.
+    #[inline(always)]
+    pub fn from_array(x: [u32; 4]) -> U4 {
+        U4(x)
     }
 
     /// The four 16-bit words of `h`, lowest first, one per lane.

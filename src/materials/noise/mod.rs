@@ -28,7 +28,7 @@ mod gradient;
 mod lanes;
 
 pub use cellular::Cells;
-pub use gradient::{Field, LANES, Ladder};
+pub use gradient::{Field, LANES, Ladder, SpanLadder};
 
 /// Noise generators for one seed.
 #[derive(Clone, Debug)]
