@@ -109,8 +109,7 @@ fn the_meshed_beam_follows_the_damaged_deflection() {
 }
 
 #[test]
-fn damage_that_leaves_the_stiffness_alone_is_drawn_and_only_spalls_and_dents_change_the_geometry()
-{
+fn damage_that_leaves_the_stiffness_alone_is_drawn_and_only_spalls_and_dents_change_the_geometry() {
     let files = |out: &Path, ending: &str| {
         hashes(out)
             .into_iter()
@@ -123,7 +122,10 @@ fn damage_that_leaves_the_stiffness_alone_is_drawn_and_only_spalls_and_dents_cha
         ".crack(#{{ at: 2.0, width_mm: 0.3 }}).spall(#{{ at: 4.0, depth: 0.02 }}).dent(#{{ at: 1.0, depth: 0.005 }}){drawn}"
     );
     let (_b, damaged) = render(&recipe(&placed), &[]);
-    let (_c, marked) = render(&recipe(&format!(".crack(#{{ at: 2.0, width_mm: 0.3 }}){drawn}")), &[]);
+    let (_c, marked) = render(
+        &recipe(&format!(".crack(#{{ at: 2.0, width_mm: 0.3 }}){drawn}")),
+        &[],
+    );
     for geometric in ["depth.exr", "mask.png"] {
         assert_eq!(files(&sound, geometric), files(&marked, geometric));
     }

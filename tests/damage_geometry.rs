@@ -3,7 +3,9 @@
 //! the face), pixels on an exposed bar back-project onto the bar's cylinder (at the cover depth
 //! EN 1992-1-1 §4.4.1 gives, as the recipe states it), every ray through the cavity's region
 //! meets the mesh (no holes where the surface was cut), and the cavity and its bars carry the
-//! spall's instance id.
+//! spall's instance id. A dent is a bowl depth·(1 − r²/R²)² pushed into the face: its pixels
+//! back-project onto that bowl, the depth at its centre is the face's plus its depth, and the
+//! normals tilt by the bowl's slope at its rim.
 
 mod common;
 
@@ -19,7 +21,7 @@ use std::path::Path;
 const RECIPE: &str = r#"
 dataset(#{
     name: "spall", seed: 1, samples: 1, views: 1,
-    outputs: ["rgb", "depth", "mask", "displacement", "damage"],
+    outputs: ["rgb", "depth", "mask", "displacement", "normals", "damage"],
     camera: #{ width: 320, height: 240, fov_y: deg(30), distance: [1.5, 1.5],
                pitch: [0.0, 0.0], yaw: [deg(-90), deg(-90)] },
     scene: |rng| {
@@ -43,6 +45,8 @@ struct Seen {
     class: Vec<u8>,
     instance: Vec<u16>,
     rgb: Vec<u8>,
+    /// The geometric normal of every pixel, camera axes.
+    normals: Vec<[f64; 3]>,
     /// The camera centre and each pixel's ray (camera z = 1, world coordinates).
     origin: [f64; 3],
     rays: Vec<[f64; 3]>,
@@ -60,6 +64,10 @@ fn seen(out: &Path) -> Seen {
     let (width, _, _, class) = read_png(&file("damage_class.png"));
     let (_, _, instance) = read_png16(&file("damage_instance.png"));
     let (_, _, _, rgb) = read_png(&file("rgb.png"));
+    let (_, n) = read_exr_channels(&file("normals.exr"));
+    let normals = (0..depth.len())
+        .map(|i| ["R", "G", "B"].map(|c| f64::from(n[c][i])))
+        .collect();
     let origin = transform(&c2w, [0.0; 3]);
     let rays: Vec<[f64; 3]> = (0..depth.len())
         .map(|i| {
@@ -89,6 +97,7 @@ fn seen(out: &Path) -> Seen {
         class,
         instance,
         rgb,
+        normals,
         origin,
         rays,
         rest,
@@ -180,4 +189,69 @@ fn a_spall_is_a_cavity_whose_floor_is_at_its_depth_with_bars_on_their_cylinders(
         floor > 2000 && bar > 100 && face > 10_000,
         "{floor} {bar} {face}"
     );
+}
+
+#[test]
+fn a_dent_is_a_bowl_of_its_depth_whose_normals_tilt_by_its_slope() {
+    let (a, radius, centre) = (0.02, 0.15, (0.0, 0.05));
+    let dent =
+        r#".dent(#{ at: 2.0, face: "side_neg_y", height: 0.05, radius: 0.15, depth: 0.02 })"#;
+    let (_dir, out) = render(&RECIPE.replace("SPALL", dent), &[]);
+    let s = seen(&out);
+    let at = |p: [f64; 3]| ((p[0] - centre.0).powi(2) + (p[2] - centre.1).powi(2)).sqrt() / radius;
+    let angle = |u: [f64; 3], v: [f64; 3]| {
+        let dot: f64 = (0..3).map(|k| u[k] * v[k]).sum();
+        dot.clamp(-1.0, 1.0).acos().to_degrees()
+    };
+    // The face's own normal, from the pixels well off the dent.
+    let flat = (0..s.depth.len())
+        .find(|&i| s.rest[i].is_some_and(|p| at(p) > 1.5 && p[2].abs() < 0.2))
+        .map(|i| s.normals[i])
+        .unwrap();
+    let (mut bowl, mut rim, mut centre_checked) = (0, 0, false);
+    for i in 0..s.depth.len() {
+        let Some(rest) = s.rest[i] else { continue };
+        if (rest[1] - FACE_Y).abs() > 0.03 {
+            continue;
+        }
+        let t = at(rest);
+        let want = if t < 1.0 {
+            a * (1.0 - t * t).powi(2)
+        } else {
+            0.0
+        };
+        // On the bowl to its interpolation error: 24 cells a diameter, a cell's diagonal d =
+        // 17.7 mm, the bowl's curvature at most 8a/R² (at its rim): d²κ/8 = 2.8e-4 m.
+        assert!(
+            (rest[1] - FACE_Y - want).abs() < 3e-4,
+            "pixel {i} at r/R = {t}: pushed {} vs {want}",
+            rest[1] - FACE_Y
+        );
+        bowl += usize::from(t < 1.0);
+        if t < 0.02 {
+            let (face_depth, _) = meets_plane(&s, i, FACE_Y);
+            let dz = f64::from(s.depth[i]) - face_depth;
+            assert!(
+                (dz - a).abs() < 2e-4,
+                "pixel {i}: depth below the face {dz}"
+            );
+            centre_checked = true;
+        }
+        if (0.45..0.7).contains(&t) {
+            // The slope of the bowl there, d/dr of a(1 − r²/R²)²: 4 a r/R² (1 − r²/R²).
+            let r = t * radius;
+            let slope = 4.0 * a * r / (radius * radius) * (1.0 - t * t);
+            let tilt = angle(s.normals[i], flat);
+            assert!(
+                (tilt - slope.atan().to_degrees()).abs() < 1.5,
+                "pixel {i} at r/R = {t}: tilt {tilt}° vs {}°",
+                slope.atan().to_degrees()
+            );
+            rim += 1;
+        }
+        if t < 1.0 {
+            assert_eq!((s.class[i], s.instance[i]), (6, 1), "pixel {i}");
+        }
+    }
+    assert!(centre_checked && bowl > 3000 && rim > 500, "{bowl} {rim}");
 }
