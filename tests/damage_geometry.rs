@@ -9,8 +9,7 @@
 
 mod common;
 
-use common::{matrix, read_exr, read_exr_channels, read_json, read_png, read_png16, render};
-use common::{transform, view_path};
+use common::{damage_view, read_exr_channels, render, transform, view_path};
 use std::path::Path;
 
 /// A 4 m simply supported 300 × 500 mm reinforced-concrete beam along x, centred on the
@@ -55,52 +54,33 @@ struct Seen {
 }
 
 fn seen(out: &Path) -> Seen {
-    let file = |kind: &str| view_path(out, 0, 0, None, kind);
-    let json = read_json(&file("json"));
-    let k: [[f64; 3]; 3] = matrix(&json["camera"]["K"]);
-    let c2w: [[f64; 4]; 4] = matrix(&json["camera"]["c2w_opencv"]);
-    let depth = read_exr(&file("depth.exr"));
-    let (_, disp) = read_exr_channels(&file("displacement.exr"));
-    let (width, _, _, class) = read_png(&file("damage_class.png"));
-    let (_, _, instance) = read_png16(&file("damage_instance.png"));
-    let (_, _, _, rgb) = read_png(&file("rgb.png"));
-    let (_, n) = read_exr_channels(&file("normals.exr"));
-    let normals = (0..depth.len())
+    let v = damage_view(out);
+    let (_, n) = read_exr_channels(&view_path(out, 0, 0, None, "normals.exr"));
+    let normals = (0..v.depth.len())
         .map(|i| ["R", "G", "B"].map(|c| f64::from(n[c][i])))
         .collect();
-    let origin = transform(&c2w, [0.0; 3]);
-    let rays: Vec<[f64; 3]> = (0..depth.len())
+    let origin = transform(&v.c2w, [0.0; 3]);
+    let rays = (0..v.depth.len())
         .map(|i| {
-            let (row, col) = ((i / width) as f64, (i % width) as f64);
+            let (row, col) = ((i / v.width) as f64, (i % v.width) as f64);
             let cam = [
-                (col + 0.5 - k[0][2]) / k[0][0],
-                (row + 0.5 - k[1][2]) / k[1][1],
+                (col + 0.5 - v.k[0][2]) / v.k[0][0],
+                (row + 0.5 - v.k[1][2]) / v.k[1][1],
                 1.0,
             ];
-            let p = transform(&c2w, cam);
+            let p = transform(&v.c2w, cam);
             std::array::from_fn(|a| p[a] - origin[a])
         })
         .collect();
-    let rest = depth
-        .iter()
-        .zip(&rays)
-        .enumerate()
-        .map(|(i, (&z, ray))| {
-            (z > 0.0 && z.is_finite()).then(|| {
-                let d = ["R", "G", "B"].map(|c| f64::from(disp[c][i]));
-                std::array::from_fn(|a| origin[a] + ray[a] * f64::from(z) - d[a])
-            })
-        })
-        .collect();
     Seen {
-        depth,
-        class,
-        instance,
-        rgb,
+        depth: v.depth,
+        class: v.class,
+        instance: v.instance,
+        rgb: v.rgb,
         normals,
         origin,
         rays,
-        rest,
+        rest: v.rest,
     }
 }
 

@@ -228,9 +228,9 @@ fn split_face_edges(
     };
     let mut cap = Vec::with_capacity(outline.cap.len());
     for t in &outline.cap {
-        let edge = (0..3).find_map(|e| {
+        let edge = (0..3).find(|&e| {
             let (a, b) = (t[e] as usize, t[(e + 1) % 3] as usize);
-            (a < n && b == (a + 1) % n && !inserted[a].is_empty()).then_some(e)
+            a < n && b == (a + 1) % n && !inserted[a].is_empty()
         });
         match edge {
             None => cap.push(t.map(index)),
