@@ -214,4 +214,26 @@ fn a_damage_call_off_the_span_points_at_the_recipe() {
         err.contains("recipe.rhai:7:") && err.contains("\"under\" is unknown"),
         "{err}"
     );
+    // A spall is cut into the mesh: it may not cut through an I's 15 mm flange, nor into a
+    // tube, which has no flat face.
+    for (section, spall, message) in [
+        (
+            "i_section(0.2, 0.4, 0.015, 0.01)",
+            ".spall(#{ at: 1.0, depth: 0.02 })",
+            "spall.depth = 0.02 m must be less than the flange (0.015 m)",
+        ),
+        (
+            "tube(0.4, 0.02)",
+            ".dent(#{ at: 1.0 })",
+            "a circular hollow section has none",
+        ),
+    ] {
+        let text = recipe(spall).replace("width: 0.3, height: 0.5", &format!("section: {section}"));
+        let path = write(dir.path(), "recipe.rhai", text);
+        let err = stderr(&run(&path, &dir.path().join("out3"), &[]));
+        assert!(
+            err.contains("recipe.rhai:7:") && err.contains(message),
+            "{err}"
+        );
+    }
 }
