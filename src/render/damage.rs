@@ -1,7 +1,9 @@
 //! Damage on a structure's surface, per pixel: which damage a pixel's surface point lies on
 //! (the per-pixel class, instance, crack-width and crack-coverage labels) and how it changes the
 //! surface's look (cracks darken by their coverage of the pixel, corrosion browns and pits the
-//! albedo with stains running down, spalls are shadowed).
+//! albedo with stains running down, a spall's fracture surfaces are dulled and its exposed
+//! bars drawn as rusty steel). Spalls and dents are cut into the mesh by `build::relief`; here
+//! a point under a face's plane within a spall's or dent's reach takes its label.
 //!
 //! Owns: the damage marks of a piece in its own material frame (plain numbers: the pipeline
 //! turns the mechanics' records into them), the coverage model of a crack of width w over a
