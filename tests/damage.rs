@@ -109,7 +109,7 @@ fn the_meshed_beam_follows_the_damaged_deflection() {
 }
 
 #[test]
-fn damage_that_leaves_the_stiffness_alone_leaves_the_geometry_alone_and_is_drawn() {
+fn damage_that_leaves_the_stiffness_alone_is_drawn_and_only_spalls_and_dents_change_the_geometry() {
     let files = |out: &Path, ending: &str| {
         hashes(out)
             .into_iter()
@@ -117,11 +117,20 @@ fn damage_that_leaves_the_stiffness_alone_leaves_the_geometry_alone_and_is_drawn
             .collect::<Vec<_>>()
     };
     let (_a, sound) = render(&recipe(""), &[]);
-    let placed = ".crack(#{ at: 2.0, width_mm: 0.3 }).spall(#{ at: 4.0, depth: 0.02 }).dent(#{ at: 1.0, depth: 0.005 }).corrosion(#{ from: 0.0, to: 1.0, section_loss: 0.0 }).map_cracking(#{ from: 4.5, to: 5.5 })";
-    let (_b, damaged) = render(&recipe(placed), &[]);
+    let drawn = ".corrosion(#{ from: 0.0, to: 1.0, section_loss: 0.0 }).map_cracking(#{ from: 4.5, to: 5.5 })";
+    let placed = format!(
+        ".crack(#{{ at: 2.0, width_mm: 0.3 }}).spall(#{{ at: 4.0, depth: 0.02 }}).dent(#{{ at: 1.0, depth: 0.005 }}){drawn}"
+    );
+    let (_b, damaged) = render(&recipe(&placed), &[]);
+    let (_c, marked) = render(
+        &recipe(&format!(".crack(#{{ at: 2.0, width_mm: 0.3 }}){drawn}")),
+        &[],
+    );
     for geometric in ["depth.exr", "mask.png"] {
-        assert_eq!(files(&sound, geometric), files(&damaged, geometric));
+        assert_eq!(files(&sound, geometric), files(&marked, geometric));
     }
+    // Spalls and dents are cut into the mesh (tests/damage_geometry.rs measures them).
+    assert_ne!(files(&sound, "depth.exr"), files(&damaged, "depth.exr"));
     // The RGB shows it (docs/damage.md, "What is drawn").
     let rgb = |out: &Path| files(out, "rgb.png");
     assert!(rgb(&sound).iter().zip(rgb(&damaged)).any(|(a, b)| *a != b));
@@ -205,4 +214,26 @@ fn a_damage_call_off_the_span_points_at_the_recipe() {
         err.contains("recipe.rhai:7:") && err.contains("\"under\" is unknown"),
         "{err}"
     );
+    // A spall is cut into the mesh: it may not cut through an I's 15 mm flange, nor into a
+    // tube, which has no flat face.
+    for (section, spall, message) in [
+        (
+            "i_section(0.2, 0.4, 0.015, 0.01)",
+            ".spall(#{ at: 1.0, depth: 0.02 })",
+            "spall.depth = 0.02 m must be less than the flange (0.015 m)",
+        ),
+        (
+            "tube(0.4, 0.02)",
+            ".dent(#{ at: 1.0 })",
+            "a circular hollow section has none",
+        ),
+    ] {
+        let text = recipe(spall).replace("width: 0.3, height: 0.5", &format!("section: {section}"));
+        let path = write(dir.path(), "recipe.rhai", text);
+        let err = stderr(&run(&path, &dir.path().join("out3"), &[]));
+        assert!(
+            err.contains("recipe.rhai:7:") && err.contains(message),
+            "{err}"
+        );
+    }
 }

@@ -8,8 +8,8 @@
 
 mod common;
 
-use common::{hashes, matrix, read_exr, read_exr_channels, read_json, read_png, read_png16};
-use common::{render, run, stderr, transform, view_path, write};
+use common::{damage_view, hashes, read_exr, read_json, read_png, read_png16};
+use common::{render, run, stderr, view_path, write};
 use std::path::Path;
 
 /// A 4 m simply supported 300 × 500 mm beam along x, centred on the origin, with a flexural
@@ -69,43 +69,18 @@ struct Layers {
 }
 
 fn layers(out: &Path) -> Layers {
+    let v = damage_view(out);
     let file = |kind: &str| view_path(out, 0, 0, None, kind);
-    let json = read_json(&file("json"));
-    let k: [[f64; 3]; 3] = matrix(&json["camera"]["K"]);
-    let c2w: [[f64; 4]; 4] = matrix(&json["camera"]["c2w_opencv"]);
-    let depth = read_exr(&file("depth.exr"));
-    let (_, disp) = read_exr_channels(&file("displacement.exr"));
-    let (width, _, _, class) = read_png(&file("damage_class.png"));
-    let (_, _, instance) = read_png16(&file("damage_instance.png"));
-    let (_, _, _, rgb) = read_png(&file("rgb.png"));
-    let rest = depth
-        .iter()
-        .enumerate()
-        .map(|(i, &z)| {
-            (z > 0.0).then(|| {
-                let (row, col) = ((i / width) as f64, (i % width) as f64);
-                let z = f64::from(z);
-                let cam = [
-                    (col + 0.5 - k[0][2]) * z / k[0][0],
-                    (row + 0.5 - k[1][2]) * z / k[1][1],
-                    z,
-                ];
-                let world = transform(&c2w, cam);
-                let d = ["R", "G", "B"].map(|c| f64::from(disp[c][i]));
-                std::array::from_fn(|a| world[a] - d[a])
-            })
-        })
-        .collect();
     Layers {
-        width,
-        footprint: depth.iter().map(|&z| f64::from(z) / k[0][0]).collect(),
-        depth,
-        class,
-        instance,
+        width: v.width,
+        footprint: v.depth.iter().map(|&z| f64::from(z) / v.k[0][0]).collect(),
+        depth: v.depth,
+        class: v.class,
+        instance: v.instance,
         crack_width: read_exr(&file("crack_width.exr")),
         coverage: read_exr(&file("crack_coverage.exr")),
-        rgb,
-        rest,
+        rgb: v.rgb,
+        rest: v.rest,
     }
 }
 

@@ -2,6 +2,7 @@
 //! placed along it at stations fine enough for the chord rule, and the section outline is swept
 //! through them, once loaded and once at rest (where textures are evaluated).
 
+use super::relief::{Bar, Relief, bar_meshes, carve, refine_outline, spall_bars};
 use super::tessellation::{chord_tolerance, segments_for_chord};
 use crate::geometry::outline::{self, PAPER_DIVISIONS, SectionOutline};
 use crate::geometry::{Frame3, Mesh, sweep};
@@ -88,7 +89,16 @@ pub fn mesh_beam(beam: &BeamSpec, pixel_footprint: f64) -> Result<BuiltBeam, Str
             .ok_or("the paper's mesh exists only for the rectangular section")?,
         _ => section_outline(&beam.section, tolerance),
     };
+    let reliefs: Vec<Relief> = damage
+        .iter()
+        .flat_map(|d| d.items.iter().filter_map(Relief::of))
+        .collect();
+    let outline = match reliefs.is_empty() {
+        true => outline,
+        false => refine_outline(&outline, &reliefs)?,
+    };
     let mut at = kinks(&beam.loads);
+    at.extend(reliefs.iter().flat_map(Relief::stations));
     match &damage {
         Some(d) => {
             at.push(d.max_deflection_at);
@@ -107,14 +117,23 @@ pub fn mesh_beam(beam: &BeamSpec, pixel_footprint: f64) -> Result<BuiltBeam, Str
             sin: 0.0,
         })
         .collect();
-    let place = |frames: &[SectionFrame]| {
-        sweep_beam(
+    let bars: Vec<Bar> = damage
+        .iter()
+        .flat_map(|d| d.items.iter().flat_map(|item| spall_bars(beam, item)))
+        .collect();
+    let place = |frames: &[SectionFrame]| -> Result<Mesh, String> {
+        let frames = world_frames(
             beam.length,
             frames,
-            &outline,
             DMat3::from_rotation_z(beam.yaw),
             DVec3::from_array(beam.centre),
-        )
+        );
+        let mut mesh = sweep(&outline, &frames)?;
+        if !reliefs.is_empty() {
+            carve(&mut mesh, &outline, &frames, &stations, &reliefs);
+            mesh.append(&bar_meshes(&bars, &frames, &stations)?);
+        }
+        Ok(mesh)
     };
     let mesh = place(&frames)?;
     Ok(BuiltBeam {
@@ -191,19 +210,18 @@ fn paper_outline(section: &Section) -> Option<SectionOutline> {
     }
 }
 
-/// Sweeps `outline` through the section frames (one per station) and closes both ends.
-/// The beam's own frame (axis along x from 0 to `length`, y across, z up) is centred on the
-/// undeformed beam and placed in the world by `rotation` and `centre`. Side faces between
-/// stations are flat quads: the beam kinematics is affine across a section, so sections need
-/// no interior vertices and only the length is subdivided.
-fn sweep_beam(
+/// The world frames the section outline is swept through (one per station; the sweep closes
+/// both ends). The beam's own frame (axis along x from 0 to `length`, y across, z up) is
+/// centred on the undeformed beam and placed in the world by `rotation` and `centre`. Side
+/// faces between stations are flat quads: the beam kinematics is affine across a section, so
+/// sections need no interior vertices and only the length is subdivided.
+fn world_frames(
     length: f64,
     frames: &[SectionFrame],
-    outline: &SectionOutline,
     rotation: DMat3,
     centre: DVec3,
-) -> Result<Mesh, String> {
-    let frames: Vec<Frame3> = frames
+) -> Vec<Frame3> {
+    frames
         .iter()
         .map(|f| Frame3 {
             origin: centre + rotation * DVec3::new(f.x - 0.5 * length, 0.0, -f.v),
@@ -211,8 +229,7 @@ fn sweep_beam(
             u: rotation * DVec3::Y,
             v: rotation * DVec3::new(f.sin, 0.0, f.cos),
         })
-        .collect();
-    sweep(outline, &frames)
+        .collect()
 }
 
 /// `segments` equal intervals plus the kinks, without slivers closer than 1e-9 L.

@@ -13,6 +13,7 @@ mod beam;
 mod frame;
 mod ground;
 mod light;
+mod relief;
 mod supports;
 mod tessellation;
 
@@ -21,6 +22,7 @@ pub use beam::{BuiltBeam, beam_radius, mesh_beam, problem, section_outline, stat
 pub use frame::{BuiltFrame, frame_radius, mesh_frame};
 pub use ground::ground_square;
 pub use light::{BackdropDraw, LightDraw, SkyDraw, SunDraw, draw_backdrop, draw_light};
+pub use relief::{Relief, spall_bars};
 pub use supports::{SupportMaterial, SupportPiece, drawn_supports};
 pub use tessellation::{chord_tolerance, segments_for_chord};
 

@@ -191,6 +191,33 @@ pub fn disc(n: usize) -> SectionOutline {
     }
 }
 
+/// Whether `p` lies inside the closed polygon (even–odd rule).
+pub fn polygon_contains(outline: &[DVec2], p: DVec2) -> bool {
+    let mut inside = false;
+    for (k, &a) in outline.iter().enumerate() {
+        let b = outline[(k + 1) % outline.len()];
+        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// Distance from `p` to the closed polygon `outline`: 0 inside, else to its nearest edge.
+pub fn distance_outside(outline: &[DVec2], p: DVec2) -> f64 {
+    if polygon_contains(outline, p) {
+        return 0.0;
+    }
+    (0..outline.len())
+        .map(|k| {
+            let (a, b) = (outline[k], outline[(k + 1) % outline.len()]);
+            let t = ((p - a).dot(b - a) / (b - a).length_squared().max(f64::MIN_POSITIVE))
+                .clamp(0.0, 1.0);
+            p.distance(a + t * (b - a))
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// A simple polygon, made counter-clockwise, with its face triangulated by ear clipping.
 pub fn polygon(profile: &[[f64; 2]]) -> Result<SectionOutline, String> {
     let mut points: Vec<DVec2> = profile.iter().map(|&p| DVec2::from_array(p)).collect();

@@ -5,13 +5,13 @@
 //! drawn with, instance ids = index + 1 in a structure's `damage.items`), and the resolution
 //! check. The drawing and the per-pixel labels are `render::damage`'s.
 
-use crate::build::BuiltSample;
+use crate::build::{BuiltSample, Relief, spall_bars};
 use crate::cameras::Camera;
 use crate::mechanics::damage::{Damage, DamageShape, Face, SurfacePoint};
 use crate::render::{
     DamageClass, DamagedPiece, FaceSegment, Mark, MarkShape, PieceFace, SampleDamage,
 };
-use crate::scene::Structure;
+use crate::scene::{BeamSpec, Structure};
 use glam::{DMat3, DVec2, DVec3};
 
 /// The part name of a beam's own triangles (the one its damage records name).
@@ -43,7 +43,13 @@ fn damaged_pieces(sample: &BuiltSample, part: u32) -> Vec<DamagedPiece> {
                 centre: DVec3::from_array(beam.centre),
                 length: beam.length,
                 half_height: 0.5 * beam.section.height(),
-                marks: damage.items.iter().enumerate().map(mark).collect(),
+                half_width: 0.5 * beam.section.width(),
+                marks: damage
+                    .items
+                    .iter()
+                    .enumerate()
+                    .map(|(index, item)| mark(beam, index, item))
+                    .collect(),
             })
         })
         .collect()
@@ -81,8 +87,9 @@ fn rust_strength(section_loss: f64) -> f64 {
     (0.45 + 0.5 * (section_loss / 0.15)).min(0.95)
 }
 
-/// The mark of damage `index` of a beam.
-fn mark((index, damage): (usize, &Damage)) -> Mark {
+/// The mark of damage `index` of `beam`.
+fn mark(beam: &BeamSpec, index: usize, damage: &Damage) -> Mark {
+    let reach = Relief::of(damage).map_or(0.0, |r| r.reach());
     let (class, shape) = match &damage.shape {
         DamageShape::FlexuralCrack { path, width_mm } => (
             DamageClass::FlexuralCrack,
@@ -131,19 +138,27 @@ fn mark((index, damage): (usize, &Damage)) -> Mark {
                 stain_length: *stain_length,
             },
         ),
-        DamageShape::Spall { outline, .. } => (
-            DamageClass::Spall,
-            MarkShape::Spall {
-                face: piece_face(damage.position.face),
-                outline: outline.iter().map(on_face).collect(),
-            },
-        ),
-        DamageShape::Dent { radius, .. } => (
+        DamageShape::Spall { outline, depth } => {
+            let bars = spall_bars(beam, damage);
+            (
+                DamageClass::Spall,
+                MarkShape::Spall {
+                    face: piece_face(damage.position.face),
+                    outline: outline.iter().map(on_face).collect(),
+                    depth: *depth,
+                    reach,
+                    bars: bars.iter().map(|b| b.centre).collect(),
+                    bar_radius: bars.first().map_or(0.0, |b| b.radius),
+                },
+            )
+        }
+        DamageShape::Dent { radius, depth } => (
             DamageClass::Dent,
             MarkShape::Dent {
                 face: piece_face(damage.position.face),
                 centre: on_face(&damage.position),
                 radius: *radius,
+                depth: *depth,
             },
         ),
     };

@@ -397,7 +397,7 @@ fn spall(b: &BeamSpec, o: &mut Options) -> OptResult<Damage> {
     let height = on_face(b, o, face)?;
     let length = positive(o, "length", 0.2, "metres")?;
     let breadth = positive(o, "breadth", 0.1, "metres")?;
-    let depth = thinner_than_section(b, o, "depth", 0.02)?;
+    let depth = thinner_than_section(b, o, "depth", 0.02, face)?;
     Ok(placed(
         DamageShape::Spall {
             outline: ellipse(b, face, at, height, 0.5 * length, 0.5 * breadth),
@@ -414,20 +414,40 @@ fn spall(b: &BeamSpec, o: &mut Options) -> OptResult<Damage> {
     ))
 }
 
+/// A spall's or dent's depth (key `key`): it is cut into the mesh, so it must leave material
+/// behind the face — less than half the section, and less than the plate it is cut into (an
+/// I's flange under its top or bottom, half the overhang of the flange beside the web on its
+/// sides, a box's wall); a tube has no flat face to cut.
 fn thinner_than_section(
     b: &BeamSpec,
     o: &mut Options,
     key: &'static str,
     default: f64,
+    face: Face,
 ) -> OptResult<f64> {
     let path = o.path(key);
     let v = positive(o, key, default, "metres")?;
     let half = 0.5 * b.section.width().min(b.section.height());
-    if v < half {
+    let (limit, what) = match b.section {
+        Section::CircularHollow { .. } => {
+            return Err(format!(
+                "{path}: a spall or dent is cut into a flat face, and a circular hollow section has none"
+            ));
+        }
+        Section::ISection {
+            width, flange, web, ..
+        } => match face.is_side() {
+            false => (flange.min(half), "the flange"),
+            true => ((0.5 * (width - web)).min(half), "the flange's overhang"),
+        },
+        Section::HollowBox { wall, .. } => (wall.min(half), "the wall"),
+        Section::Rectangle { .. } => (half, "half the section"),
+    };
+    if v < limit {
         Ok(v)
     } else {
         Err(format!(
-            "{path} = {v} m must be less than half the section ({half} m)"
+            "{path} = {v} m must be less than {what} ({limit} m)"
         ))
     }
 }
@@ -438,7 +458,7 @@ fn dent(b: &BeamSpec, o: &mut Options) -> OptResult<Damage> {
     let face = face(o, "side_neg_y")?;
     let height = on_face(b, o, face)?;
     let radius = positive(o, "radius", 0.1, "metres")?;
-    let depth = thinner_than_section(b, o, "depth", 0.01)?;
+    let depth = thinner_than_section(b, o, "depth", 0.01, face)?;
     Ok(placed(
         DamageShape::Dent { depth, radius },
         SurfacePoint {

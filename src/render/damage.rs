@@ -1,7 +1,9 @@
 //! Damage on a structure's surface, per pixel: which damage a pixel's surface point lies on
 //! (the per-pixel class, instance, crack-width and crack-coverage labels) and how it changes the
 //! surface's look (cracks darken by their coverage of the pixel, corrosion browns and pits the
-//! albedo with stains running down, spalls are shadowed).
+//! albedo with stains running down, a spall's fracture surfaces are dulled and its exposed
+//! bars drawn as rusty steel). Spalls and dents are cut into the mesh by `build::relief`; here
+//! a point under a face's plane within a spall's or dent's reach takes its label.
 //!
 //! Owns: the damage marks of a piece in its own material frame (plain numbers: the pipeline
 //! turns the mechanics' records into them), the coverage model of a crack of width w over a
@@ -16,6 +18,7 @@ use super::surfaces::affine_weights;
 use super::trace::{GBuffer, NO_HIT};
 use crate::cameras::Camera;
 use crate::geometry::Mesh;
+use crate::geometry::outline::polygon_contains;
 use crate::materials::Surface;
 use glam::{DMat3, DVec2, DVec3};
 use rayon::prelude::*;
@@ -162,14 +165,23 @@ pub enum MarkShape {
         /// How far stains run down, metres.
         stain_length: f64,
     },
-    /// A spall: a polygon on a face (face coordinates).
+    /// A spall: a cavity under a polygon on a face (face coordinates), and the bars it lays
+    /// bare.
     Spall {
         /// The face.
         face: PieceFace,
         /// Its outline, closed.
         outline: Vec<DVec2>,
+        /// Depth of its floor under the face, metres.
+        depth: f64,
+        /// How far beyond the outline its walls may reach on the face, metres.
+        reach: f64,
+        /// Centres of the exposed bars in the section, piece frame (y, z).
+        bars: Vec<DVec2>,
+        /// The bars' radius, metres.
+        bar_radius: f64,
     },
-    /// A dent: a disc on a face.
+    /// A dent: a bowl under a disc on a face.
     Dent {
         /// The face.
         face: PieceFace,
@@ -177,6 +189,8 @@ pub enum MarkShape {
         centre: DVec2,
         /// Radius, metres.
         radius: f64,
+        /// Depth at its centre, metres.
+        depth: f64,
     },
 }
 
@@ -206,6 +220,8 @@ pub struct DamagedPiece {
     pub length: f64,
     /// Half the section's height, metres: top and bottom faces lie at z = ±this.
     pub half_height: f64,
+    /// Half the section's width, metres: the sides lie at y = ±this.
+    pub half_width: f64,
     /// Its damage.
     pub marks: Vec<Mark>,
 }
@@ -237,6 +253,8 @@ pub struct DamageAt {
     pub rust: f64,
     /// Whether the point lies in a spall.
     pub spalled: bool,
+    /// Whether the point lies on a bar a spall exposes.
+    pub rebar: bool,
 }
 
 /// A pixel's footprint on the undeformed surface: the point under its centre and the
@@ -342,18 +360,6 @@ fn to_cell_edge(p: DVec2, cell: f64, salt: u64) -> (f64, DVec2) {
         .unwrap_or((f64::INFINITY, DVec2::X))
 }
 
-/// Whether `p` lies inside the closed polygon (even–odd rule).
-fn inside_polygon(p: DVec2, outline: &[DVec2]) -> bool {
-    let mut inside = false;
-    for (k, &a) in outline.iter().enumerate() {
-        let b = outline[(k + 1) % outline.len()];
-        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
-            inside = !inside;
-        }
-    }
-    inside
-}
-
 /// The region label a point keeps when it lies in several: a spall over a dent over corrosion
 /// (the class further down the table), the first of equal classes.
 fn prevailing(kept: Option<(DamageClass, u16)>, new: (DamageClass, u16)) -> (DamageClass, u16) {
@@ -414,8 +420,10 @@ impl DamagedPiece {
                     }
                     0.0
                 }
-                MarkShape::Spall { face: on, outline } if *on == face => {
-                    if inside_polygon(p, outline) {
+                MarkShape::Spall {
+                    face: on, outline, ..
+                } if *on == face => {
+                    if polygon_contains(outline, p) {
                         found.spalled = true;
                         region = Some(prevailing(region, (mark.class, mark.instance)));
                     }
@@ -425,6 +433,7 @@ impl DamagedPiece {
                     face: on,
                     centre,
                     radius,
+                    ..
                 } if *on == face && p.distance(*centre) <= *radius => {
                     region = Some(prevailing(region, (mark.class, mark.instance)));
                     0.0
@@ -450,6 +459,63 @@ impl DamagedPiece {
             found.instance = instance;
         }
         found
+    }
+
+    /// How far the piece-frame point `local` lies under the plane of `face` (inside the
+    /// piece: positive).
+    fn under(&self, face: PieceFace, local: DVec3) -> f64 {
+        let plane = match face.is_side() {
+            true => self.half_width,
+            false => self.half_height,
+        };
+        plane - local.dot(face.normal())
+    }
+
+    /// The spall or dent whose pushed-in surface, or exposed bar, the undeformed piece-frame
+    /// point `local` lies on: a point under a face's plane (by more than rounding, and no
+    /// deeper than the relief) within the relief's reach on that face. None elsewhere.
+    fn relief_at(&self, local: DVec3) -> Option<DamageAt> {
+        let tiny = 1e-9 * (1.0 + self.length);
+        self.marks.iter().find_map(|mark| {
+            let (face, depth, within, rebar) = match &mark.shape {
+                MarkShape::Spall {
+                    face,
+                    outline,
+                    depth,
+                    reach,
+                    bars,
+                    bar_radius,
+                } => {
+                    let p = face.coordinates(local);
+                    let lo = outline.iter().copied().reduce(DVec2::min)? - *reach;
+                    let hi = outline.iter().copied().reduce(DVec2::max)? + *reach;
+                    let near = p.cmpge(lo).all() && p.cmple(hi).all();
+                    let section = DVec2::new(local.y, local.z);
+                    let on_bar = bars
+                        .iter()
+                        .any(|c| c.distance(section) <= bar_radius * (1.0 + 1e-6));
+                    (*face, *depth, near, on_bar)
+                }
+                MarkShape::Dent {
+                    face,
+                    centre,
+                    radius,
+                    depth,
+                } => {
+                    let near = face.coordinates(local).distance(*centre) <= *radius;
+                    (*face, *depth, near, false)
+                }
+                _ => return None,
+            };
+            let under = self.under(face, local);
+            (within && under > tiny && under <= depth + tiny).then_some(DamageAt {
+                class: mark.class,
+                instance: mark.instance,
+                spalled: mark.class == DamageClass::Spall,
+                rebar,
+                ..DamageAt::default()
+            })
+        })
     }
 
     /// Rust at face point `p` of a corrosion over `faces`: `strength` on them, and on the
@@ -526,12 +592,16 @@ impl SampleDamage {
     /// shows, seen through `camera` at image point (u, v).
     fn at_point(&self, seen: &SeenMesh, tri: u32, p: DVec3, uv: (f64, f64)) -> Option<DamageAt> {
         let piece = self.piece(tri)?;
+        let local = piece.local(rest_point(seen, tri, p));
+        if let Some(relief) = piece.relief_at(local) {
+            return Some(relief);
+        }
         let [a, b, c] = seen.mesh.triangles[tri as usize].map(|i| seen.rest[i as usize]);
         let rest_normal = piece.rotation.transpose() * (b - a).cross(c - a).normalize_or_zero();
         let face = PieceFace::facing(rest_normal)?;
         // Top and bottom are the outer faces only (not the inner faces of an I's flanges).
         if !face.is_side() {
-            let z = piece.local(rest_point(seen, tri, p)).z;
+            let z = local.z;
             if (z.abs() - piece.half_height).abs() > 0.01 * piece.half_height {
                 return None;
             }
@@ -647,8 +717,12 @@ const CRACK_ALBEDO: [f64; 3] = [0.02, 0.018, 0.016];
 /// Linear albedo of dense rust: dark brown (FHWA: corrosion "dark brown to black" where
 /// active, with orange-brown stains).
 const RUST_ALBEDO: [f64; 3] = [0.09, 0.035, 0.012];
-/// What a spall's cavity keeps of the light: its walls shadow its floor.
-const SPALL_SHADE: f64 = 0.55;
+/// What a spall's cavity keeps of the light beyond the shadows its walls now cast: fresh
+/// fracture surfaces of concrete are rougher and dustier than the formed face.
+const SPALL_SHADE: f64 = 0.8;
+/// Linear albedo of an exposed bar: steel under a skin of rust (FHWA: exposed reinforcement
+/// "corroded", brown).
+const REBAR_ALBEDO: [f64; 3] = [0.12, 0.06, 0.03];
 
 /// The look of `surface` with the damage `d` drawn on it.
 pub fn drawn(mut surface: Surface, d: &DamageAt) -> Surface {
@@ -660,7 +734,11 @@ pub fn drawn(mut surface: Surface, d: &DamageAt) -> Surface {
         surface.roughness = surface.roughness.max(0.9);
         surface.specular *= 1.0 - d.rust.clamp(0.0, 1.0);
     }
-    if d.spalled {
+    if d.rebar {
+        surface.albedo = REBAR_ALBEDO;
+        surface.roughness = 0.6;
+        surface.specular = 0.04;
+    } else if d.spalled {
         surface.albedo = surface.albedo.map(|a| a * SPALL_SHADE);
     }
     if d.crack_coverage > 0.0 {
@@ -783,9 +861,9 @@ mod tests {
             DVec2::new(1.0, 1.0),
             DVec2::new(0.0, 1.0),
         ];
-        assert!(inside_polygon(DVec2::new(0.5, 0.5), &square));
-        assert!(!inside_polygon(DVec2::new(1.5, 0.5), &square));
-        assert!(!inside_polygon(DVec2::new(0.5, -0.1), &square));
+        assert!(polygon_contains(&square, DVec2::new(0.5, 0.5)));
+        assert!(!polygon_contains(&square, DVec2::new(1.5, 0.5)));
+        assert!(!polygon_contains(&square, DVec2::new(0.5, -0.1)));
     }
 
     #[test]

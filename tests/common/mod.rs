@@ -504,3 +504,60 @@ pub fn spawn_run(recipe: &Path, out: &Path, extra: &[&str]) -> std::process::Chi
         .spawn()
         .unwrap()
 }
+
+/// The files of view 0 of sample 0 a damage test reads, and each seen pixel's rest point.
+pub struct DamageView {
+    /// Image width, pixels.
+    pub width: usize,
+    /// Intrinsics and camera-to-world (OpenCV axes) from the view's JSON.
+    pub k: [[f64; 3]; 3],
+    pub c2w: [[f64; 4]; 4],
+    pub depth: Vec<f32>,
+    pub class: Vec<u8>,
+    pub instance: Vec<u16>,
+    pub rgb: Vec<u8>,
+    /// World rest point (the back-projected hit minus the written displacement) of every
+    /// pixel with a finite positive depth.
+    pub rest: Vec<Option<[f64; 3]>>,
+}
+
+/// Reads view 0 of sample 0 of `out` (depth, displacement, damage layers, RGB, camera).
+pub fn damage_view(out: &Path) -> DamageView {
+    let file = |kind: &str| view_path(out, 0, 0, None, kind);
+    let json = read_json(&file("json"));
+    let k: [[f64; 3]; 3] = matrix(&json["camera"]["K"]);
+    let c2w: [[f64; 4]; 4] = matrix(&json["camera"]["c2w_opencv"]);
+    let depth = read_exr(&file("depth.exr"));
+    let (_, disp) = read_exr_channels(&file("displacement.exr"));
+    let (width, _, _, class) = read_png(&file("damage_class.png"));
+    let (_, _, instance) = read_png16(&file("damage_instance.png"));
+    let (_, _, _, rgb) = read_png(&file("rgb.png"));
+    let rest = depth
+        .iter()
+        .enumerate()
+        .map(|(i, &z)| {
+            (z > 0.0 && z.is_finite()).then(|| {
+                let (row, col) = ((i / width) as f64, (i % width) as f64);
+                let z = f64::from(z);
+                let cam = [
+                    (col + 0.5 - k[0][2]) * z / k[0][0],
+                    (row + 0.5 - k[1][2]) * z / k[1][1],
+                    z,
+                ];
+                let world = transform(&c2w, cam);
+                let d = ["R", "G", "B"].map(|c| f64::from(disp[c][i]));
+                std::array::from_fn(|a| world[a] - d[a])
+            })
+        })
+        .collect();
+    DamageView {
+        width,
+        k,
+        c2w,
+        depth,
+        class,
+        instance,
+        rgb,
+        rest,
+    }
+}
