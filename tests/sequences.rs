@@ -275,3 +275,35 @@ fn bad_sequences_and_time_loads_are_refused_at_their_line_with_their_value() {
         );
     }
 }
+
+#[test]
+fn a_sequence_lists_each_file_once_and_its_sensor_series_once_per_sample() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    ok(run(
+        &monitoring_recipe(),
+        &out,
+        &[
+            "--set",
+            "size=32",
+            "--set",
+            "duration=0.1",
+            "--set",
+            "samples=1",
+        ],
+    ));
+    let manifest = std::fs::read_to_string(out.join("manifest.jsonl")).unwrap();
+    let line: serde_json::Value = serde_json::from_str(manifest.lines().next().unwrap()).unwrap();
+    let files: Vec<&str> = line["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_str().unwrap())
+        .collect();
+    let unique: std::collections::BTreeSet<&str> = files.iter().copied().collect();
+    assert_eq!(files.len(), unique.len(), "a file listed twice: {files:?}");
+    // 6 frames × 2 views × (rgb, depth, mask, json) and the two rates' CSV and NPY.
+    assert_eq!(files.len(), 6 * 2 * 4 + 4, "{files:?}");
+    let sensors = files.iter().filter(|f| f.contains(".sensors_")).count();
+    assert_eq!(sensors, 4, "{files:?}");
+}

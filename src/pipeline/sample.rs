@@ -97,6 +97,8 @@ pub fn write_sample(
     stage: &mut SampleStage,
 ) -> Result<u32> {
     let dataset = &recipe.dataset;
+    // The sensors record the whole sequence: one series a sample, not one a frame.
+    write_sensor_files(dataset, sample, stage)?;
     let Some(sequence) = &dataset.sequence else {
         write_still(recipe, sample, shared, stage, None)?;
         return Ok(dataset.images_per_sample());
@@ -273,11 +275,20 @@ fn write_sample_files(
             files.insert(*kind, path);
         }
     }
-    // Virtual sensors: staged with the sample, not yet listed in its records by kind.
+    Ok(files)
+}
+
+/// Stages the sample's virtual sensor series (none when no beam has a sensor); not yet listed
+/// in its records by kind.
+fn write_sensor_files(
+    dataset: &DatasetSpec,
+    sample: &BuiltSample,
+    stage: &mut SampleStage,
+) -> Result<()> {
     for (kind, bytes) in super::sensors::sensor_files(dataset, sample)? {
         stage.write(sample_file(sample.index, &kind), &bytes)?;
     }
-    Ok(files)
+    Ok(())
 }
 
 /// Runs the dataset's writers on one view (or copy): its files and its record, in order.
