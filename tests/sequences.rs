@@ -307,3 +307,134 @@ fn a_sequence_lists_each_file_once_and_its_sensor_series_once_per_sample() {
     let sensors = files.iter().filter(|f| f.contains(".sensors_")).count();
     assert_eq!(sensors, 4, "{files:?}");
 }
+
+/// A 2 m steel beam 0.1 × 0.2 m (EI = 210 GPa × 0.1 · 0.2³/12) in a plain colour on black,
+/// filmed side-on from 2 m at 640 × 480 px by one fixed camera, over `sequence`.
+fn blur_recipe(sequence: &str, calls: &str) -> String {
+    format!(
+        r#"dataset(#{{
+    name: "blur", seed: 5, samples: 1, views: 1, outputs: ["rgb", "mask"],
+    background: "black",
+    {sequence}
+    camera: #{{ width: 640, height: 480, fov_y: deg(40),
+        fixed: [#{{ position: [1.0, -2.0, 0.15], target: [1.0, 0.0, 0.0] }}] }},
+    scene: |rng| {{
+        let b = beam(#{{ length: 2.0, width: 0.1, height: 0.2 }});
+        b.simply_supported();
+        b.theory("euler_bernoulli");
+        b.colour([0.6, 0.6, 0.6]);
+        b.at(1.0, 0.0, 0.0);
+        {calls}
+        b
+    }},
+}});
+"#
+    )
+}
+
+/// Linear light (green) of column `x` of frame `frame`'s RGB, row by row.
+fn linear_column(out: &Path, frame: u32, x: usize) -> Vec<f64> {
+    let path = out.join(format!("samples/0000/000000_00_f{frame:04}.rgb.png"));
+    let (w, h, channels, bytes) = common::read_png(&path);
+    (0..h)
+        .map(|y| {
+            let code = f64::from(bytes[(y * w + x) * channels + 1]) / 255.0;
+            if code <= 0.04045 {
+                code / 12.92
+            } else {
+                ((code + 0.055) / 1.055).powf(2.4)
+            }
+        })
+        .collect()
+}
+
+/// Mean and variance of the rows where `column` falls from the beam's face (above) to the
+/// black background (below) within `rows`: the fall between each row and the next, as weights.
+fn edge_spread(column: &[f64], rows: std::ops::Range<usize>) -> (f64, f64) {
+    let face = column[rows.start];
+    let falls: Vec<(f64, f64)> = rows
+        .map(|y| {
+            (
+                y as f64 + 1.0,
+                ((column[y] - column[y + 1]) / face).max(0.0),
+            )
+        })
+        .collect();
+    let total: f64 = falls.iter().map(|f| f.1).sum();
+    let mean = falls.iter().map(|(y, w)| y * w).sum::<f64>() / total;
+    let var = falls
+        .iter()
+        .map(|(y, w)| w * (y - mean).powi(2))
+        .sum::<f64>()
+        / total;
+    (mean, var)
+}
+
+#[test]
+fn a_still_structure_blurs_to_its_unblurred_frames_byte_for_byte() {
+    let calls = "b.point_force(0.7, 4e5); b.damping(0.05);";
+    let sharp = blur_recipe("sequence: #{ duration: 0.1, fps: 30.0 },", calls);
+    let blurred = blur_recipe(
+        "sequence: #{ duration: 0.1, fps: 30.0, motion_blur: 5 },",
+        calls,
+    );
+    let (_a, sharp) = render(&sharp, &[]);
+    let (_b, blurred) = render(&blurred, &[]);
+    for k in 0..3 {
+        for kind in ["rgb.png", "mask.png"] {
+            assert!(
+                frame_file(&sharp, k, kind) == frame_file(&blurred, k, kind),
+                "frame {k}: {kind}"
+            );
+        }
+        let record = read_json(&blurred.join(format!("samples/0000/000000_00_f{k:04}.json")));
+        assert_eq!(record["frame"]["motion_blur"], 5);
+        let record = read_json(&sharp.join(format!("samples/0000/000000_00_f{k:04}.json")));
+        assert!(record["frame"].get("motion_blur").is_none());
+    }
+}
+
+#[test]
+fn a_moving_edge_spreads_over_the_distance_it_moves_during_the_exposure() {
+    // A force ramping to 1e7 N over 0.4 s at mid-span, quasi-static: the mid-span deflection
+    // grows at a constant rate, w(t) = (F t / 0.4 s) L³ / 48EI. Frame 1 (t = 0.1 s) is exposed
+    // over [0.05, 0.15] s, 8 sub-instants.
+    let calls = "b.ramp(1.0, 1e7, 0.0, 0.4); b.quasi_static(true);";
+    let n = 8.0;
+    let sequence =
+        |blur: &str| format!("sequence: #{{ duration: 0.25, fps: 10.0, exposure: 0.1{blur} }},");
+    let (_a, sharp) = render(&blur_recipe(&sequence(""), calls), &[]);
+    let (_b, blurred) = render(&blur_recipe(&sequence(", motion_blur: 8"), calls), &[]);
+    let ei = 210e9 * 0.1 * 0.2f64.powi(3) / 12.0;
+    let w = |t: f64| 1e7 * t / 0.4 * 8.0 / (48.0 * ei);
+    // The near bottom edge at mid-span, where the first and last sub-instants see it.
+    let record = read_json(&blurred.join("samples/0000/000000_00_f0001.json"));
+    let k: [[f64; 3]; 3] = common::matrix(&record["camera"]["K"]);
+    let w2c: [[f64; 4]; 4] = common::matrix(&record["camera"]["w2c_opencv"]);
+    let row_of = |t: f64| {
+        let c = common::transform(&w2c, [1.0, -0.05, -0.1 - w(t)]);
+        k[1][1] * c[1] / c[2] + k[1][2]
+    };
+    let exposure = record["frame"]["exposure"].as_f64().unwrap();
+    assert_eq!(exposure, 0.1);
+    let (first, last) = (0.05 + exposure / (2.0 * n), 0.15 - exposure / (2.0 * n));
+    let travel = row_of(last) - row_of(first);
+    assert!(
+        travel > 8.0,
+        "the edge travels {travel} px: too little to measure"
+    );
+    let x = (k[0][2]) as usize;
+    let rows = (row_of(first) as usize - 6)..(row_of(last) as usize + 6);
+    let (_, sharp_var) = edge_spread(&linear_column(&sharp, 1, x), rows.clone());
+    let (mean, var) = edge_spread(&linear_column(&blurred, 1, x), rows);
+    // n equally spaced edges over `travel`: variance travel² (n + 1) / (12 (n − 1)), added to
+    // the sharp edge's own; centred where the edge is at mid-exposure.
+    let expected = travel.powi(2) * (n + 1.0) / (12.0 * (n - 1.0));
+    let added = var - sharp_var;
+    assert!(
+        (added / expected - 1.0).abs() < 0.05,
+        "added variance {added} px², expected {expected} (travel {travel} px)"
+    );
+    let middle = row_of(0.1);
+    assert!((mean - middle).abs() < 0.25, "{mean} against {middle}");
+}

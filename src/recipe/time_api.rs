@@ -15,13 +15,14 @@ use super::result::{Fallible, fail};
 use crate::mechanics::dynamics::{Axle, TimeLoad};
 use crate::mechanics::frame::Lane;
 use crate::scene::{
-    BeamMotion, BeamSpec, DEFAULT_EXPOSURE_FRACTION, FrameSpec, MountShake, SequenceSpec,
-    SourceSite,
+    BeamMotion, BeamSpec, DEFAULT_EXPOSURE_FRACTION, FrameSpec, MAX_MOTION_BLUR, MountShake,
+    SequenceSpec, SourceSite,
 };
 use rhai::{Array, Dynamic, Engine, NativeCallContext, Variant};
 
-/// `dataset.sequence`: `#{ duration, fps, exposure, mount: #{ rotation, translation, band } }`.
-/// Duration and fps are required; exposure defaults to half the frame interval.
+/// `dataset.sequence`: `#{ duration, fps, exposure, motion_blur, mount: #{ rotation,
+/// translation, band } }`. Duration and fps are required; exposure defaults to half the frame
+/// interval; motion_blur (sub-instants averaged over the exposure) to 0, none.
 pub(super) fn sequence(options: Option<Options>) -> OptResult<Option<SequenceSpec>> {
     let Some(mut o) = options else {
         return Ok(None);
@@ -29,6 +30,7 @@ pub(super) fn sequence(options: Option<Options>) -> OptResult<Option<SequenceSpe
     let duration = o.positive("duration", "seconds")?;
     let fps = o.positive("fps", "frames per second")?;
     let exposure = o.number("exposure", DEFAULT_EXPOSURE_FRACTION / fps)?;
+    let motion_blur = o.integer("motion_blur", 0, 0, i64::from(MAX_MOTION_BLUR))? as u32;
     let mount = match o.sub("mount")? {
         Some(mut m) => {
             let shake = MountShake {
@@ -46,6 +48,7 @@ pub(super) fn sequence(options: Option<Options>) -> OptResult<Option<SequenceSpe
         duration,
         fps,
         exposure,
+        motion_blur,
         mount,
     };
     match spec.problem() {

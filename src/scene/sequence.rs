@@ -27,9 +27,15 @@ pub struct SequenceSpec {
     pub duration: f64,
     /// Frame rate, frames per second (positive).
     pub fps: f64,
-    /// How long the shutter is open, seconds (0 < exposure ≤ 1 / fps). Recorded; images are
-    /// rendered at the frame's instant (no motion blur yet) and labels are at that instant.
+    /// How long the shutter is open, seconds (0 < exposure ≤ 1 / fps). Without motion blur
+    /// the images are rendered at the frame's instant; labels are always at that instant, the
+    /// middle of the exposure.
     pub exposure: f64,
+    /// Motion blur: the RGB image of a frame is the average, in linear light before the
+    /// sensor's effects, of this many renders at the sub-instants `exposure_instants` across
+    /// the exposure; 0 (the default) renders the frame's instant alone.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub motion_blur: u32,
     /// How the camera mounts shake, if they do (absent: perfectly still tripods).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mount: Option<MountShake>,
@@ -50,6 +56,16 @@ impl SequenceSpec {
     /// The instants of every frame, in order.
     pub fn times(&self) -> Vec<f64> {
         (0..self.frames()).map(|k| self.time(k)).collect()
+    }
+
+    /// The sub-instants frame `k`'s motion blur averages: the midpoints of `motion_blur` equal
+    /// parts of the exposure [t − exposure/2, t + exposure/2] (empty without motion blur).
+    pub fn exposure_instants(&self, k: u32) -> Vec<f64> {
+        let n = f64::from(self.motion_blur);
+        let t = self.time(k);
+        (0..self.motion_blur)
+            .map(|j| t + self.exposure * ((f64::from(j) + 0.5) / n - 0.5))
+            .collect()
     }
 
     /// The problem with the values, naming the parameter and its value; None when they are fine.
@@ -80,9 +96,22 @@ impl SequenceSpec {
                 1.0 / self.fps
             ));
         }
+        if self.motion_blur > MAX_MOTION_BLUR {
+            return Some(format!(
+                "sequence.motion_blur = {} sub-instants, more than the {MAX_MOTION_BLUR} a frame may average",
+                self.motion_blur
+            ));
+        }
         self.mount.as_ref().and_then(MountShake::problem)
     }
 }
+
+fn is_zero(n: &u32) -> bool {
+    *n == 0
+}
+
+/// Most sub-instants a frame's motion blur may average.
+pub const MAX_MOTION_BLUR: u32 = 64;
 
 /// Small random motions of each camera's mount about its drawn pose, frame by frame: band-limited
 /// white noise of the given RMS in each rotation and translation axis, drawn per sample and view
@@ -169,8 +198,24 @@ mod tests {
             duration,
             fps,
             exposure: 0.5 / fps,
+            motion_blur: 0,
             mount: None,
         }
+    }
+
+    #[test]
+    fn blur_sub_instants_are_the_midpoints_of_equal_parts_of_the_exposure() {
+        let mut s = sequence(1.0, 50.0);
+        assert!(s.exposure_instants(3).is_empty());
+        s.motion_blur = 4;
+        // t = 0.06 s, exposure 0.01 s: parts of 2.5 ms from 0.055 s, midpoints 1.25 ms in.
+        let instants = s.exposure_instants(3);
+        let expected = [0.05625, 0.05875, 0.06125, 0.06375];
+        for (got, want) in instants.iter().zip(expected) {
+            assert!((got - want).abs() < 1e-15, "{instants:?}");
+        }
+        s.motion_blur = 65;
+        assert!(s.problem().unwrap().contains("motion_blur = 65"));
     }
 
     #[test]
