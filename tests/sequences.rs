@@ -438,3 +438,105 @@ fn a_moving_edge_spreads_over_the_distance_it_moves_during_the_exposure() {
     let middle = row_of(0.1);
     assert!((mean - middle).abs() < 0.25, "{mean} against {middle}");
 }
+
+/// The 2 m beam of `recipe`, static, filmed by a camera flying `path` (a `sequence.paths` entry).
+fn flight_recipe(path: &str) -> String {
+    recipe(
+        &format!("sequence: #{{ duration: 0.2, fps: 20.0, paths: [{path}] }},"),
+        "",
+        r#""rgb", "depth", "mask""#,
+    )
+}
+
+#[test]
+fn a_flying_camera_is_written_where_its_path_is_and_sees_fixed_points_where_they_project() {
+    // A straight flight along the beam, 3 m in front of it, looking at a point 10 m beyond.
+    let (from, to, target) = ([0.2, -3.0, 0.4], [1.8, -3.0, 0.6], [1.0, 10.0, 0.0]);
+    let path = format!("#{{ view: 0, from: {from:?}, to: {to:?}, target: {target:?} }}");
+    let (_dir, out) = render(&flight_recipe(&path), &[]);
+    // A point on the beam's near face (y = -0.05), a quarter span from its centre.
+    let point = [0.5, -0.05, 0.02];
+    let mut columns = Vec::new();
+    for k in 0..4u32 {
+        let t = f64::from(k) / 20.0;
+        let s = t / 0.2;
+        let expected: [f64; 3] = std::array::from_fn(|i| from[i] + s * (to[i] - from[i]));
+        let record = read_json(&out.join(format!("samples/0000/000000_00_f{k:04}.json")));
+        let position: Vec<f64> = (0..3)
+            .map(|i| record["camera"]["position"][i].as_f64().unwrap())
+            .collect();
+        for i in 0..3 {
+            assert!(
+                (position[i] - expected[i]).abs() < 1e-12,
+                "frame {k}: {position:?}"
+            );
+        }
+        let w2c: [[f64; 4]; 4] = common::matrix(&record["camera"]["w2c_opencv"]);
+        let k_matrix: [[f64; 3]; 3] = common::matrix(&record["camera"]["K"]);
+        // It looks at the target: the target projects to the principal point.
+        let c = common::transform(&w2c, target);
+        assert!(
+            c[0].abs() < 1e-9 && c[1].abs() < 1e-9 && c[2] > 0.0,
+            "{c:?}"
+        );
+        // The fixed point: its pixel sees the beam at the point's own depth.
+        let c = common::transform(&w2c, point);
+        let (u, v) = (
+            k_matrix[0][0] * c[0] / c[2] + k_matrix[0][2],
+            k_matrix[1][1] * c[1] / c[2] + k_matrix[1][2],
+        );
+        let pixel = v as usize * 64 + u as usize;
+        let mask = common::read_png(&out.join(format!("samples/0000/000000_00_f{k:04}.mask.png")));
+        assert_eq!(mask.3[pixel], 255, "frame {k}: ({u}, {v})");
+        let depth =
+            common::read_exr(&out.join(format!("samples/0000/000000_00_f{k:04}.depth.exr")));
+        // The face is flat: across the pixel's half-width its depth changes by under 2 cm here.
+        assert!(
+            (f64::from(depth[pixel]) - c[2]).abs() < 0.02,
+            "frame {k}: {} against {}",
+            depth[pixel],
+            c[2]
+        );
+        columns.push(u);
+    }
+    // The camera flew 1.2 m along the beam in those frames: the point crossed the image.
+    assert!(columns[0] - columns[3] > 5.0, "{columns:?}");
+}
+
+#[test]
+fn bad_flight_paths_are_refused_at_the_dataset_call_with_their_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "#{ view: 3, from: [0.0, -3.0, 0.0], to: [1.0, -3.0, 0.0], target: [1.0, 0.0, 0.0] }",
+            "sequence.paths[0].view = 3 but the dataset has 1 views",
+        ),
+        (
+            "#{ view: 0, waypoints: [[0.1, [0.0, -3.0, 0.0]], [0.05, [1.0, -3.0, 0.0]]], target: [1.0, 0.0, 0.0] }",
+            "waypoints[1]: time 0.05 s must be finite and after the waypoint before (0.1 s)",
+        ),
+        (
+            "#{ view: 0, from: [0.0, 0.0, 0.0], to: [2.0, 0.0, 0.0], target: [1.0, 0.0, 0.0] }",
+            "passes through its target [1.0, 0.0, 0.0]",
+        ),
+        (
+            "#{ view: 0, waypoints: [[0.0, [0.0, -3.0]]], target: [1.0, 0.0, 0.0] }",
+            "must be a list of [time, [x, y, z]]",
+        ),
+        (
+            "#{ view: 0, from: [0.0, -3.0, 0.0], target: [1.0, 0.0, 0.0] }",
+            "takes either waypoints",
+        ),
+    ];
+    for (i, (path, says)) in cases.into_iter().enumerate() {
+        let file = write(dir.path(), &format!("bad{i}.rhai"), flight_recipe(path));
+        let out = run(&file, &dir.path().join(format!("out{i}")), &[]);
+        assert!(!out.status.success(), "case {i} ran");
+        let text = stderr(&out);
+        assert!(text.contains(says), "case {i}: {text}");
+        assert!(
+            text.contains(&format!("bad{i}.rhai:1:")),
+            "case {i}: {text}"
+        );
+    }
+}

@@ -7,7 +7,7 @@ use super::damage::{unresolved_cracks, unresolved_warning};
 use super::finite::check_finite;
 use super::geometry::SampleGeometry;
 use super::record::{AugmentationRecord, FrameRecord, SampleRecord, ViewFacts, json_bytes};
-use super::sequence::{SampleMotion, averaged_in_linear_light, mount_offset, shaken};
+use super::sequence::{SampleMotion, averaged_in_linear_light, flown, mount_offset, shaken};
 use super::view::{RenderedLayers, RenderedView, SampleRenderer, ViewCamera, view_camera};
 use crate::build::{BuiltSample, build_framed, build_sample};
 use crate::cameras::Camera;
@@ -243,13 +243,20 @@ fn for_each_image_at(
 ) -> Result<()> {
     let (dataset, sample) = (renderer.dataset(), renderer.sample());
     let augment = &dataset.augment;
-    let unshaken = view_camera(dataset, sample, view)?;
-    let at = |t: Option<f64>| match t.and_then(|t| mount_offset(dataset, sample.index, view, t)) {
-        Some(offset) => ViewCamera {
-            camera: shaken(unshaken.camera, &offset),
-            ..unshaken
-        },
-        None => unshaken,
+    let standing = view_camera(dataset, sample, view)?;
+    let path = (dataset.sequence.iter())
+        .flat_map(|s| &s.paths)
+        .find(|p| p.view == view);
+    // The view's camera at an instant: where its path has it, then shaken on its mount.
+    let at = |t: Option<f64>| {
+        let Some(t) = t else {
+            return standing;
+        };
+        let mut drawn = path.map_or(standing, |path| flown(standing, path, t));
+        if let Some(offset) = mount_offset(dataset, sample.index, view, t) {
+            drawn.camera = shaken(drawn.camera, &offset);
+        }
+        drawn
     };
     let drawn = at(time);
     // Each image's camera from the view's camera as drawn (and shaken) at one instant.

@@ -1,21 +1,24 @@
 //! The frames of a sequence: what each beam or frame in motion does over the sequence, the
-//! scene of each frame, and how each fixed camera's mount shakes.
+//! scene of each frame, how each fixed camera's mount shakes and where each flying camera is.
 //!
-//! Owns: turning a sample's scene and the dataset's `SequenceSpec` into one scene per frame
-//! (each beam's static loads plus the forces acting at the frame's instant, and the dynamic part
-//! of its deflection as mode amplitudes, which the build stage adds to the static solution; each
-//! frame's model with the forces acting then on its lane, and its nodes' displacements from its
-//! modal response), and the per-frame offset of every camera's mount. Must not touch: meshing, rendering or
-//! files (the sample pipeline builds and writes each frame as it builds a still).
+//! Owns: turning a sample's scene and the dataset's `SequenceSpec` into one scene per frame and
+//! per sub-instant of a frame's motion blur (each beam's static loads plus the forces acting
+//! then, and the dynamic part of its deflection as mode amplitudes, which the build stage adds
+//! to the static solution; each frame's model with the forces acting then on its lane, and its
+//! nodes' displacements from its modal response); the average of a blurred frame's renders; the
+//! offset of every camera's mount and the pose of every camera on a flight path at an instant.
+//! Must not touch: meshing, rendering or files (the sample pipeline builds and writes each
+//! frame as it builds a still).
 
+use super::view::ViewCamera;
 use crate::augment::srgb;
-use crate::cameras::Camera;
+use crate::cameras::{Camera, ViewDraw};
 use crate::mechanics::Target;
 use crate::mechanics::dynamics::{ModalBeam, Response, STEPS_PER_PERIOD};
 use crate::mechanics::frame::Lane;
 use crate::render::{SecondaryRays, Shaded};
 use crate::scene::{
-    BeamSpec, DatasetSpec, FrameSpec, SceneSpec, SequenceSpec, SourceSite, Structure,
+    BeamSpec, CameraPath, DatasetSpec, FrameSpec, SceneSpec, SequenceSpec, SourceSite, Structure,
 };
 use crate::seeds::{Scope, Stream};
 use glam::{DMat3, DVec3};
@@ -309,6 +312,21 @@ fn linear_at(values: &[f64], s: f64) -> f64 {
     let k = (s.floor().max(0.0) as usize).min(last.saturating_sub(1));
     let w = (s - k as f64).clamp(0.0, 1.0);
     values[k] * (1.0 - w) + values[(k + 1).min(last)] * w
+}
+
+/// The view's camera `drawn` at `time` of its flight `path`: the rig's lens at the path's
+/// position then, looking at its target with world z up (recorded as the view's aim).
+pub fn flown(drawn: ViewCamera, path: &CameraPath, time: f64) -> ViewCamera {
+    let position = DVec3::from_array(path.position_at(time));
+    let target = DVec3::from_array(path.target);
+    ViewCamera {
+        camera: Camera::look_at(drawn.camera.intrinsics, position, target, DVec3::Z),
+        draw: ViewDraw {
+            aim: path.target,
+            ..drawn.draw
+        },
+        ..drawn
+    }
 }
 
 /// `camera` moved by `offset`, in its own axes: the mount turns the camera about its centre of

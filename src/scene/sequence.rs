@@ -39,6 +39,117 @@ pub struct SequenceSpec {
     /// How the camera mounts shake, if they do (absent: perfectly still tripods).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mount: Option<MountShake>,
+    /// Views that fly along a path instead of standing where the rig drew them (drones).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub paths: Vec<CameraPath>,
+}
+
+/// A view's camera flying over the sequence: its centre of projection moves through the
+/// waypoints, straight between them at constant speed (held before the first and after the
+/// last), always looking at `target` with world z up; its lens is the rig's.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct CameraPath {
+    /// The view (camera index in the rig) that flies.
+    pub view: u32,
+    /// Where the camera is when, in increasing time.
+    pub waypoints: Vec<Waypoint>,
+    /// The point it looks at, world metres.
+    pub target: [f64; 3],
+}
+
+/// A point of a camera's path: where its centre of projection is at `time`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct Waypoint {
+    /// Seconds from the start of the sequence.
+    pub time: f64,
+    /// World metres.
+    pub position: [f64; 3],
+}
+
+impl CameraPath {
+    /// Where the camera is at `time`: linear between the waypoints around it, held outside.
+    pub fn position_at(&self, time: f64) -> [f64; 3] {
+        let w = &self.waypoints;
+        let after = w.partition_point(|p| p.time <= time);
+        if after == 0 {
+            return w[0].position;
+        }
+        if after == w.len() {
+            return w[w.len() - 1].position;
+        }
+        let (a, b) = (w[after - 1], w[after]);
+        let s = (time - a.time) / (b.time - a.time);
+        std::array::from_fn(|i| a.position[i] + s * (b.position[i] - a.position[i]))
+    }
+
+    /// The problem with the path of entry `i` of `sequence.paths`, naming the value; None when
+    /// it is fine. `views` is the number of views of the rig.
+    pub fn problem(&self, i: usize, views: u32) -> Option<String> {
+        let at = format!("sequence.paths[{i}]");
+        if self.view >= views {
+            return Some(format!(
+                "{at}.view = {} but the dataset has {views} views (0 to {})",
+                self.view,
+                views - 1
+            ));
+        }
+        if self.waypoints.is_empty() {
+            return Some(format!(
+                "{at}.waypoints is empty: give at least one [time, [x, y, z]]"
+            ));
+        }
+        let finite = |p: &[f64; 3]| p.iter().all(|c| c.is_finite());
+        if !finite(&self.target) {
+            return Some(format!(
+                "{at}.target = {:?} must be a finite point",
+                self.target
+            ));
+        }
+        let mut last = f64::NEG_INFINITY;
+        for (j, w) in self.waypoints.iter().enumerate() {
+            if !(w.time.is_finite() && w.time > last) {
+                return Some(format!(
+                    "{at}.waypoints[{j}]: time {} s must be finite and after the waypoint before ({last} s)",
+                    w.time
+                ));
+            }
+            if !finite(&w.position) {
+                return Some(format!(
+                    "{at}.waypoints[{j}]: position {:?} must be a finite point",
+                    w.position
+                ));
+            }
+            last = w.time;
+        }
+        self.passes_through_target(&at)
+    }
+
+    /// Refuses a path that passes through its target: the camera would look nowhere there.
+    fn passes_through_target(&self, at: &str) -> Option<String> {
+        let target = glam::DVec3::from_array(self.target);
+        let legs = self
+            .waypoints
+            .windows(2)
+            .map(|w| (w[0].position, w[1].position));
+        let first = self.waypoints[0].position;
+        std::iter::once((first, first)).chain(legs).find_map(|(a, b)| {
+            let (a, b) = (glam::DVec3::from_array(a), glam::DVec3::from_array(b));
+            let along = (b - a).length_squared();
+            let s = if along > 0.0 {
+                ((target - a).dot(b - a) / along).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let closest = a + s * (b - a);
+            (closest.distance(target) < 1e-6).then(|| {
+                format!(
+                    "{at}: the camera passes through its target {:?} (at {:?}) and would look nowhere there",
+                    self.target,
+                    closest.to_array()
+                )
+            })
+        })
+    }
 }
 
 impl SequenceSpec {
@@ -200,7 +311,42 @@ mod tests {
             exposure: 0.5 / fps,
             motion_blur: 0,
             mount: None,
+            paths: Vec::new(),
         }
+    }
+
+    fn flight(waypoints: &[(f64, [f64; 3])]) -> CameraPath {
+        CameraPath {
+            view: 0,
+            waypoints: waypoints
+                .iter()
+                .map(|&(time, position)| Waypoint { time, position })
+                .collect(),
+            target: [0.0, 0.0, 0.0],
+        }
+    }
+
+    #[test]
+    fn a_camera_flies_straight_between_waypoints_and_holds_outside_them() {
+        let path = flight(&[(1.0, [0.0, -4.0, 1.0]), (3.0, [4.0, -4.0, 3.0])]);
+        assert_eq!(path.position_at(0.0), [0.0, -4.0, 1.0]);
+        assert_eq!(path.position_at(2.0), [2.0, -4.0, 2.0]);
+        assert_eq!(path.position_at(2.5), [3.0, -4.0, 2.5]);
+        assert_eq!(path.position_at(9.0), [4.0, -4.0, 3.0]);
+        assert_eq!(path.problem(0, 1), None);
+    }
+
+    #[test]
+    fn bad_paths_are_named_with_their_value() {
+        let why = |p: CameraPath, views| p.problem(2, views).unwrap();
+        let ok = flight(&[(0.0, [0.0, -4.0, 1.0]), (1.0, [1.0, -4.0, 1.0])]);
+        assert!(why(ok.clone(), 0).contains("sequence.paths[2].view = 0 but the dataset has 0"));
+        let back = flight(&[(1.0, [0.0, -4.0, 1.0]), (0.5, [1.0, -4.0, 1.0])]);
+        assert!(why(back, 1).contains("waypoints[1]: time 0.5 s must be finite and after"));
+        let through = flight(&[(0.0, [-1.0, 0.0, 0.0]), (1.0, [1.0, 0.0, 0.0])]);
+        assert!(why(through, 1).contains("passes through its target [0.0, 0.0, 0.0]"));
+        let nan = flight(&[(0.0, [f64::NAN, 0.0, 1.0])]);
+        assert!(why(nan, 1).contains("position [NaN, 0.0, 1.0]"));
     }
 
     #[test]
