@@ -34,13 +34,13 @@ pub struct SequenceSpec {
     /// Motion blur: the RGB image of a frame is the average, in linear light before the
     /// sensor's effects, of this many renders at the sub-instants `exposure_instants` across
     /// the exposure; 0 (the default) renders the frame's instant alone.
-    #[serde(skip_serializing_if = "is_zero")]
+    #[serde(default, skip_serializing_if = "is_zero")]
     pub motion_blur: u32,
     /// How the camera mounts shake, if they do (absent: perfectly still tripods).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mount: Option<MountShake>,
     /// Views that fly along a path instead of standing where the rig drew them (drones).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub paths: Vec<CameraPath>,
 }
 
