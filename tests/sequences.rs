@@ -275,3 +275,268 @@ fn bad_sequences_and_time_loads_are_refused_at_their_line_with_their_value() {
         );
     }
 }
+
+#[test]
+fn a_sequence_lists_each_file_once_and_its_sensor_series_once_per_sample() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    ok(run(
+        &monitoring_recipe(),
+        &out,
+        &[
+            "--set",
+            "size=32",
+            "--set",
+            "duration=0.1",
+            "--set",
+            "samples=1",
+        ],
+    ));
+    let manifest = std::fs::read_to_string(out.join("manifest.jsonl")).unwrap();
+    let line: serde_json::Value = serde_json::from_str(manifest.lines().next().unwrap()).unwrap();
+    let files: Vec<&str> = line["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_str().unwrap())
+        .collect();
+    let unique: std::collections::BTreeSet<&str> = files.iter().copied().collect();
+    assert_eq!(files.len(), unique.len(), "a file listed twice: {files:?}");
+    // 6 frames × 2 views × (rgb, depth, mask, json) and the two rates' CSV and NPY.
+    assert_eq!(files.len(), 6 * 2 * 4 + 4, "{files:?}");
+    let sensors = files.iter().filter(|f| f.contains(".sensors_")).count();
+    assert_eq!(sensors, 4, "{files:?}");
+}
+
+/// A 2 m steel beam 0.1 × 0.2 m (EI = 210 GPa × 0.1 · 0.2³/12) in a plain colour on black,
+/// filmed side-on from 2 m at 640 × 480 px by one fixed camera, over `sequence`.
+fn blur_recipe(sequence: &str, calls: &str) -> String {
+    format!(
+        r#"dataset(#{{
+    name: "blur", seed: 5, samples: 1, views: 1, outputs: ["rgb", "mask"],
+    background: "black",
+    {sequence}
+    camera: #{{ width: 640, height: 480, fov_y: deg(40),
+        fixed: [#{{ position: [1.0, -2.0, 0.15], target: [1.0, 0.0, 0.0] }}] }},
+    scene: |rng| {{
+        let b = beam(#{{ length: 2.0, width: 0.1, height: 0.2 }});
+        b.simply_supported();
+        b.theory("euler_bernoulli");
+        b.colour([0.6, 0.6, 0.6]);
+        b.at(1.0, 0.0, 0.0);
+        {calls}
+        b
+    }},
+}});
+"#
+    )
+}
+
+/// Linear light (green) of column `x` of frame `frame`'s RGB, row by row.
+fn linear_column(out: &Path, frame: u32, x: usize) -> Vec<f64> {
+    let path = out.join(format!("samples/0000/000000_00_f{frame:04}.rgb.png"));
+    let (w, h, channels, bytes) = common::read_png(&path);
+    (0..h)
+        .map(|y| {
+            let code = f64::from(bytes[(y * w + x) * channels + 1]) / 255.0;
+            if code <= 0.04045 {
+                code / 12.92
+            } else {
+                ((code + 0.055) / 1.055).powf(2.4)
+            }
+        })
+        .collect()
+}
+
+/// Mean and variance of the rows where `column` falls from the beam's face (above) to the
+/// black background (below) within `rows`: the fall between each row and the next, as weights.
+fn edge_spread(column: &[f64], rows: std::ops::Range<usize>) -> (f64, f64) {
+    let face = column[rows.start];
+    let falls: Vec<(f64, f64)> = rows
+        .map(|y| {
+            (
+                y as f64 + 1.0,
+                ((column[y] - column[y + 1]) / face).max(0.0),
+            )
+        })
+        .collect();
+    let total: f64 = falls.iter().map(|f| f.1).sum();
+    let mean = falls.iter().map(|(y, w)| y * w).sum::<f64>() / total;
+    let var = falls
+        .iter()
+        .map(|(y, w)| w * (y - mean).powi(2))
+        .sum::<f64>()
+        / total;
+    (mean, var)
+}
+
+#[test]
+fn a_still_structure_blurs_to_its_unblurred_frames_byte_for_byte() {
+    let calls = "b.point_force(0.7, 4e5); b.damping(0.05);";
+    let sharp = blur_recipe("sequence: #{ duration: 0.1, fps: 30.0 },", calls);
+    let blurred = blur_recipe(
+        "sequence: #{ duration: 0.1, fps: 30.0, motion_blur: 5 },",
+        calls,
+    );
+    let (_a, sharp) = render(&sharp, &[]);
+    let (_b, blurred) = render(&blurred, &[]);
+    for k in 0..3 {
+        for kind in ["rgb.png", "mask.png"] {
+            assert!(
+                frame_file(&sharp, k, kind) == frame_file(&blurred, k, kind),
+                "frame {k}: {kind}"
+            );
+        }
+        let record = read_json(&blurred.join(format!("samples/0000/000000_00_f{k:04}.json")));
+        assert_eq!(record["frame"]["motion_blur"], 5);
+        let record = read_json(&sharp.join(format!("samples/0000/000000_00_f{k:04}.json")));
+        assert!(record["frame"].get("motion_blur").is_none());
+    }
+}
+
+#[test]
+fn a_moving_edge_spreads_over_the_distance_it_moves_during_the_exposure() {
+    // A force ramping to 1e7 N over 0.4 s at mid-span, quasi-static: the mid-span deflection
+    // grows at a constant rate, w(t) = (F t / 0.4 s) L³ / 48EI. Frame 1 (t = 0.1 s) is exposed
+    // over [0.05, 0.15] s, 8 sub-instants.
+    let calls = "b.ramp(1.0, 1e7, 0.0, 0.4); b.quasi_static(true);";
+    let n = 8.0;
+    let sequence =
+        |blur: &str| format!("sequence: #{{ duration: 0.25, fps: 10.0, exposure: 0.1{blur} }},");
+    let (_a, sharp) = render(&blur_recipe(&sequence(""), calls), &[]);
+    let (_b, blurred) = render(&blur_recipe(&sequence(", motion_blur: 8"), calls), &[]);
+    let ei = 210e9 * 0.1 * 0.2f64.powi(3) / 12.0;
+    let w = |t: f64| 1e7 * t / 0.4 * 8.0 / (48.0 * ei);
+    // The near bottom edge at mid-span, where the first and last sub-instants see it.
+    let record = read_json(&blurred.join("samples/0000/000000_00_f0001.json"));
+    let k: [[f64; 3]; 3] = common::matrix(&record["camera"]["K"]);
+    let w2c: [[f64; 4]; 4] = common::matrix(&record["camera"]["w2c_opencv"]);
+    let row_of = |t: f64| {
+        let c = common::transform(&w2c, [1.0, -0.05, -0.1 - w(t)]);
+        k[1][1] * c[1] / c[2] + k[1][2]
+    };
+    let exposure = record["frame"]["exposure"].as_f64().unwrap();
+    assert_eq!(exposure, 0.1);
+    let (first, last) = (0.05 + exposure / (2.0 * n), 0.15 - exposure / (2.0 * n));
+    let travel = row_of(last) - row_of(first);
+    assert!(
+        travel > 8.0,
+        "the edge travels {travel} px: too little to measure"
+    );
+    let x = (k[0][2]) as usize;
+    let rows = (row_of(first) as usize - 6)..(row_of(last) as usize + 6);
+    let (_, sharp_var) = edge_spread(&linear_column(&sharp, 1, x), rows.clone());
+    let (mean, var) = edge_spread(&linear_column(&blurred, 1, x), rows);
+    // n equally spaced edges over `travel`: variance travel² (n + 1) / (12 (n − 1)), added to
+    // the sharp edge's own; centred where the edge is at mid-exposure.
+    let expected = travel.powi(2) * (n + 1.0) / (12.0 * (n - 1.0));
+    let added = var - sharp_var;
+    assert!(
+        (added / expected - 1.0).abs() < 0.05,
+        "added variance {added} px², expected {expected} (travel {travel} px)"
+    );
+    let middle = row_of(0.1);
+    assert!((mean - middle).abs() < 0.25, "{mean} against {middle}");
+}
+
+/// The 2 m beam of `recipe`, static, filmed by a camera flying `path` (a `sequence.paths` entry).
+fn flight_recipe(path: &str) -> String {
+    recipe(
+        &format!("sequence: #{{ duration: 0.2, fps: 20.0, paths: [{path}] }},"),
+        "",
+        r#""rgb", "depth", "mask""#,
+    )
+}
+
+#[test]
+fn a_flying_camera_is_written_where_its_path_is_and_sees_fixed_points_where_they_project() {
+    // A straight flight along the beam, 3 m in front of it, looking at a point 10 m beyond.
+    let (from, to, target) = ([0.2, -3.0, 0.4], [1.8, -3.0, 0.6], [1.0, 10.0, 0.0]);
+    let path = format!("#{{ view: 0, from: {from:?}, to: {to:?}, target: {target:?} }}");
+    let (_dir, out) = render(&flight_recipe(&path), &[]);
+    // A point on the beam's near face (y = -0.05), a quarter span from its centre.
+    let point = [0.5, -0.05, 0.02];
+    let mut columns = Vec::new();
+    for k in 0..4u32 {
+        let t = f64::from(k) / 20.0;
+        let s = t / 0.2;
+        let expected: [f64; 3] = std::array::from_fn(|i| from[i] + s * (to[i] - from[i]));
+        let record = read_json(&out.join(format!("samples/0000/000000_00_f{k:04}.json")));
+        let position: Vec<f64> = (0..3)
+            .map(|i| record["camera"]["position"][i].as_f64().unwrap())
+            .collect();
+        for i in 0..3 {
+            assert!(
+                (position[i] - expected[i]).abs() < 1e-12,
+                "frame {k}: {position:?}"
+            );
+        }
+        let w2c: [[f64; 4]; 4] = common::matrix(&record["camera"]["w2c_opencv"]);
+        let k_matrix: [[f64; 3]; 3] = common::matrix(&record["camera"]["K"]);
+        // It looks at the target: the target projects to the principal point.
+        let c = common::transform(&w2c, target);
+        assert!(
+            c[0].abs() < 1e-9 && c[1].abs() < 1e-9 && c[2] > 0.0,
+            "{c:?}"
+        );
+        // The fixed point: its pixel sees the beam at the point's own depth.
+        let c = common::transform(&w2c, point);
+        let (u, v) = (
+            k_matrix[0][0] * c[0] / c[2] + k_matrix[0][2],
+            k_matrix[1][1] * c[1] / c[2] + k_matrix[1][2],
+        );
+        let pixel = v as usize * 64 + u as usize;
+        let mask = common::read_png(&out.join(format!("samples/0000/000000_00_f{k:04}.mask.png")));
+        assert_eq!(mask.3[pixel], 255, "frame {k}: ({u}, {v})");
+        let depth =
+            common::read_exr(&out.join(format!("samples/0000/000000_00_f{k:04}.depth.exr")));
+        // The face is flat: across the pixel's half-width its depth changes by under 2 cm here.
+        assert!(
+            (f64::from(depth[pixel]) - c[2]).abs() < 0.02,
+            "frame {k}: {} against {}",
+            depth[pixel],
+            c[2]
+        );
+        columns.push(u);
+    }
+    // The camera flew 1.2 m along the beam in those frames: the point crossed the image.
+    assert!(columns[0] - columns[3] > 5.0, "{columns:?}");
+}
+
+#[test]
+fn bad_flight_paths_are_refused_at_the_dataset_call_with_their_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "#{ view: 3, from: [0.0, -3.0, 0.0], to: [1.0, -3.0, 0.0], target: [1.0, 0.0, 0.0] }",
+            "sequence.paths[0].view = 3 but the dataset has 1 views",
+        ),
+        (
+            "#{ view: 0, waypoints: [[0.1, [0.0, -3.0, 0.0]], [0.05, [1.0, -3.0, 0.0]]], target: [1.0, 0.0, 0.0] }",
+            "waypoints[1]: time 0.05 s must be finite and after the waypoint before (0.1 s)",
+        ),
+        (
+            "#{ view: 0, from: [0.0, 0.0, 0.0], to: [2.0, 0.0, 0.0], target: [1.0, 0.0, 0.0] }",
+            "passes through its target [1.0, 0.0, 0.0]",
+        ),
+        (
+            "#{ view: 0, waypoints: [[0.0, [0.0, -3.0]]], target: [1.0, 0.0, 0.0] }",
+            "must be a list of [time, [x, y, z]]",
+        ),
+        (
+            "#{ view: 0, from: [0.0, -3.0, 0.0], target: [1.0, 0.0, 0.0] }",
+            "takes either waypoints",
+        ),
+    ];
+    for (i, (path, says)) in cases.into_iter().enumerate() {
+        let file = write(dir.path(), &format!("bad{i}.rhai"), flight_recipe(path));
+        let out = run(&file, &dir.path().join(format!("out{i}")), &[]);
+        assert!(!out.status.success(), "case {i} ran");
+        let text = stderr(&out);
+        assert!(text.contains(says), "case {i}: {text}");
+        assert!(
+            text.contains(&format!("bad{i}.rhai:1:")),
+            "case {i}: {text}"
+        );
+    }
+}

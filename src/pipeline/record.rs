@@ -164,7 +164,8 @@ pub struct FrameRecord {
     pub index: u32,
     /// Its instant t = k / fps, seconds from the start of the sequence.
     pub time: f64,
-    /// How long the shutter was open, seconds (recorded; the image is rendered at `time`).
+    /// How long the shutter was open, seconds: the RGB image is rendered at `time`, or with
+    /// `motion_blur` averaged over the exposure.
     pub exposure: f64,
     /// Frames in the sequence.
     pub frames: u32,
@@ -174,6 +175,12 @@ pub struct FrameRecord {
     /// (already in `camera`'s poses); absent when the mounts are still.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mount: Option<super::sequence::MountOffset>,
+    /// Motion blur (`dataset.sequence.motion_blur`): the RGB image is the average, in linear
+    /// light before the sensor's effects, of this many renders at the midpoints of equal parts
+    /// of [time − exposure/2, time + exposure/2] (the structures, their loads and the mount at
+    /// each); every other layer and label is at `time`, mid-exposure. Absent: no blur.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion_blur: Option<u32>,
 }
 
 /// How an augmented copy was made. Its camera (K and pose) is the one its files agree with.

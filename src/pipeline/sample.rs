@@ -7,9 +7,10 @@ use super::damage::{unresolved_cracks, unresolved_warning};
 use super::finite::check_finite;
 use super::geometry::SampleGeometry;
 use super::record::{AugmentationRecord, FrameRecord, SampleRecord, ViewFacts, json_bytes};
-use super::sequence::{SampleMotion, mount_offset, shaken};
-use super::view::{RenderedLayers, SampleRenderer, view_camera};
+use super::sequence::{SampleMotion, averaged_in_linear_light, flown, mount_offset, shaken};
+use super::view::{RenderedLayers, RenderedView, SampleRenderer, ViewCamera, view_camera};
 use crate::build::{BuiltSample, build_framed, build_sample};
+use crate::cameras::Camera;
 use crate::output::{
     MAX_SEGMENTATION_ID, SAMPLE_WRITERS, SampleStage, ViewLayers, WRITERS, in_frame, sample_file,
     view_file,
@@ -97,18 +98,30 @@ pub fn write_sample(
     stage: &mut SampleStage,
 ) -> Result<u32> {
     let dataset = &recipe.dataset;
+    // The sensors record the whole sequence: one series a sample, not one a frame.
+    write_sensor_files(dataset, sample, stage)?;
     let Some(sequence) = &dataset.sequence else {
-        write_still(recipe, sample, shared, stage, None)?;
+        write_still(recipe, sample, shared, stage, None, &[])?;
         return Ok(dataset.images_per_sample());
     };
     let motion = sample_motion(recipe, sample, sequence)?;
     let framing = sample.framing();
     let context = format!("while building the frames of sample {}", sample.index);
+    let build = |scene| {
+        build_framed(dataset, sample.index, scene, Some(framing))
+            .map_err(|e| recipe.locate(&e.message, e.site.as_ref(), &context))
+    };
     for k in 0..motion.frames() {
-        let scene = motion.scene_at(&sample.scene, k);
-        let frame = build_framed(dataset, sample.index, scene, Some(framing))
-            .map_err(|e| recipe.locate(&e.message, e.site.as_ref(), &context))?;
+        let frame = build(motion.scene_at(&sample.scene, k))?;
         let index = k as u32;
+        // With motion blur, the structures at each sub-instant of the exposure.
+        let during = (motion.scenes_during(&sample.scene, k).into_iter())
+            .map(build)
+            .collect::<Result<Vec<_>, _>>()?;
+        let exposure: Vec<(&BuiltSample, f64)> = during
+            .iter()
+            .zip(sequence.exposure_instants(index))
+            .collect();
         let record = FrameRecord {
             index,
             time: sequence.time(index),
@@ -116,24 +129,32 @@ pub fn write_sample(
             frames: sequence.frames(),
             fps: sequence.fps,
             mount: None,
+            motion_blur: (sequence.motion_blur > 0).then_some(sequence.motion_blur),
         };
-        write_still(recipe, &frame, shared, stage, Some(record))?;
+        write_still(recipe, &frame, shared, stage, Some(record), &exposure)?;
     }
     Ok(dataset.images_per_sample())
 }
 
 /// Writes one still of the sample: its own files and every view, clean and augmented; in a
-/// sequence, frame `frame` of it.
+/// sequence, frame `frame` of it, its RGB images averaged over `exposure` (the structures at
+/// each sub-instant of its motion blur, and when; empty: the frame's instant alone).
 fn write_still(
     recipe: &Recipe,
     sample: &BuiltSample,
     shared: &SharedTraceMeshes,
     stage: &mut SampleStage,
     frame: Option<FrameRecord>,
+    exposure: &[(&BuiltSample, f64)],
 ) -> Result<()> {
     let dataset = &recipe.dataset;
-    let trace_mesh = shared.get(&sample.mesh, sample.structure_triangles());
-    let renderer = SampleRenderer::with_trace_mesh(dataset, sample, trace_mesh);
+    let renderer = renderer_of(dataset, shared, sample);
+    let during: Vec<SubInstant> = (exposure.iter())
+        .map(|&(s, time)| SubInstant {
+            renderer: renderer_of(dataset, shared, s),
+            time,
+        })
+        .collect();
     let mut record = SampleRecord::new(sample);
     record.frame = frame;
     record.files = write_sample_files(dataset, sample, stage, frame.map(|f| f.index))?;
@@ -144,7 +165,8 @@ fn write_still(
             .map(|&view| {
                 let mut files = Vec::new();
                 let time = frame.map(|f| f.time);
-                for_each_image_at(&renderer, view, time, |layers, copy, facts| {
+                let at = (&renderer, time, &during[..]);
+                for_each_image_at(at, view, |layers, copy, facts| {
                     files.extend(encode_view(
                         recipe,
                         (sample, &record),
@@ -164,6 +186,16 @@ fn write_still(
     }
     warn_unresolved_cracks(&renderer)?;
     Ok(())
+}
+
+/// The renderer of `sample`, its mesh prepared for tracing or shared from `shared`.
+fn renderer_of<'a>(
+    dataset: &'a DatasetSpec,
+    shared: &SharedTraceMeshes,
+    sample: &'a BuiltSample,
+) -> SampleRenderer<'a> {
+    let trace_mesh = shared.get(&sample.mesh, sample.structure_triangles());
+    SampleRenderer::with_trace_mesh(dataset, sample, trace_mesh)
 }
 
 /// Warns (on stderr) about the sample's cracks no view of it resolves.
@@ -192,24 +224,58 @@ pub fn for_each_image(
     view: u32,
     each: impl FnMut(&dyn RenderedLayers, Option<u32>, ViewFacts) -> Result<()>,
 ) -> Result<()> {
-    for_each_image_at(renderer, view, None, each)
+    for_each_image_at((renderer, None, &[]), view, each)
+}
+
+/// One sub-instant of a frame's exposure: the structures then, ready to render, and when.
+struct SubInstant<'a> {
+    renderer: SampleRenderer<'a>,
+    time: f64,
 }
 
 /// [`for_each_image`] at instant `time` of a sequence (None for a still): the camera's mount
-/// is displaced as the sequence's mount shake has it then.
+/// is displaced as the sequence's mount shake has it then; with motion blur (`during`, the
+/// exposure's sub-instants), every RGB image rendered is the average over them.
 fn for_each_image_at(
-    renderer: &SampleRenderer,
+    (renderer, time, during): (&SampleRenderer, Option<f64>, &[SubInstant]),
     view: u32,
-    time: Option<f64>,
     mut each: impl FnMut(&dyn RenderedLayers, Option<u32>, ViewFacts) -> Result<()>,
 ) -> Result<()> {
     let (dataset, sample) = (renderer.dataset(), renderer.sample());
     let augment = &dataset.augment;
-    let mut drawn = view_camera(dataset, sample, view)?;
-    if let Some(offset) = time.and_then(|t| mount_offset(dataset, sample.index, view, t)) {
-        drawn.camera = shaken(drawn.camera, &offset);
-    }
+    let standing = view_camera(dataset, sample, view)?;
+    let path = (dataset.sequence.iter())
+        .flat_map(|s| &s.paths)
+        .find(|p| p.view == view);
+    // The view's camera at an instant: where its path has it, then shaken on its mount.
+    let at = |t: Option<f64>| {
+        let Some(t) = t else {
+            return standing;
+        };
+        let mut drawn = path.map_or(standing, |path| flown(standing, path, t));
+        if let Some(offset) = mount_offset(dataset, sample.index, view, t) {
+            drawn.camera = shaken(drawn.camera, &offset);
+        }
+        drawn
+    };
+    let drawn = at(time);
+    // Each image's camera from the view's camera as drawn (and shaken) at one instant.
+    let expose = |rendered: &RenderedView, camera_of: &dyn Fn(&ViewCamera) -> Result<Camera>| {
+        if during.is_empty() {
+            return Ok(());
+        }
+        let films = (during.iter())
+            .map(|sub| {
+                let drawn = at(Some(sub.time));
+                let camera = camera_of(&drawn)?;
+                Ok(sub.renderer.view_with(view, camera, drawn).film())
+            })
+            .collect::<Result<Vec<_>>>()?;
+        rendered.expose(averaged_in_linear_light(films));
+        anyhow::Ok(())
+    };
     let clean = renderer.view_with(view, drawn.camera, drawn);
+    expose(&clean, &|d| Ok(d.camera))?;
     if augment.keep_clean {
         let facts = ViewFacts {
             view,
@@ -230,6 +296,8 @@ fn for_each_image_at(
         let (base, warp) = match (augment.mode, geometry) {
             (GeometryMode::Exact, Some(_)) => {
                 rendered = renderer.view_with(view, camera, drawn);
+                let of = (sample.index, view, copy);
+                expose(&rendered, &|d| Ok(copy_camera(dataset, of, d)?.1))?;
                 (&rendered, None)
             }
             (GeometryMode::Image, Some(sim)) => (&clean, Some(sim)),
@@ -273,11 +341,20 @@ fn write_sample_files(
             files.insert(*kind, path);
         }
     }
-    // Virtual sensors: staged with the sample, not yet listed in its records by kind.
+    Ok(files)
+}
+
+/// Stages the sample's virtual sensor series (none when no beam has a sensor); not yet listed
+/// in its records by kind.
+fn write_sensor_files(
+    dataset: &DatasetSpec,
+    sample: &BuiltSample,
+    stage: &mut SampleStage,
+) -> Result<()> {
     for (kind, bytes) in super::sensors::sensor_files(dataset, sample)? {
         stage.write(sample_file(sample.index, &kind), &bytes)?;
     }
-    Ok(files)
+    Ok(())
 }
 
 /// Runs the dataset's writers on one view (or copy): its files and its record, in order.

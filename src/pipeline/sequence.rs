@@ -1,19 +1,24 @@
 //! The frames of a sequence: what each beam or frame in motion does over the sequence, the
-//! scene of each frame, and how each fixed camera's mount shakes.
+//! scene of each frame, how each fixed camera's mount shakes and where each flying camera is.
 //!
-//! Owns: turning a sample's scene and the dataset's `SequenceSpec` into one scene per frame
-//! (each beam's static loads plus the forces acting at the frame's instant, and the dynamic part
-//! of its deflection as mode amplitudes, which the build stage adds to the static solution; each
-//! frame's model with the forces acting then on its lane, and its nodes' displacements from its
-//! modal response), and the per-frame offset of every camera's mount. Must not touch: meshing, rendering or
-//! files (the sample pipeline builds and writes each frame as it builds a still).
+//! Owns: turning a sample's scene and the dataset's `SequenceSpec` into one scene per frame and
+//! per sub-instant of a frame's motion blur (each beam's static loads plus the forces acting
+//! then, and the dynamic part of its deflection as mode amplitudes, which the build stage adds
+//! to the static solution; each frame's model with the forces acting then on its lane, and its
+//! nodes' displacements from its modal response); the average of a blurred frame's renders; the
+//! offset of every camera's mount and the pose of every camera on a flight path at an instant.
+//! Must not touch: meshing, rendering or files (the sample pipeline builds and writes each
+//! frame as it builds a still).
 
-use crate::cameras::Camera;
+use super::view::ViewCamera;
+use crate::augment::srgb;
+use crate::cameras::{Camera, ViewDraw};
 use crate::mechanics::Target;
 use crate::mechanics::dynamics::{ModalBeam, Response, STEPS_PER_PERIOD};
 use crate::mechanics::frame::Lane;
+use crate::render::{SecondaryRays, Shaded};
 use crate::scene::{
-    BeamSpec, DatasetSpec, FrameSpec, SceneSpec, SequenceSpec, SourceSite, Structure,
+    BeamSpec, CameraPath, DatasetSpec, FrameSpec, SceneSpec, SequenceSpec, SourceSite, Structure,
 };
 use crate::seeds::{Scope, Stream};
 use glam::{DMat3, DVec3};
@@ -41,9 +46,18 @@ enum Moving {
     Frame(MovingFrame),
 }
 
-/// What the structures of one sample do over its sequence, ready to give each frame's scene.
+/// What the structures of one sample do over its sequence, ready to give each frame's scene
+/// and, with motion blur, the scenes of the sub-instants its exposure averages.
 pub struct SampleMotion {
+    /// The instants the response is known at, ascending and distinct (the integration steps
+    /// forward through them).
     times: Vec<f64>,
+    /// Index in `times` of each instant asked for: frame k's at `k × stride`, then its
+    /// exposure's sub-instants (held at t = 0 before the start: the structures are at rest
+    /// until then).
+    instants: Vec<usize>,
+    /// Instants per frame: 1 + its motion blur's sub-instants.
+    stride: usize,
     /// Per structure, in scene order: the response of a structure in motion, None for the
     /// others.
     structures: Vec<Option<Moving>>,
@@ -60,7 +74,17 @@ pub struct MotionError {
 impl SampleMotion {
     /// Integrates every beam in motion of `scene` over `sequence` (from rest at t = 0).
     pub fn new(scene: &SceneSpec, sequence: &SequenceSpec) -> Result<Self, MotionError> {
-        let times = sequence.times();
+        let stride = 1 + sequence.motion_blur as usize;
+        let asked: Vec<f64> = (0..sequence.frames())
+            .flat_map(|k| {
+                let during = sequence
+                    .exposure_instants(k)
+                    .into_iter()
+                    .map(|t| t.max(0.0));
+                std::iter::once(sequence.time(k)).chain(during)
+            })
+            .collect();
+        let (times, instants) = ascending(&asked);
         let located = |i: usize, site: &Option<SourceSite>| {
             let site = site.clone();
             move |message| MotionError {
@@ -82,24 +106,44 @@ impl SampleMotion {
                 _ => Ok(None),
             })
             .collect::<Result<_, _>>()?;
-        Ok(SampleMotion { times, structures })
+        Ok(SampleMotion {
+            times,
+            instants,
+            stride,
+            structures,
+        })
     }
 
     /// Number of frames.
     pub fn frames(&self) -> usize {
-        self.times.len()
+        self.instants.len() / self.stride
     }
 
     /// The scene of frame `k`: every beam in motion carries its static loads plus the forces
     /// acting at the frame's instant, and the dynamic part of its deflection (unless it is
     /// quasi-static); everything else as in `scene`.
     pub fn scene_at(&self, scene: &SceneSpec, k: usize) -> SceneSpec {
+        self.scene_at_instant(scene, k * self.stride)
+    }
+
+    /// The scenes at the sub-instants frame `k`'s motion blur averages, in time order (none
+    /// without motion blur).
+    pub fn scenes_during(&self, scene: &SceneSpec, k: usize) -> Vec<SceneSpec> {
+        let first = k * self.stride + 1;
+        (first..first + self.stride - 1)
+            .map(|i| self.scene_at_instant(scene, i))
+            .collect()
+    }
+
+    /// The scene at instant `instant` (an index into `instants`).
+    fn scene_at_instant(&self, scene: &SceneSpec, instant: usize) -> SceneSpec {
         let mut frame = scene.clone();
-        let t = self.times[k];
+        let i = self.instants[instant];
+        let t = self.times[i];
         for (structure, moving) in frame.structures.iter_mut().zip(&self.structures) {
             match (structure, moving) {
                 (Structure::Beam(b), Some(Moving::Beam(m))) => {
-                    b.frame_modes = frame_modes(b, m, k);
+                    b.frame_modes = frame_modes(b, m, i);
                     let loads = b.motion.as_ref().map(|motion| &motion.loads[..]);
                     b.loads
                         .extend(m.modal.static_loads(loads.unwrap_or(&[]), t));
@@ -110,7 +154,7 @@ impl SampleMotion {
                         .as_ref()
                         .map_or(&[][..], |motion| &motion.loads[..]);
                     f.model = m.lane.loaded(&f.model, loads, t);
-                    f.displaced = m.displaced.as_ref().map(|d| d[k].clone());
+                    f.displaced = m.displaced.as_ref().map(|d| d[i].clone());
                 }
                 _ => {}
             }
@@ -119,10 +163,24 @@ impl SampleMotion {
     }
 }
 
-fn frame_modes(beam: &BeamSpec, moving: &MovingBeam, k: usize) -> Vec<(u32, f64)> {
+/// `asked` sorted ascending without repeats, and where each of its values went: the times an
+/// integration from rest steps through (for frames alone, already ascending: unchanged).
+fn ascending(asked: &[f64]) -> (Vec<f64>, Vec<usize>) {
+    let mut times = asked.to_vec();
+    times.sort_by(f64::total_cmp);
+    times.dedup();
+    let index = asked
+        .iter()
+        .map(|t| times.partition_point(|u| u < t))
+        .collect();
+    (times, index)
+}
+
+/// The dynamic mode amplitudes of `beam` at instant `i` of its response.
+fn frame_modes(beam: &BeamSpec, moving: &MovingBeam, i: usize) -> Vec<(u32, f64)> {
     match &beam.motion {
         Some(motion) if !motion.quasi_static => {
-            moving.response.dynamic_amplitudes(&moving.modal, k)
+            moving.response.dynamic_amplitudes(&moving.modal, i)
         }
         _ => Vec::new(),
     }
@@ -189,6 +247,32 @@ fn moving_frame(frame: &FrameSpec, times: &[f64]) -> Result<MovingFrame, String>
     })
 }
 
+/// The light on the film over an exposure: the average of `films` (the renders at its
+/// sub-instants, in time order) in linear light, each 8-bit sRGB code decoded, the mean encoded
+/// to the nearest code; renders that agree average to themselves exactly. The record's ray
+/// counts are the middle render's, its secondary rays those of any.
+pub fn averaged_in_linear_light(films: Vec<Shaded>) -> Shaded {
+    let n = films.len();
+    assert!(n > 0, "an exposure averages at least one render");
+    let mut sum = vec![0f32; films[0].rgb.len()];
+    for film in &films {
+        for (s, &code) in sum.iter_mut().zip(&film.rgb) {
+            *s += srgb::decode(code);
+        }
+    }
+    let mut secondary: Vec<SecondaryRays> = films
+        .iter()
+        .flat_map(|f| f.secondary.iter().copied())
+        .collect();
+    secondary.sort();
+    secondary.dedup();
+    Shaded {
+        rgb: sum.iter().map(|&s| srgb::encode(s / n as f32)).collect(),
+        edge_rays: films[n / 2].edge_rays,
+        secondary,
+    }
+}
+
 /// How a view's camera mount is displaced at one frame, in the camera's own axes (OpenCV).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct MountOffset {
@@ -230,6 +314,21 @@ fn linear_at(values: &[f64], s: f64) -> f64 {
     values[k] * (1.0 - w) + values[(k + 1).min(last)] * w
 }
 
+/// The view's camera `drawn` at `time` of its flight `path`: the rig's lens at the path's
+/// position then, looking at its target with world z up (recorded as the view's aim).
+pub fn flown(drawn: ViewCamera, path: &CameraPath, time: f64) -> ViewCamera {
+    let position = DVec3::from_array(path.position_at(time));
+    let target = DVec3::from_array(path.target);
+    ViewCamera {
+        camera: Camera::look_at(drawn.camera.intrinsics, position, target, DVec3::Z),
+        draw: ViewDraw {
+            aim: path.target,
+            ..drawn.draw
+        },
+        ..drawn
+    }
+}
+
 /// `camera` moved by `offset`, in its own axes: the mount turns the camera about its centre of
 /// projection and shifts it.
 pub fn shaken(camera: Camera, offset: &MountOffset) -> Camera {
@@ -245,6 +344,36 @@ pub fn shaken(camera: Camera, offset: &MountOffset) -> Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn renders_average_in_linear_light_and_agreeing_ones_to_themselves() {
+        let film = |rgb: Vec<u8>| Shaded {
+            rgb,
+            edge_rays: None,
+            secondary: Vec::new(),
+        };
+        // Every code averaged with itself, any number of times, is itself.
+        let all: Vec<u8> = (0..=255).collect();
+        for n in [1, 3, 7] {
+            let same = (0..n).map(|_| film(all.clone())).collect();
+            assert_eq!(averaged_in_linear_light(same).rgb, all);
+        }
+        // Black and white half the exposure each: half the light, code 188 (sRGB of 0.5), not
+        // the code midway (128, which is 22 % of the light).
+        let half = averaged_in_linear_light(vec![film(vec![0]), film(vec![255])]);
+        assert_eq!(half.rgb, [188]);
+        assert!((srgb::to_encoded(0.5) * 255.0 - 188.0).abs() < 0.5);
+    }
+
+    #[test]
+    fn instants_are_integrated_in_order_and_found_again() {
+        let asked = [0.0, 0.0, 0.004, 0.02, 0.016, 0.024];
+        let (times, index) = ascending(&asked);
+        assert_eq!(times, [0.0, 0.004, 0.016, 0.02, 0.024]);
+        for (t, i) in asked.iter().zip(index) {
+            assert_eq!(times[i], *t);
+        }
+    }
 
     #[test]
     fn linear_reading_interpolates_and_holds_the_ends() {

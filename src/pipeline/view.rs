@@ -397,9 +397,22 @@ impl RenderedView<'_> {
     }
 
     /// RGB of what `g` saw through this view's camera in `mesh`, with the sample's
-    /// light and this view's backdrop, through the sensor; the sample's damage drawn on
-    /// `surfaces` when it has some.
+    /// light and this view's backdrop, through the lens and the sensor; the sample's damage
+    /// drawn on `surfaces` when it has some.
     fn shaded(
+        &self,
+        g: &GBuffer,
+        mesh: &TraceMesh,
+        surfaces: &SampleSurfaces,
+        cache: Option<&LightCache>,
+    ) -> Shaded {
+        let mut shaded = self.filmed(g, mesh, surfaces, cache);
+        self.develop(&mut shaded.rgb, g);
+        shaded
+    }
+
+    /// The light reaching the film: `shaded` before the lens's defocus and the sensor.
+    fn filmed(
         &self,
         g: &GBuffer,
         mesh: &TraceMesh,
@@ -417,13 +430,13 @@ impl RenderedView<'_> {
                         camera: &self.camera,
                     },
                 };
-                self.shaded_surfaces(g, mesh, &damaged, cache)
+                self.filmed_surfaces(g, mesh, &damaged, cache)
             }
-            None => self.shaded_surfaces(g, mesh, surfaces, cache),
+            None => self.filmed_surfaces(g, mesh, surfaces, cache),
         }
     }
 
-    fn shaded_surfaces(
+    fn filmed_surfaces(
         &self,
         g: &GBuffer,
         mesh: &TraceMesh,
@@ -431,7 +444,7 @@ impl RenderedView<'_> {
         cache: Option<&LightCache>,
     ) -> Shaded {
         let r = self.renderer;
-        let mut shaded = shade(
+        shade(
             g,
             mesh,
             &self.camera,
@@ -439,8 +452,12 @@ impl RenderedView<'_> {
             surfaces,
             &self.backdrop,
             r.dataset.antialias,
-        );
-        let rgb = &mut shaded.rgb;
+        )
+    }
+
+    /// The lens's defocus (from `g`'s depth) and the sensor's effects on the filmed `rgb`.
+    fn develop(&self, rgb: &mut [u8], g: &GBuffer) {
+        let r = self.renderer;
         let size = (g.width as usize, g.height as usize);
         if let Some(lens) = &r.dataset.camera.depth_of_field {
             // Circles from the exact planar depth; the backdrop lies at infinity.
@@ -449,7 +466,21 @@ impl RenderedView<'_> {
         }
         // The operations are validated; an encoder failing in memory is a bug.
         photometric(rgb, size, &self.sensor, None).expect("sensor effects on a valid image");
-        shaded
+    }
+
+    /// The loaded structure's light on the film, before the lens and the sensor: what motion
+    /// blur averages over the exposure.
+    pub(super) fn film(&self) -> Shaded {
+        let r = self.renderer;
+        let cache = r.light_cache(false);
+        self.filmed(&self.gbuffer, &r.trace_mesh, &r.surfaces(), cache)
+    }
+
+    /// Sets this view's RGB to `filmed` (the light on the film over the exposure) through the
+    /// lens and the sensor, as its own shading would have been.
+    pub(super) fn expose(&self, mut filmed: Shaded) {
+        self.develop(&mut filmed.rgb, &self.gbuffer);
+        assert!(self.rgb.set(filmed).is_ok(), "a view is exposed once");
     }
 
     /// How the images asked for so far were found (call it once every layer is encoded).

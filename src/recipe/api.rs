@@ -204,7 +204,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
     let ground = super::ground_api::ground(o.take("ground"))?;
     let augment = super::augment_api::augment(o.take("augment"))?;
     let sensor = super::augment_api::sensor(o.take("sensor"))?;
-    let sequence = super::time_api::sequence(o.sub("sequence")?)?;
+    let sequence = super::time_api::sequence(o.sub("sequence")?, views)?;
     let outputs = outputs(o.take("outputs"))?;
     check_flow_warps(&outputs, &augment)?;
     let normals = normals_frame(o.string("normals", "camera")?)?;

@@ -15,20 +15,22 @@ use super::result::{Fallible, fail};
 use crate::mechanics::dynamics::{Axle, TimeLoad};
 use crate::mechanics::frame::Lane;
 use crate::scene::{
-    BeamMotion, BeamSpec, DEFAULT_EXPOSURE_FRACTION, FrameSpec, MountShake, SequenceSpec,
-    SourceSite,
+    BeamMotion, BeamSpec, CameraPath, DEFAULT_EXPOSURE_FRACTION, FrameSpec, MAX_MOTION_BLUR,
+    MountShake, SequenceSpec, SourceSite, Waypoint,
 };
 use rhai::{Array, Dynamic, Engine, NativeCallContext, Variant};
 
-/// `dataset.sequence`: `#{ duration, fps, exposure, mount: #{ rotation, translation, band } }`.
-/// Duration and fps are required; exposure defaults to half the frame interval.
-pub(super) fn sequence(options: Option<Options>) -> OptResult<Option<SequenceSpec>> {
+/// `dataset.sequence`: `#{ duration, fps, exposure, motion_blur, mount: #{ rotation,
+/// translation, band } }`. Duration and fps are required; exposure defaults to half the frame
+/// interval; motion_blur (sub-instants averaged over the exposure) to 0, none.
+pub(super) fn sequence(options: Option<Options>, views: u32) -> OptResult<Option<SequenceSpec>> {
     let Some(mut o) = options else {
         return Ok(None);
     };
     let duration = o.positive("duration", "seconds")?;
     let fps = o.positive("fps", "frames per second")?;
     let exposure = o.number("exposure", DEFAULT_EXPOSURE_FRACTION / fps)?;
+    let motion_blur = o.integer("motion_blur", 0, 0, i64::from(MAX_MOTION_BLUR))? as u32;
     let mount = match o.sub("mount")? {
         Some(mut m) => {
             let shake = MountShake {
@@ -41,17 +43,108 @@ pub(super) fn sequence(options: Option<Options>) -> OptResult<Option<SequenceSpe
         }
         None => None,
     };
+    let paths = match o.take("paths") {
+        Some(list) => camera_paths(&list, &o.path("paths"), duration)?,
+        None => Vec::new(),
+    };
     o.finish()?;
     let spec = SequenceSpec {
         duration,
         fps,
         exposure,
+        motion_blur,
         mount,
+        paths,
     };
-    match spec.problem() {
+    let path_problem = (spec.paths.iter().enumerate()).find_map(|(i, p)| p.problem(i, views));
+    let twice = (spec.paths.iter().enumerate())
+        .find(|(i, p)| spec.paths[..*i].iter().any(|q| q.view == p.view));
+    let twice = twice.map(|(i, p)| {
+        format!(
+            "sequence.paths[{i}].view = {}: that view already has a path",
+            p.view
+        )
+    });
+    match spec.problem().or(path_problem).or(twice) {
         Some(why) => Err(format!("dataset.{why}")),
         None => Ok(Some(spec)),
     }
+}
+
+/// `sequence.paths`: `[#{ view, waypoints: [[time, [x, y, z]], ...], target }, ...]`, or a
+/// straight flight `#{ view, from, to, target }` from `from` at t = 0 to `to` at the end.
+fn camera_paths(list: &Dynamic, at: &str, duration: f64) -> OptResult<Vec<CameraPath>> {
+    let items = list.clone().try_cast::<Array>().ok_or_else(|| {
+        format!("{at} = {list} must be a list of paths like [#{{ view, waypoints, target }}]")
+    })?;
+    items
+        .iter()
+        .enumerate()
+        .map(|(i, item)| {
+            let here = format!("{at}[{i}]");
+            let map = item.clone().try_cast::<rhai::Map>().ok_or_else(|| {
+                format!("{here} = {item} must be a map like #{{ view, waypoints, target }}")
+            })?;
+            camera_path(Options::new(map, here.clone()), &here, duration)
+        })
+        .collect()
+}
+
+fn camera_path(mut o: Options, here: &str, duration: f64) -> OptResult<CameraPath> {
+    let view = o.required("view")?;
+    let view = (view.as_int().ok())
+        .and_then(|v| u32::try_from(v).ok())
+        .ok_or_else(|| format!("{here}.view = {view} must be a view index, a whole number ≥ 0"))?;
+    let target = o
+        .point("target")?
+        .ok_or_else(|| format!("missing option `{}`", o.path("target")))?;
+    let waypoints = match (o.take("waypoints"), o.point("from")?, o.point("to")?) {
+        (Some(list), None, None) => waypoints(&list, &o.path("waypoints"))?,
+        (None, Some(from), Some(to)) => vec![
+            Waypoint {
+                time: 0.0,
+                position: from,
+            },
+            Waypoint {
+                time: duration,
+                position: to,
+            },
+        ],
+        _ => {
+            return Err(format!(
+                "{here} takes either waypoints: [[time, [x, y, z]], ...] or both from and to"
+            ));
+        }
+    };
+    o.finish()?;
+    Ok(CameraPath {
+        view,
+        waypoints,
+        target,
+    })
+}
+
+/// `[[time, [x, y, z]], ...]`.
+fn waypoints(list: &Dynamic, at: &str) -> OptResult<Vec<Waypoint>> {
+    let shape = || format!("{at} = {list} must be a list of [time, [x, y, z]]");
+    let items = list.clone().try_cast::<Array>().ok_or_else(shape)?;
+    items
+        .iter()
+        .map(|item| {
+            let pair = item.clone().try_cast::<Array>().filter(|p| p.len() == 2);
+            let pair = pair.ok_or_else(shape)?;
+            let xyz = pair[1].clone().try_cast::<Array>().filter(|p| p.len() == 3);
+            let xyz = xyz.ok_or_else(shape)?;
+            Ok(Waypoint {
+                time: number(&pair[0], &format!("{at} time"))?,
+                position: [
+                    number(&xyz[0], &format!("{at} x"))?,
+                    number(&xyz[1], &format!("{at} y"))?,
+                    number(&xyz[2], &format!("{at} z"))?,
+                ],
+            })
+        })
+        .collect()
 }
 
 pub fn register(engine: &mut Engine) {

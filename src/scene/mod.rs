@@ -30,8 +30,8 @@ pub use light::{
 };
 pub use sensors::{SensorQuantity, SensorSpec, modal_beam, record_frame_sensors, record_sensors};
 pub use sequence::{
-    BeamMotion, DEFAULT_DAMPING, DEFAULT_EXPOSURE_FRACTION, DEFAULT_MODES, MAX_FRAMES, MountShake,
-    STEEL_DENSITY, SequenceSpec,
+    BeamMotion, CameraPath, DEFAULT_DAMPING, DEFAULT_EXPOSURE_FRACTION, DEFAULT_MODES, MAX_FRAMES,
+    MAX_MOTION_BLUR, MountShake, STEEL_DENSITY, SequenceSpec, Waypoint,
 };
 
 use crate::cameras::CameraRig;

@@ -27,12 +27,129 @@ pub struct SequenceSpec {
     pub duration: f64,
     /// Frame rate, frames per second (positive).
     pub fps: f64,
-    /// How long the shutter is open, seconds (0 < exposure ≤ 1 / fps). Recorded; images are
-    /// rendered at the frame's instant (no motion blur yet) and labels are at that instant.
+    /// How long the shutter is open, seconds (0 < exposure ≤ 1 / fps). Without motion blur
+    /// the images are rendered at the frame's instant; labels are always at that instant, the
+    /// middle of the exposure.
     pub exposure: f64,
+    /// Motion blur: the RGB image of a frame is the average, in linear light before the
+    /// sensor's effects, of this many renders at the sub-instants `exposure_instants` across
+    /// the exposure; 0 (the default) renders the frame's instant alone.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub motion_blur: u32,
     /// How the camera mounts shake, if they do (absent: perfectly still tripods).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mount: Option<MountShake>,
+    /// Views that fly along a path instead of standing where the rig drew them (drones).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub paths: Vec<CameraPath>,
+}
+
+/// A view's camera flying over the sequence: its centre of projection moves through the
+/// waypoints, straight between them at constant speed (held before the first and after the
+/// last), always looking at `target` with world z up; its lens is the rig's.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct CameraPath {
+    /// The view (camera index in the rig) that flies.
+    pub view: u32,
+    /// Where the camera is when, in increasing time.
+    pub waypoints: Vec<Waypoint>,
+    /// The point it looks at, world metres.
+    pub target: [f64; 3],
+}
+
+/// A point of a camera's path: where its centre of projection is at `time`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct Waypoint {
+    /// Seconds from the start of the sequence.
+    pub time: f64,
+    /// World metres.
+    pub position: [f64; 3],
+}
+
+impl CameraPath {
+    /// Where the camera is at `time`: linear between the waypoints around it, held outside.
+    pub fn position_at(&self, time: f64) -> [f64; 3] {
+        let w = &self.waypoints;
+        let after = w.partition_point(|p| p.time <= time);
+        if after == 0 {
+            return w[0].position;
+        }
+        if after == w.len() {
+            return w[w.len() - 1].position;
+        }
+        let (a, b) = (w[after - 1], w[after]);
+        let s = (time - a.time) / (b.time - a.time);
+        std::array::from_fn(|i| a.position[i] + s * (b.position[i] - a.position[i]))
+    }
+
+    /// The problem with the path of entry `i` of `sequence.paths`, naming the value; None when
+    /// it is fine. `views` is the number of views of the rig.
+    pub fn problem(&self, i: usize, views: u32) -> Option<String> {
+        let at = format!("sequence.paths[{i}]");
+        if self.view >= views {
+            return Some(format!(
+                "{at}.view = {} but the dataset has {views} views (0 to {})",
+                self.view,
+                views - 1
+            ));
+        }
+        if self.waypoints.is_empty() {
+            return Some(format!(
+                "{at}.waypoints is empty: give at least one [time, [x, y, z]]"
+            ));
+        }
+        let finite = |p: &[f64; 3]| p.iter().all(|c| c.is_finite());
+        if !finite(&self.target) {
+            return Some(format!(
+                "{at}.target = {:?} must be a finite point",
+                self.target
+            ));
+        }
+        let mut last = f64::NEG_INFINITY;
+        for (j, w) in self.waypoints.iter().enumerate() {
+            if !(w.time.is_finite() && w.time > last) {
+                return Some(format!(
+                    "{at}.waypoints[{j}]: time {} s must be finite and after the waypoint before ({last} s)",
+                    w.time
+                ));
+            }
+            if !finite(&w.position) {
+                return Some(format!(
+                    "{at}.waypoints[{j}]: position {:?} must be a finite point",
+                    w.position
+                ));
+            }
+            last = w.time;
+        }
+        self.passes_through_target(&at)
+    }
+
+    /// Refuses a path that passes through its target: the camera would look nowhere there.
+    fn passes_through_target(&self, at: &str) -> Option<String> {
+        let target = glam::DVec3::from_array(self.target);
+        let legs = self
+            .waypoints
+            .windows(2)
+            .map(|w| (w[0].position, w[1].position));
+        let first = self.waypoints[0].position;
+        std::iter::once((first, first)).chain(legs).find_map(|(a, b)| {
+            let (a, b) = (glam::DVec3::from_array(a), glam::DVec3::from_array(b));
+            let along = (b - a).length_squared();
+            let s = if along > 0.0 {
+                ((target - a).dot(b - a) / along).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let closest = a + s * (b - a);
+            (closest.distance(target) < 1e-6).then(|| {
+                format!(
+                    "{at}: the camera passes through its target {:?} (at {:?}) and would look nowhere there",
+                    self.target,
+                    closest.to_array()
+                )
+            })
+        })
+    }
 }
 
 impl SequenceSpec {
@@ -50,6 +167,16 @@ impl SequenceSpec {
     /// The instants of every frame, in order.
     pub fn times(&self) -> Vec<f64> {
         (0..self.frames()).map(|k| self.time(k)).collect()
+    }
+
+    /// The sub-instants frame `k`'s motion blur averages: the midpoints of `motion_blur` equal
+    /// parts of the exposure [t − exposure/2, t + exposure/2] (empty without motion blur).
+    pub fn exposure_instants(&self, k: u32) -> Vec<f64> {
+        let n = f64::from(self.motion_blur);
+        let t = self.time(k);
+        (0..self.motion_blur)
+            .map(|j| t + self.exposure * ((f64::from(j) + 0.5) / n - 0.5))
+            .collect()
     }
 
     /// The problem with the values, naming the parameter and its value; None when they are fine.
@@ -80,9 +207,22 @@ impl SequenceSpec {
                 1.0 / self.fps
             ));
         }
+        if self.motion_blur > MAX_MOTION_BLUR {
+            return Some(format!(
+                "sequence.motion_blur = {} sub-instants, more than the {MAX_MOTION_BLUR} a frame may average",
+                self.motion_blur
+            ));
+        }
         self.mount.as_ref().and_then(MountShake::problem)
     }
 }
+
+fn is_zero(n: &u32) -> bool {
+    *n == 0
+}
+
+/// Most sub-instants a frame's motion blur may average.
+pub const MAX_MOTION_BLUR: u32 = 64;
 
 /// Small random motions of each camera's mount about its drawn pose, frame by frame: band-limited
 /// white noise of the given RMS in each rotation and translation axis, drawn per sample and view
@@ -169,8 +309,59 @@ mod tests {
             duration,
             fps,
             exposure: 0.5 / fps,
+            motion_blur: 0,
             mount: None,
+            paths: Vec::new(),
         }
+    }
+
+    fn flight(waypoints: &[(f64, [f64; 3])]) -> CameraPath {
+        CameraPath {
+            view: 0,
+            waypoints: waypoints
+                .iter()
+                .map(|&(time, position)| Waypoint { time, position })
+                .collect(),
+            target: [0.0, 0.0, 0.0],
+        }
+    }
+
+    #[test]
+    fn a_camera_flies_straight_between_waypoints_and_holds_outside_them() {
+        let path = flight(&[(1.0, [0.0, -4.0, 1.0]), (3.0, [4.0, -4.0, 3.0])]);
+        assert_eq!(path.position_at(0.0), [0.0, -4.0, 1.0]);
+        assert_eq!(path.position_at(2.0), [2.0, -4.0, 2.0]);
+        assert_eq!(path.position_at(2.5), [3.0, -4.0, 2.5]);
+        assert_eq!(path.position_at(9.0), [4.0, -4.0, 3.0]);
+        assert_eq!(path.problem(0, 1), None);
+    }
+
+    #[test]
+    fn bad_paths_are_named_with_their_value() {
+        let why = |p: CameraPath, views| p.problem(2, views).unwrap();
+        let ok = flight(&[(0.0, [0.0, -4.0, 1.0]), (1.0, [1.0, -4.0, 1.0])]);
+        assert!(why(ok.clone(), 0).contains("sequence.paths[2].view = 0 but the dataset has 0"));
+        let back = flight(&[(1.0, [0.0, -4.0, 1.0]), (0.5, [1.0, -4.0, 1.0])]);
+        assert!(why(back, 1).contains("waypoints[1]: time 0.5 s must be finite and after"));
+        let through = flight(&[(0.0, [-1.0, 0.0, 0.0]), (1.0, [1.0, 0.0, 0.0])]);
+        assert!(why(through, 1).contains("passes through its target [0.0, 0.0, 0.0]"));
+        let nan = flight(&[(0.0, [f64::NAN, 0.0, 1.0])]);
+        assert!(why(nan, 1).contains("position [NaN, 0.0, 1.0]"));
+    }
+
+    #[test]
+    fn blur_sub_instants_are_the_midpoints_of_equal_parts_of_the_exposure() {
+        let mut s = sequence(1.0, 50.0);
+        assert!(s.exposure_instants(3).is_empty());
+        s.motion_blur = 4;
+        // t = 0.06 s, exposure 0.01 s: parts of 2.5 ms from 0.055 s, midpoints 1.25 ms in.
+        let instants = s.exposure_instants(3);
+        let expected = [0.05625, 0.05875, 0.06125, 0.06375];
+        for (got, want) in instants.iter().zip(expected) {
+            assert!((got - want).abs() < 1e-15, "{instants:?}");
+        }
+        s.motion_blur = 65;
+        assert!(s.problem().unwrap().contains("motion_blur = 65"));
     }
 
     #[test]
