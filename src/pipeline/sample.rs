@@ -7,19 +7,22 @@ use super::damage::{unresolved_cracks, unresolved_warning};
 use super::finite::check_finite;
 use super::geometry::SampleGeometry;
 use super::record::{AugmentationRecord, FrameRecord, SampleRecord, ViewFacts, json_bytes};
-use super::sequence::{SampleMotion, mount_offset, shaken};
-use super::view::{RenderedLayers, SampleRenderer, view_camera};
+use super::sequence::SampleMotion;
+use super::view::{
+    FrameNeighbours, RenderedLayers, SampleRenderer, SequenceFrame, frame_camera, view_camera,
+};
 use crate::build::{BuiltSample, build_framed, build_sample};
 use crate::output::{
     MAX_SEGMENTATION_ID, SAMPLE_WRITERS, SampleStage, ViewLayers, WRITERS, in_frame, sample_file,
     view_file,
 };
 use crate::recipe::Recipe;
-use crate::render::SharedTraceMeshes;
+use crate::render::{SharedTraceMeshes, TraceMesh};
 use crate::scene::{DatasetSpec, GeometryMode, SequenceSpec};
 use anyhow::{Result, bail};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 /// Draws the scene of sample `index` and builds its deformed meshes; fails on anything that
 /// would make non-finite output: the meshes, the structures' labels and every view's camera
@@ -98,16 +101,36 @@ pub fn write_sample(
 ) -> Result<u32> {
     let dataset = &recipe.dataset;
     let Some(sequence) = &dataset.sequence else {
-        write_still(recipe, sample, shared, stage, None)?;
+        let still = Still {
+            trace_mesh: shared.get(&sample.mesh, sample.structure_triangles()),
+            frame: None,
+            neighbours: FrameNeighbours::default(),
+        };
+        write_still(recipe, sample, still, stage)?;
         return Ok(dataset.images_per_sample());
     };
     let motion = sample_motion(recipe, sample, sequence)?;
     let framing = sample.framing();
     let context = format!("while building the frames of sample {}", sample.index);
-    for k in 0..motion.frames() {
+    let build = |k: usize| -> Result<SequenceFrame> {
         let scene = motion.scene_at(&sample.scene, k);
         let frame = build_framed(dataset, sample.index, scene, Some(framing))
             .map_err(|e| recipe.locate(&e.message, e.site.as_ref(), &context))?;
+        let trace_mesh = shared.get(&frame.mesh, frame.structure_triangles());
+        Ok(SequenceFrame::new(
+            frame,
+            sequence.time(k as u32),
+            trace_mesh,
+        ))
+    };
+    let frames = motion.frames();
+    let mut window = FrameWindow::new(build(0)?, dataset.outputs.wants("frame_flow"));
+    for k in 0..frames {
+        let next = if k + 1 < frames {
+            Some(build(k + 1)?)
+        } else {
+            None
+        };
         let index = k as u32;
         let record = FrameRecord {
             index,
@@ -117,9 +140,61 @@ pub fn write_sample(
             fps: sequence.fps,
             mount: None,
         };
-        write_still(recipe, &frame, shared, stage, Some(record))?;
+        let still = Still {
+            trace_mesh: window.current.trace_mesh.clone(),
+            frame: Some(record),
+            neighbours: window.neighbours(next.as_ref()),
+        };
+        write_still(recipe, &window.current.sample, still, stage)?;
+        if let Some(next) = next {
+            window.advance(next);
+        }
     }
     Ok(dataset.images_per_sample())
+}
+
+/// The frames of a sequence kept while one is written: it, and the one before when the flow
+/// between frames is asked for (else the previous frame is dropped at once).
+struct FrameWindow {
+    prev: Option<SequenceFrame>,
+    current: SequenceFrame,
+    keep_prev: bool,
+}
+
+impl FrameWindow {
+    fn new(first: SequenceFrame, keep_prev: bool) -> Self {
+        FrameWindow {
+            prev: None,
+            current: first,
+            keep_prev,
+        }
+    }
+
+    /// The frames around the current one, `next` built ahead (none unless the flow between
+    /// frames is asked for).
+    fn neighbours<'a>(&'a self, next: Option<&'a SequenceFrame>) -> FrameNeighbours<'a> {
+        if !self.keep_prev {
+            return FrameNeighbours::default();
+        }
+        FrameNeighbours {
+            prev: self.prev.as_ref(),
+            next,
+        }
+    }
+
+    /// Moves on to `next`.
+    fn advance(&mut self, next: SequenceFrame) {
+        let current = std::mem::replace(&mut self.current, next);
+        self.prev = self.keep_prev.then_some(current);
+    }
+}
+
+/// What a still is rendered with besides its sample: its mesh ready for tracing and, in a
+/// sequence, its frame and the frames around it.
+struct Still<'a> {
+    trace_mesh: Arc<TraceMesh>,
+    frame: Option<FrameRecord>,
+    neighbours: FrameNeighbours<'a>,
 }
 
 /// Writes one still of the sample: its own files and every view, clean and augmented; in a
@@ -127,13 +202,13 @@ pub fn write_sample(
 fn write_still(
     recipe: &Recipe,
     sample: &BuiltSample,
-    shared: &SharedTraceMeshes,
+    still: Still,
     stage: &mut SampleStage,
-    frame: Option<FrameRecord>,
 ) -> Result<()> {
     let dataset = &recipe.dataset;
-    let trace_mesh = shared.get(&sample.mesh, sample.structure_triangles());
-    let renderer = SampleRenderer::with_trace_mesh(dataset, sample, trace_mesh);
+    let frame = still.frame;
+    let renderer = SampleRenderer::with_trace_mesh(dataset, sample, still.trace_mesh)
+        .between(still.neighbours);
     let mut record = SampleRecord::new(sample);
     record.frame = frame;
     record.files = write_sample_files(dataset, sample, stage, frame.map(|f| f.index))?;
@@ -205,10 +280,7 @@ fn for_each_image_at(
 ) -> Result<()> {
     let (dataset, sample) = (renderer.dataset(), renderer.sample());
     let augment = &dataset.augment;
-    let mut drawn = view_camera(dataset, sample, view)?;
-    if let Some(offset) = time.and_then(|t| mount_offset(dataset, sample.index, view, t)) {
-        drawn.camera = shaken(drawn.camera, &offset);
-    }
+    let drawn = frame_camera(dataset, sample, view, time)?;
     let clean = renderer.view_with(view, drawn.camera, drawn);
     if augment.keep_clean {
         let facts = ViewFacts {
@@ -229,7 +301,7 @@ fn for_each_image_at(
         let rendered;
         let (base, warp) = match (augment.mode, geometry) {
             (GeometryMode::Exact, Some(_)) => {
-                rendered = renderer.view_with(view, camera, drawn);
+                rendered = renderer.view_with(view, camera, drawn).as_copy(copy);
                 (&rendered, None)
             }
             (GeometryMode::Image, Some(sim)) => (&clean, Some(sim)),
