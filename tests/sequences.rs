@@ -537,3 +537,65 @@ fn flow_between_frames_is_refused_for_a_still_at_the_dataset_call() {
     );
     assert!(text.contains("still.rhai:1:"), "{text}");
 }
+
+/// Positions (m from x = 0) of the crossing's displacement and rotation sensors, all in view.
+const SENSORS_AT: [f64; 3] = [0.8, 1.0, 1.2];
+
+#[test]
+fn displacement_sensors_agree_with_the_pixels_that_see_their_points() {
+    // The crossing with, at each of SENSORS_AT, a displacement transducer and an inclinometer
+    // sampled at the frame rate, and the per-pixel displacement written.
+    let sensors: String = SENSORS_AT
+        .iter()
+        .enumerate()
+        .map(|(i, at)| {
+            format!(
+                r#"b.sensor(#{{ name: "d{i}", kind: "displacement", at: {at}, rate: {CROSSING_FPS} }});
+        b.sensor(#{{ name: "r{i}", kind: "rotation", at: {at}, rate: {CROSSING_FPS} }});
+        "#
+            )
+        })
+        .collect();
+    let recipe = crossing_recipe("")
+        .replace(r#""frame_flow", "mesh""#, r#""displacement""#)
+        .replace("b.modes(6);", &format!("b.modes(6); {sensors}"));
+    let (_dir, out) = render(&recipe, &[]);
+    let csv = std::fs::read_to_string(out.join("samples/0000/000000.sensors_30hz.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), CROSSING_FRAMES);
+    // What is compared: a sensor records the deflection v of the axis (downward) from the static
+    // equilibrium, and this beam has no static load, so its equilibrium is the unloaded beam
+    // from which the displacement label is measured. The camera sees the side face; the face's
+    // point at the axis's height above the sensor moves down by v exactly (plane sections:
+    // a fibre e above the axis drops by v + e(1 − cos θ)), and it sits in the pixel its moved
+    // position projects to. The pixel's label is the displacement of the point its centre sees,
+    // up to half a pixel away along the beam: within |θ| · (half a footprint) of v, θ the
+    // inclinometer's reading, plus a micrometre for float32 and the chord error.
+    let mut largest = 0.0f64;
+    for (k, row) in rows.iter().enumerate() {
+        let view = frame_view(&out, k);
+        let (_, channels) = common::read_exr_channels(
+            &out.join(format!("samples/0000/000000_00_f{k:04}.displacement.exr")),
+        );
+        for (i, &at) in SENSORS_AT.iter().enumerate() {
+            let (v, theta) = (row[1 + 2 * i], row[2 + 2 * i]);
+            let ([u, w], depth) = view.project([at, -0.05, -v]);
+            let (col, line) = (u.floor() as usize, w.floor() as usize);
+            let pixel = line * view.width + col;
+            let seen = -f64::from(channels["B"][pixel]);
+            let footprint = depth / view.k()[0][0];
+            let bound = theta.abs() * footprint + 1e-6;
+            assert!(
+                (seen - v).abs() <= bound,
+                "frame {k}, sensor d{i} at {at} m: sensor {v} m, pixel ({line}, {col}) {seen} m, bound {bound} m"
+            );
+            largest = largest.max(v.abs());
+        }
+    }
+    // The crossing deflects the beam by millimetres, far beyond the bound.
+    assert!(largest > 1e-3, "{largest}");
+}
