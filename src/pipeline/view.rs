@@ -127,18 +127,26 @@ impl SequenceFrame {
     }
 
     fn rest(&self) -> &Traced {
-        self.rest.get_or_init(|| {
-            let s = &self.sample;
-            Traced::with_positions(&s.mesh, &s.rest, s.structure_triangles())
-        })
+        self.rest.get_or_init(|| unloaded_twin(&self.sample))
     }
 
     fn deformed(&self) -> Deformed<'_> {
-        Deformed {
-            mesh: &self.sample.mesh,
-            traced: &self.trace_mesh,
-            rest: &self.sample.rest,
-        }
+        deformed(&self.sample, &self.trace_mesh)
+    }
+}
+
+/// The unloaded structure of `sample` ready for tracing: its mesh's triangles over the
+/// undeformed vertices.
+fn unloaded_twin(sample: &BuiltSample) -> Traced {
+    Traced::with_positions(&sample.mesh, &sample.rest, sample.structure_triangles())
+}
+
+/// The loaded structure of `sample` (traced as `traced`) with its vertices' unloaded positions.
+fn deformed<'a>(sample: &'a BuiltSample, traced: &'a TraceMesh) -> Deformed<'a> {
+    Deformed {
+        mesh: &sample.mesh,
+        traced,
+        rest: &sample.rest,
     }
 }
 
@@ -326,19 +334,12 @@ impl<'a> SampleRenderer<'a> {
     /// The unloaded structure ready for tracing, prepared on first use: the loaded mesh's
     /// triangles over the undeformed vertices.
     fn rest(&self) -> &Traced {
-        self.rest.get_or_init(|| {
-            let s = self.sample;
-            Traced::with_positions(&s.mesh, &s.rest, s.structure_triangles())
-        })
+        self.rest.get_or_init(|| unloaded_twin(self.sample))
     }
 
     /// The loaded structure with the undeformed position of every vertex.
     fn deformed(&self) -> Deformed<'_> {
-        Deformed {
-            mesh: &self.sample.mesh,
-            traced: &self.trace_mesh,
-            rest: &self.sample.rest,
-        }
+        deformed(self.sample, &self.trace_mesh)
     }
 
     /// The dataset the views belong to.
