@@ -540,3 +540,327 @@ fn bad_flight_paths_are_refused_at_the_dataset_call_with_their_value() {
         );
     }
 }
+
+/// A 2 m steel beam 0.1 × 0.2 m, simply supported, crossed at 8 m/s by one 3e5 N axle, filmed
+/// side-on from 0.6 m at 30 fps (8 frames over the crossing); `mount` shakes the camera.
+fn crossing_recipe(mount: &str) -> String {
+    format!(
+        r#"dataset(#{{
+    name: "flow", seed: 5, samples: 1, views: 1, outputs: ["depth", "mask", "frame_flow", "mesh"],
+    sequence: #{{ duration: 0.25, fps: {CROSSING_FPS} {mount} }},
+    camera: #{{ width: 160, height: 120, fov_y: deg(60),
+        fixed: [#{{ position: [1.0, -0.6, 0.12], target: [1.0, 0.0, 0.0] }}] }},
+    scene: |rng| {{
+        let b = beam(#{{ length: 2.0, width: 0.1, height: 0.2 }});
+        b.simply_supported();
+        b.theory("euler_bernoulli");
+        b.at(1.0, 0.0, 0.0);
+        b.vehicle([[0.0, {CROSSING_FORCE}]], {SPEED}, 0.0); b.damping(0.03); b.modes(6);
+        b
+    }},
+}});
+"#
+    )
+}
+
+const CROSSING_FPS: f64 = 30.0;
+const CROSSING_FORCE: f64 = 3e5;
+const CROSSING_FRAMES: usize = 8;
+
+/// Frame `frame` of view 0 of sample 0: its depth, mask and record.
+fn frame_view(out: &Path, frame: usize) -> common::View {
+    let path = |kind: &str| out.join(format!("samples/0000/000000_00_f{frame:04}.{kind}"));
+    let (width, height, _, mask) = common::read_png(&path("mask.png"));
+    common::View {
+        width,
+        height,
+        depth: common::read_exr(&path("depth.exr")),
+        mask,
+        json: read_json(&path("json")),
+    }
+}
+
+/// Frame `frame`'s flow to the next (`"next"`) or previous (`"prev"`) frame: (u, v) where
+/// valid, per pixel.
+fn frame_flow(out: &Path, frame: usize, side: &str) -> Vec<Option<[f64; 2]>> {
+    let path = |kind: &str| out.join(format!("samples/0000/000000_00_f{frame:04}.{kind}"));
+    let (_, channels) = common::read_exr_channels(&path(&format!("flow_{side}.exr")));
+    let (_, _, _, valid) = common::read_png(&path(&format!("flow_{side}_valid.png")));
+    (0..valid.len())
+        .map(|i| {
+            (valid[i] == 255).then(|| [f64::from(channels["R"][i]), f64::from(channels["G"][i])])
+        })
+        .collect()
+}
+
+/// The crossing's beam as `ModalBeam` (E = 210 GPa, steel), its load and its response at the
+/// frames' instants: the independent truth of the flow between frames.
+struct Crossing {
+    beam: ModalBeam,
+    loads: Vec<TimeLoad>,
+    response: shmgen::mechanics::dynamics::Response,
+}
+
+impl Crossing {
+    fn new() -> Self {
+        let (width, height, length): (f64, f64, f64) = (0.1, 0.2, 2.0);
+        let ei = 210e9 * width * height.powi(3) / 12.0;
+        let mass = 7850.0 * width * height;
+        let beam = ModalBeam::new(Support::SimplySupported, length, ei, mass, 0.03, 6).unwrap();
+        let loads = vec![TimeLoad::Vehicle {
+            axles: vec![Axle {
+                behind: 0.0,
+                force: CROSSING_FORCE,
+            }],
+            speed: SPEED,
+            enters: 0.0,
+        }];
+        let times: Vec<f64> = (0..CROSSING_FRAMES)
+            .map(|k| k as f64 / CROSSING_FPS)
+            .collect();
+        let response = beam.respond(&loads, 0.0, &times, 64);
+        Crossing {
+            beam,
+            loads,
+            response,
+        }
+    }
+
+    /// (deflection downward, slope) of the axis at `x` at frame `k`.
+    fn axis(&self, k: usize, x: f64) -> (f64, f64) {
+        let m = self
+            .response
+            .at(&self.beam, &self.loads, k, x.clamp(0.0, 2.0));
+        (m.deflection, m.slope)
+    }
+
+    /// Where world point `p`, seen on the beam at frame `k`, is at frame `other`: plane
+    /// sections rotating with the slope (a fibre `e` above the axis at x moves by (e·w′, 0,
+    /// −w), w downward), to first order in the slope (the neglected cos and axial-shortening
+    /// terms are below 2·10⁻⁵ m here, 0.007 px).
+    fn carried(&self, p: [f64; 3], k: usize, other: usize) -> [f64; 3] {
+        // The material point's axial coordinate x and height e above the axis, from where
+        // frame k has it: p = (x + e·w′(x), y, e − w(x)), solved by fixed point.
+        let (mut x, mut e) = (p[0], p[2]);
+        for _ in 0..8 {
+            let (w, slope) = self.axis(k, x);
+            e = p[2] + w;
+            x = p[0] - e * slope;
+        }
+        let (w, slope) = self.axis(other, x);
+        [x + e * slope, p[1], e - w]
+    }
+}
+
+/// Compares the flow of every frame to the next and the previous with the projection, through
+/// the other frame's written camera, of each seen point carried by the closed-form kinematics;
+/// returns the largest error (px), the largest flow (px) and the largest share of the flow the
+/// camera's own motion makes.
+fn check_frame_flows(out: &Path, crossing: &Crossing) -> (f64, f64, f64) {
+    let views: Vec<common::View> = (0..CROSSING_FRAMES).map(|k| frame_view(out, k)).collect();
+    let (mut worst, mut largest, mut camera_part) = (0.0f64, 0.0f64, 0.0f64);
+    for k in 0..CROSSING_FRAMES {
+        let this = &views[k];
+        for (side, other) in [("next", k + 1), ("prev", k.wrapping_sub(1))] {
+            let flow = frame_flow(out, k, side);
+            let Some(that) = views.get(other) else {
+                assert!(
+                    flow.iter().all(Option::is_none),
+                    "frame {k}: {side} at the end"
+                );
+                continue;
+            };
+            let (mut valid, mut seen) = (0, 0);
+            for row in 0..this.height {
+                for col in 0..this.width {
+                    let Some(p) = this.point(row, col) else {
+                        continue;
+                    };
+                    seen += 1;
+                    let Some([u, v]) = flow[row * this.width + col] else {
+                        continue;
+                    };
+                    valid += 1;
+                    let moved = crossing.carried(p, k, other);
+                    let ([tu, tv], _) = that.project(moved);
+                    let (u0, v0) = (col as f64 + 0.5, row as f64 + 0.5);
+                    let error = (u - (tu - u0)).hypot(v - (tv - v0));
+                    // The chord error of the two tessellations (piecewise linear between
+                    // stations) and the neglected second-order terms: a few thousandths.
+                    assert!(
+                        error < 5e-3,
+                        "frame {k} {side}, pixel ({row}, {col}): flow ({u}, {v}), truth ({}, {}), error {error} px",
+                        tu - u0,
+                        tv - v0
+                    );
+                    worst = worst.max(error);
+                    largest = largest.max(u.hypot(v));
+                    // The same point moved, seen through this frame's camera: what the flow
+                    // would be with a still camera.
+                    let ([su, sv], _) = this.project(moved);
+                    camera_part = camera_part.max((tu - su).hypot(tv - sv));
+                }
+            }
+            assert!(
+                valid as f64 > 0.95 * seen as f64,
+                "frame {k} {side}: {valid} of {seen} pixels valid"
+            );
+        }
+    }
+    (worst, largest, camera_part)
+}
+
+#[test]
+fn flow_between_frames_is_the_projected_difference_of_the_closed_form_displacements() {
+    let (_dir, out) = render(&crossing_recipe(""), &[]);
+    let crossing = Crossing::new();
+    let (worst, largest, camera_part) = check_frame_flows(&out, &crossing);
+    eprintln!(
+        "still mounts: error {worst:.2e} px, flow up to {largest:.3} px, camera {camera_part:.2e} px"
+    );
+    // The beam moves a visible share of a pixel between frames, and the cameras do not.
+    assert!(largest > 0.2, "flow up to {largest} px");
+    assert!(camera_part < 1e-9, "{camera_part}");
+    // The frames tessellate the beam differently (a station follows the axle): their unloaded
+    // meshes differ, so no point can be carried by its triangle's weights from one frame's mesh
+    // to the next.
+    let rest = |k: usize| {
+        std::fs::read(out.join(format!("samples/0000/000000_f{k:04}.rest.ply"))).unwrap()
+    };
+    let changes = (1..CROSSING_FRAMES).filter(|&k| rest(k) != rest(k - 1));
+    assert!(changes.count() >= CROSSING_FRAMES - 2);
+    exported_to_webdataset_as_arrays(&out);
+}
+
+/// `shmgen export --format webdataset` writes the flows between frames as float32 (H, W, 2)
+/// arrays and their validity as bool (H, W) arrays, as it writes the still's flow.
+fn exported_to_webdataset_as_arrays(out: &Path) {
+    let wds = out.with_file_name("wds");
+    ok(common::shmgen(&[
+        "export".as_ref(),
+        out.as_os_str(),
+        "--format".as_ref(),
+        "webdataset".as_ref(),
+        "--out".as_ref(),
+        wds.as_os_str(),
+    ]));
+    let mut headers = std::collections::BTreeMap::new();
+    for shard in common::files_with_extension(&wds, "gz") {
+        let gzip = flate2::read::GzDecoder::new(std::fs::File::open(&shard).unwrap());
+        for entry in tar::Archive::new(gzip).entries().unwrap() {
+            let mut entry = entry.unwrap();
+            let name = entry.path().unwrap().to_string_lossy().to_string();
+            let mut bytes = Vec::new();
+            std::io::Read::read_to_end(&mut entry, &mut bytes).unwrap();
+            let header = String::from_utf8_lossy(&bytes[..bytes.len().min(128)]).to_string();
+            headers.insert(name, header);
+        }
+    }
+    for side in ["next", "prev"] {
+        let vectors = &headers[&format!("000000_00_f0003.flow_{side}.npy")];
+        assert!(
+            vectors.contains("'<f4'") && vectors.contains("(120, 160, 2)"),
+            "{vectors}"
+        );
+        let valid = &headers[&format!("000000_00_f0003.flow_{side}_valid.npy")];
+        assert!(
+            valid.contains("'|b1'") && valid.contains("(120, 160)"),
+            "{valid}"
+        );
+    }
+}
+
+#[test]
+fn flow_between_frames_follows_each_frames_camera_when_the_mount_shakes() {
+    let mount = ", mount: #{ rotation: 2e-3, translation: 1e-3, band: 5.0 }";
+    let (_dir, out) = render(&crossing_recipe(mount), &[]);
+    let crossing = Crossing::new();
+    let (worst, largest, camera_part) = check_frame_flows(&out, &crossing);
+    eprintln!(
+        "shaken mounts: error {worst:.2e} px, flow up to {largest:.3} px, camera {camera_part:.3} px"
+    );
+    assert!(
+        camera_part > 0.3,
+        "the mount moved the camera by {camera_part} px only"
+    );
+}
+
+#[test]
+fn flow_between_frames_is_refused_for_a_still_at_the_dataset_call() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "still.rhai",
+        recipe("", "", r#""rgb", "frame_flow""#),
+    );
+    let out = run(&path, &dir.path().join("out"), &[]);
+    assert!(!out.status.success());
+    let text = stderr(&out);
+    assert!(
+        text.contains("\"frame_flow\"") && text.contains("dataset.sequence"),
+        "{text}"
+    );
+    assert!(text.contains("still.rhai:1:"), "{text}");
+}
+
+/// Positions (m from x = 0) of the crossing's displacement and rotation sensors, all in view.
+const SENSORS_AT: [f64; 3] = [0.8, 1.0, 1.2];
+
+#[test]
+fn displacement_sensors_agree_with_the_pixels_that_see_their_points() {
+    // The crossing with, at each of SENSORS_AT, a displacement transducer and an inclinometer
+    // sampled at the frame rate, and the per-pixel displacement written.
+    let sensors: String = SENSORS_AT
+        .iter()
+        .enumerate()
+        .map(|(i, at)| {
+            format!(
+                r#"b.sensor(#{{ name: "d{i}", kind: "displacement", at: {at}, rate: {CROSSING_FPS} }});
+        b.sensor(#{{ name: "r{i}", kind: "rotation", at: {at}, rate: {CROSSING_FPS} }});
+        "#
+            )
+        })
+        .collect();
+    let recipe = crossing_recipe("")
+        .replace(r#""frame_flow", "mesh""#, r#""displacement""#)
+        .replace("b.modes(6);", &format!("b.modes(6); {sensors}"));
+    let (_dir, out) = render(&recipe, &[]);
+    let csv = std::fs::read_to_string(out.join("samples/0000/000000.sensors_30hz.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), CROSSING_FRAMES);
+    // What is compared: a sensor records the deflection v of the axis (downward) from the static
+    // equilibrium, and this beam has no static load, so its equilibrium is the unloaded beam
+    // from which the displacement label is measured. The camera sees the side face; the face's
+    // point at the axis's height above the sensor moves down by v exactly (plane sections:
+    // a fibre e above the axis drops by v + e(1 − cos θ)), and it sits in the pixel its moved
+    // position projects to. The pixel's label is the displacement of the point its centre sees,
+    // up to half a pixel away along the beam: within |θ| · (half a footprint) of v, θ the
+    // inclinometer's reading, plus a micrometre for float32 and the chord error.
+    let mut largest = 0.0f64;
+    for (k, row) in rows.iter().enumerate() {
+        let view = frame_view(&out, k);
+        let (_, channels) = common::read_exr_channels(
+            &out.join(format!("samples/0000/000000_00_f{k:04}.displacement.exr")),
+        );
+        for (i, &at) in SENSORS_AT.iter().enumerate() {
+            let (v, theta) = (row[1 + 2 * i], row[2 + 2 * i]);
+            let ([u, w], depth) = view.project([at, -0.05, -v]);
+            let (col, line) = (u.floor() as usize, w.floor() as usize);
+            let pixel = line * view.width + col;
+            let seen = -f64::from(channels["B"][pixel]);
+            let footprint = depth / view.k()[0][0];
+            let bound = theta.abs() * footprint + 1e-6;
+            assert!(
+                (seen - v).abs() <= bound,
+                "frame {k}, sensor d{i} at {at} m: sensor {v} m, pixel ({line}, {col}) {seen} m, bound {bound} m"
+            );
+            largest = largest.max(v.abs());
+        }
+    }
+    // The crossing deflects the beam by millimetres, far beyond the bound.
+    assert!(largest > 1e-3, "{largest}");
+}

@@ -21,7 +21,7 @@ CAMERA_KEYS = ("K", "c2w", "w2c", "c2w_opengl", "distortion")
 #: What :func:`view_arrays` gives: arrays, and the view's indices, stem and whether it is a copy.
 Item = dict[str, Union[NDArray[Any], int, str, bool]]
 
-_MASKS = {"mask", "cracks", "erased", "valid", "flow_valid"}
+_MASKS = {"mask", "cracks", "erased", "valid", "flow_valid", "flow_next_valid", "flow_prev_valid"}
 _IDS = {"parts", "instances"}
 _COLOURS = {"rgb", "rest_rgb"}
 
@@ -31,8 +31,10 @@ def layer_array(view: View, name: str) -> np.ndarray:
 
     * ``rgb``, ``rest_rgb``: ``(3, H, W)`` float32 in [0, 1];
     * ``depth``, ``rest_depth``, ``ray_distance``: ``(1, H, W)`` float32 metres, 0 = no surface;
-    * ``normals``, ``displacement``: ``(3, H, W)`` float32; ``flow``: ``(2, H, W)`` float32;
-    * masks (``mask``, ``cracks``, ``erased``, ``valid``, ``flow_valid``): ``(1, H, W)`` bool;
+    * ``normals``, ``displacement``: ``(3, H, W)`` float32; ``flow``, ``flow_next``,
+      ``flow_prev``: ``(2, H, W)`` float32;
+    * masks (``mask``, ``cracks``, ``erased``, ``valid`` and the flows' ``…_valid``):
+      ``(1, H, W)`` bool;
     * ``parts``, ``instances``: ``(H, W)`` int64 ids (a segmentation target).
     """
     values = view.load(name)

@@ -77,8 +77,10 @@ class _Layer:
 #: Every per-view output, by name: ``rgb`` and ``rest_rgb`` are ``(H, W, 3)`` uint8; ``depth``,
 #: ``rest_depth`` and ``ray_distance`` ``(H, W)`` float32 metres (0 = no surface); ``normals``
 #: and ``displacement`` ``(H, W, 3)`` float32 (x, y, z); ``flow`` ``(H, W, 2)`` float32 pixels
-#: (u, v); the EXR channels are the ones the view's record names (``Y``; ``R G B``; ``R G``);
-#: the masks ``mask``, ``cracks``, ``erased``, ``valid`` and ``flow_valid`` ``(H, W)`` bool
+#: (u, v), and in a sequence ``flow_next`` and ``flow_prev`` (this frame's image to the next
+#: and previous frame's) likewise; the EXR channels are the ones the view's record names
+#: (``Y``; ``R G B``; ``R G``); the masks ``mask``, ``cracks``, ``erased``, ``valid``,
+#: ``flow_valid``, ``flow_next_valid`` and ``flow_prev_valid`` ``(H, W)`` bool
 #: (True where the file holds 255); ``parts`` and ``instances`` ``(H, W)`` int32 ids;
 #: ``damage_class`` (0 none … 6 dent, names in the record's ``damage.classes``) and
 #: ``damage_instance`` (index + 1 in the structure's ``damage.items``) ``(H, W)`` int32,
@@ -96,6 +98,12 @@ LAYERS = {
     "displacement": _Layer("displacement.exr", "exr", "displacement", ("R", "G", "B"), "finite"),
     "flow": _Layer("flow.exr", "exr", "flow", ("R", "G"), "finite"),
     "flow_valid": _Layer("flow_valid.png", "binary"),
+    # Flow between consecutive frames of a sequence (output "frame_flow"; docs/sequences.md):
+    # this frame's image -> the next frame's / the previous frame's, pixels.
+    "flow_next": _Layer("flow_next.exr", "exr", "frame_flow", ("R", "G"), "finite"),
+    "flow_next_valid": _Layer("flow_next_valid.png", "binary"),
+    "flow_prev": _Layer("flow_prev.exr", "exr", "frame_flow", ("R", "G"), "finite"),
+    "flow_prev_valid": _Layer("flow_prev_valid.png", "binary"),
     "rest_rgb": _Layer("rest_rgb.png", "rgb"),
     # rest_depth follows the depth convention (the record's `depth` covers both files).
     "rest_depth": _Layer("rest_depth.exr", "exr", "depth", ("Y",), "depth"),
@@ -310,8 +318,9 @@ class View:
 
     Images (see :data:`LAYERS` for shapes and dtypes), read on first access and kept:
     ``rgb``, ``depth``, ``mask``, ``parts``, ``instances``, ``cracks``, ``erased``, ``valid``,
-    ``normals``, ``displacement``, ``flow``, ``flow_valid``, ``rest_rgb``, ``rest_depth``,
-    ``ray_distance``, ``damage_class``, ``damage_instance``, ``crack_width``,
+    ``normals``, ``displacement``, ``flow``, ``flow_valid``, ``flow_next``, ``flow_next_valid``,
+    ``flow_prev``, ``flow_prev_valid``, ``rest_rgb``, ``rest_depth``, ``ray_distance``,
+    ``damage_class``, ``damage_instance``, ``crack_width``,
     ``crack_coverage``. Asking for one the view does not have raises :class:`MissingFileError`
     naming the view and the output; :meth:`has` and :attr:`layers` tell which it has.
     """
@@ -334,6 +343,10 @@ class View:
     displacement = _Output()
     flow = _Output()
     flow_valid = _Output()
+    flow_next = _Output()
+    flow_next_valid = _Output()
+    flow_prev = _Output()
+    flow_prev_valid = _Output()
     rest_rgb = _Output()
     rest_depth = _Output()
     ray_distance = _Output()

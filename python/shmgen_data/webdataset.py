@@ -7,10 +7,10 @@ the export writes members they read as training arrays (see ``docs/using-the-dat
 * ``rgb.png``, ``rest_rgb.png``: colour PNG, as in the dataset (``.decode("torch")``:
   ``(3, H, W)`` float in [0, 1]; ``.decode("rgb")``: ``(H, W, 3)`` float32);
 * ``depth.npy``, ``rest_depth.npy``, ``ray_distance.npy``: ``(H, W)`` float32 metres, 0 = no
-  surface; ``normals.npy``, ``displacement.npy`` ``(H, W, 3)``, ``flow.npy`` ``(H, W, 2)``
-  float32;
-* ``mask.npy``, ``cracks.npy``, ``erased.npy``, ``valid.npy``, ``flow_valid.npy``: ``(H, W)``
-  bool; ``parts.npy``, ``instances.npy``: ``(H, W)`` int32 ids (the record's
+  surface; ``normals.npy``, ``displacement.npy`` ``(H, W, 3)``, ``flow.npy`` (and in a
+  sequence ``flow_next.npy``, ``flow_prev.npy``) ``(H, W, 2)`` float32;
+* ``mask.npy``, ``cracks.npy``, ``erased.npy``, ``valid.npy``, ``flow_valid.npy`` (and
+  ``flow_next_valid.npy``, ``flow_prev_valid.npy``): ``(H, W)`` bool; ``parts.npy``, ``instances.npy``: ``(H, W)`` int32 ids (the record's
   ``segmentation`` tables name them);
 * ``json``: the view's record (a dict), whose ``augmentation`` is None for a clean view.
 
@@ -44,6 +44,10 @@ MEMBERS = {
     "erased.npy": "bool (H, W) pixels an augmentation erased",
     "valid.npy": "bool (H, W) pixels whose labels hold",
     "flow_valid.npy": "bool (H, W) where flow is defined",
+    "flow_next.npy": "float32 (H, W, 2) this frame → next frame pixel motion (U, V)",
+    "flow_next_valid.npy": "bool (H, W) where flow_next is defined",
+    "flow_prev.npy": "float32 (H, W, 2) this frame → previous frame pixel motion (U, V)",
+    "flow_prev_valid.npy": "bool (H, W) where flow_prev is defined",
     "parts.npy": "int32 (H, W) part ids (segmentation.part_ids)",
     "instances.npy": "int32 (H, W) instance ids (segmentation.instance_ids)",
     "json": "the view's record (shmgen.view/2)",

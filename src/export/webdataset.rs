@@ -11,7 +11,7 @@
 //! - every EXR layer becomes `{layer}.npy`, float32, `(H, W)` for one channel (depth, rest
 //!   depth, ray distance) or `(H, W, C)` in the record's channel order (normals, displacement
 //!   x, y, z; flow u, v), which NumPy's `.npy` decoder in WebDataset reads as is;
-//! - masks (`mask`, `cracks`, `erased`, `valid`, `flow_valid`) become `{layer}.npy` bool
+//! - masks (`mask`, `cracks`, `erased`, `valid`, the flows' `…_valid`) become `{layer}.npy` bool
 //!   `(H, W)`, and the id images (`parts`, `instances`) `{layer}.npy` int32 `(H, W)`.
 //!
 //! Shards: `--shard-size N` puts N views in each (the last holds the rest); by default the views
@@ -48,12 +48,14 @@ const MIN_SHARDS: usize = 16;
 const MAX_AUTO_VIEWS: usize = 1000;
 
 /// The masks, stored as PNGs of 0 and 255, written as bool arrays.
-const MASKS: [&str; 5] = [
+const MASKS: [&str; 7] = [
     "mask.png",
     "cracks.png",
     "erased.png",
     "valid.png",
     "flow_valid.png",
+    "flow_next_valid.png",
+    "flow_prev_valid.png",
 ];
 
 /// The id images (8- or 16-bit PNGs), written as int32 arrays.
@@ -139,6 +141,8 @@ fn exr_channels(record: &Value, layer: &str, relative: &str) -> Result<Vec<Strin
     let convention = match layer {
         // The damage layers share one convention.
         "crack_width" | "crack_coverage" => &record["damage"],
+        // So do the flows between frames.
+        "flow_next" | "flow_prev" => &record["frame_flow"],
         _ => &record[layer.strip_prefix("rest_").unwrap_or(layer)],
     };
     let names: Option<Vec<String>> = match (&convention["channels"], &convention["channel"]) {

@@ -38,8 +38,8 @@ pub use meshes::{MeshLayer, PointLayer};
 pub use series::{RateGroup, SensorColumn, TIME_LABEL, series_files};
 pub use status::{EXIT_COMPLETE, EXIT_INCOMPLETE, EXIT_RUNNING, Status, status};
 pub use writers::{
-    DEFAULT_OUTPUTS, DamageLayers, Flow, SAMPLE_WRITERS, SampleLayers, SampleWriter, ViewLayers,
-    WRITERS, Writer, output_names,
+    DEFAULT_OUTPUTS, DamageLayers, Flow, FrameFlow, SAMPLE_WRITERS, SampleLayers, SampleWriter,
+    ViewLayers, WRITERS, Writer, output_names,
 };
 
 /// Relative path of one view's file of the given kind (`rgb.png`, `depth.exr`, ...):

@@ -42,6 +42,9 @@ pub trait ViewLayers {
     fn displacement(&self) -> Vec<[f32; 3]>;
     /// Where each surface point of the unloaded image moves in the loaded one.
     fn flow(&self) -> Flow;
+    /// In a sequence, where each surface point of this frame's image moves in the next frame's
+    /// and in the previous frame's (no pixel valid at the ends of the sequence).
+    fn frame_flow(&self) -> FrameFlow;
     /// sRGB colour of the unloaded structure seen through the same camera, three bytes a pixel.
     fn rest_rgb(&self) -> &[u8];
     /// Planar depth of the unloaded structure, metres, 0 where no surface is seen.
@@ -62,6 +65,36 @@ pub struct Flow {
     pub vectors: Vec<[f32; 2]>,
     /// 255 where the point moves to a pixel inside the frame and is seen there, else 0.
     pub valid: Vec<u8>,
+}
+
+impl Flow {
+    /// The flow of a per-pixel field: a vector where the pixel has one, 0 and invalid
+    /// elsewhere.
+    pub fn from_field(field: &[Option<[f32; 2]>]) -> Flow {
+        Flow {
+            vectors: field.iter().map(|f| f.unwrap_or_default()).collect(),
+            valid: field
+                .iter()
+                .map(|f| if f.is_some() { 255 } else { 0 })
+                .collect(),
+        }
+    }
+
+    /// A flow of `pixels` pixels none of which is valid.
+    pub fn invalid(pixels: usize) -> Flow {
+        Flow {
+            vectors: vec![[0.0; 2]; pixels],
+            valid: vec![0; pixels],
+        }
+    }
+}
+
+/// Optical flow between consecutive frames of a sequence, per pixel of this frame's image.
+pub struct FrameFlow {
+    /// To the next frame's image (invalid everywhere at the last frame).
+    pub next: Flow,
+    /// To the previous frame's image (invalid everywhere at the first frame).
+    pub prev: Flow,
 }
 
 /// The per-pixel damage labels of a view, from its centre rays (docs/damage.md).
@@ -101,7 +134,7 @@ impl Writer {
 }
 
 /// Every output shmgen can write, in the order a view's files are written.
-pub const WRITERS: [Writer; 15] = [
+pub const WRITERS: [Writer; 16] = [
     Writer {
         output: "rgb",
         files: &["rgb.png"],
@@ -203,6 +236,38 @@ pub const WRITERS: [Writer; 15] = [
             Ok(vec![
                 vector_exr((w, h), names, &flow.vectors, ("shmgen_flow", note))?,
                 mask_png(w, h, &flow.valid),
+            ])
+        },
+    },
+    Writer {
+        output: "frame_flow",
+        files: &[
+            "flow_next.exr",
+            "flow_next_valid.png",
+            "flow_prev.exr",
+            "flow_prev_valid.png",
+        ],
+        write: |v| {
+            let (w, h) = v.size();
+            let FrameFlow { next, prev } = v.frame_flow();
+            let names = FLOW_CHANNELS.names;
+            let next_note = "R, G = u, v: pixels from this frame's image to the next frame's; 0 where flow_next_valid is 0";
+            let prev_note = "R, G = u, v: pixels from this frame's image to the previous frame's; 0 where flow_prev_valid is 0";
+            Ok(vec![
+                vector_exr(
+                    (w, h),
+                    names,
+                    &next.vectors,
+                    ("shmgen_flow_next", next_note),
+                )?,
+                mask_png(w, h, &next.valid),
+                vector_exr(
+                    (w, h),
+                    names,
+                    &prev.vectors,
+                    ("shmgen_flow_prev", prev_note),
+                )?,
+                mask_png(w, h, &prev.valid),
             ])
         },
     },
@@ -365,6 +430,15 @@ mod tests {
                 valid: vec![255, 0],
             }
         }
+        fn frame_flow(&self) -> FrameFlow {
+            FrameFlow {
+                next: Flow {
+                    vectors: vec![[-0.5, 0.125], [0.0; 2]],
+                    valid: vec![255, 0],
+                },
+                prev: Flow::invalid(2),
+            }
+        }
         fn rest_rgb(&self) -> &[u8] {
             &[190, 100, 50, 0, 0, 0]
         }
@@ -438,6 +512,8 @@ mod tests {
                     ("R", vec![1e-3, 0.0]),
                 ],
                 "flow.exr" => vec![("G", vec![1.5, 0.0]), ("R", vec![0.25, 0.0])],
+                "flow_next.exr" => vec![("G", vec![0.125, 0.0]), ("R", vec![-0.5, 0.0])],
+                "flow_prev.exr" => vec![("G", vec![0.0, 0.0]), ("R", vec![0.0, 0.0])],
                 "crack_width.exr" => vec![("Y", vec![0.3, 0.0])],
                 "crack_coverage.exr" => vec![("Y", vec![0.15, 0.0])],
                 other => panic!("no expected channels for {other}"),
@@ -458,7 +534,7 @@ mod tests {
                 checked += 1;
             }
         }
-        assert_eq!(checked, 8);
+        assert_eq!(checked, 10);
     }
 
     #[test]

@@ -14,7 +14,7 @@ use crate::augment::{
     Vignette,
 };
 use crate::cameras::Camera;
-use crate::output::{DamageLayers, Flow, ViewLayers};
+use crate::output::{DamageLayers, Flow, FrameFlow, ViewLayers};
 use crate::render::ViewVisibility;
 use crate::scene::{AugmentSpec, DatasetSpec, GeometryMode, NormalsFrame, Operation};
 use crate::seeds::{Scope, Stream};
@@ -327,6 +327,11 @@ pub fn photometric(
     Ok(())
 }
 
+/// Pixels of an image of `(width, height)`.
+fn pixels((w, h): (u32, u32)) -> usize {
+    w as usize * h as usize
+}
+
 impl ViewLayers for AugmentedView<'_> {
     fn size(&self) -> (u32, u32) {
         self.base.size()
@@ -404,11 +409,17 @@ impl ViewLayers for AugmentedView<'_> {
         }
         // The recipe refuses flow with image-space warps; should one get here, no pixel
         // claims a flow rather than one measured in another frame.
-        let (w, h) = self.size();
-        let pixels = w as usize * h as usize;
-        Flow {
-            vectors: vec![[0.0; 2]; pixels],
-            valid: vec![0; pixels],
+        Flow::invalid(pixels(self.size()))
+    }
+
+    fn frame_flow(&self) -> FrameFlow {
+        if self.warp.is_none() {
+            return self.base.frame_flow();
+        }
+        // Refused with image-space warps too, as `flow`.
+        FrameFlow {
+            next: Flow::invalid(pixels(self.size())),
+            prev: Flow::invalid(pixels(self.size())),
         }
     }
 

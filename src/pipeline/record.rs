@@ -117,6 +117,10 @@ pub struct ViewRecord<'a> {
     pub displacement: VectorConvention,
     /// How to read the flow files (`flow` and `flow_valid`).
     pub flow: VectorConvention,
+    /// How to read the flow between frames of a sequence (`flow_next`, `flow_next_valid`,
+    /// `flow_prev`, `flow_prev_valid`); only when the dataset writes them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame_flow: Option<VectorConvention>,
     /// How to read the mask file.
     pub mask: MaskConvention,
     /// How to read the crack file.
@@ -803,6 +807,17 @@ impl<'a> SampleRecord<'a> {
                 channels: FLOW_CHANNELS.names.to_vec(),
                 no_value: 0.0,
             },
+            frame_flow: recipe
+                .dataset
+                .outputs
+                .wants("frame_flow")
+                .then_some(VectorConvention {
+                    meaning: "on this frame's image (rgb), where the pixel's material point lands in the next frame's image (flow_next) or the previous frame's (flow_prev), through that frame's camera (its mount shaken as then), minus the pixel centre; valid where flow_next_valid / flow_prev_valid is 255 (the point lands inside that frame, unhidden; none at the last / first frame)",
+                    axes: Axes::Image,
+                    unit: Unit::Pixel,
+                    channels: FLOW_CHANNELS.names.to_vec(),
+                    no_value: 0.0,
+                }),
             mask: MaskConvention {
                 structure: 255,
                 background: 0,

@@ -7,8 +7,11 @@ use super::damage::{unresolved_cracks, unresolved_warning};
 use super::finite::check_finite;
 use super::geometry::SampleGeometry;
 use super::record::{AugmentationRecord, FrameRecord, SampleRecord, ViewFacts, json_bytes};
-use super::sequence::{SampleMotion, averaged_in_linear_light, flown, mount_offset, shaken};
-use super::view::{RenderedLayers, RenderedView, SampleRenderer, ViewCamera, view_camera};
+use super::sequence::{SampleMotion, averaged_in_linear_light};
+use super::view::{
+    FrameNeighbours, RenderedLayers, RenderedView, SampleRenderer, SequenceFrame, ViewCamera,
+    frame_camera, view_camera,
+};
 use crate::build::{BuiltSample, build_framed, build_sample};
 use crate::cameras::Camera;
 use crate::output::{
@@ -16,11 +19,12 @@ use crate::output::{
     view_file,
 };
 use crate::recipe::Recipe;
-use crate::render::SharedTraceMeshes;
+use crate::render::{SharedTraceMeshes, TraceMesh};
 use crate::scene::{DatasetSpec, GeometryMode, SequenceSpec};
 use anyhow::{Result, bail};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 /// Draws the scene of sample `index` and builds its deformed meshes; fails on anything that
 /// would make non-finite output: the meshes, the structures' labels and every view's camera
@@ -101,22 +105,43 @@ pub fn write_sample(
     // The sensors record the whole sequence: one series a sample, not one a frame.
     write_sensor_files(dataset, sample, stage)?;
     let Some(sequence) = &dataset.sequence else {
-        write_still(recipe, sample, shared, stage, None, &[])?;
+        let still = Still {
+            trace_mesh: shared.get(&sample.mesh, sample.structure_triangles()),
+            frame: None,
+            neighbours: FrameNeighbours::default(),
+            exposure: &[],
+        };
+        write_still(recipe, sample, still, shared, stage)?;
         return Ok(dataset.images_per_sample());
     };
     let motion = sample_motion(recipe, sample, sequence)?;
     let framing = sample.framing();
     let context = format!("while building the frames of sample {}", sample.index);
-    let build = |scene| {
+    let build_scene = |scene| {
         build_framed(dataset, sample.index, scene, Some(framing))
             .map_err(|e| recipe.locate(&e.message, e.site.as_ref(), &context))
     };
-    for k in 0..motion.frames() {
-        let frame = build(motion.scene_at(&sample.scene, k))?;
+    let build = |k: usize| -> Result<SequenceFrame> {
+        let frame = build_scene(motion.scene_at(&sample.scene, k))?;
+        let trace_mesh = shared.get(&frame.mesh, frame.structure_triangles());
+        Ok(SequenceFrame::new(
+            frame,
+            sequence.time(k as u32),
+            trace_mesh,
+        ))
+    };
+    let frames = motion.frames();
+    let mut window = FrameWindow::new(build(0)?, dataset.outputs.wants("frame_flow"));
+    for k in 0..frames {
+        let next = if k + 1 < frames {
+            Some(build(k + 1)?)
+        } else {
+            None
+        };
         let index = k as u32;
         // With motion blur, the structures at each sub-instant of the exposure.
         let during = (motion.scenes_during(&sample.scene, k).into_iter())
-            .map(build)
+            .map(build_scene)
             .collect::<Result<Vec<_>, _>>()?;
         let exposure: Vec<(&BuiltSample, f64)> = during
             .iter()
@@ -131,25 +156,82 @@ pub fn write_sample(
             mount: None,
             motion_blur: (sequence.motion_blur > 0).then_some(sequence.motion_blur),
         };
-        write_still(recipe, &frame, shared, stage, Some(record), &exposure)?;
+        let still = Still {
+            trace_mesh: window.current.trace_mesh.clone(),
+            frame: Some(record),
+            neighbours: window.neighbours(next.as_ref()),
+            exposure: &exposure,
+        };
+        write_still(recipe, &window.current.sample, still, shared, stage)?;
+        if let Some(next) = next {
+            window.advance(next);
+        }
     }
     Ok(dataset.images_per_sample())
 }
 
+/// The frames of a sequence kept while one is written: it, and the one before when the flow
+/// between frames is asked for (else the previous frame is dropped at once).
+struct FrameWindow {
+    prev: Option<SequenceFrame>,
+    current: SequenceFrame,
+    keep_prev: bool,
+}
+
+impl FrameWindow {
+    fn new(first: SequenceFrame, keep_prev: bool) -> Self {
+        FrameWindow {
+            prev: None,
+            current: first,
+            keep_prev,
+        }
+    }
+
+    /// The frames around the current one, `next` built ahead (none unless the flow between
+    /// frames is asked for).
+    fn neighbours<'a>(&'a self, next: Option<&'a SequenceFrame>) -> FrameNeighbours<'a> {
+        if !self.keep_prev {
+            return FrameNeighbours::default();
+        }
+        FrameNeighbours {
+            prev: self.prev.as_ref(),
+            next,
+        }
+    }
+
+    /// Moves on to `next`.
+    fn advance(&mut self, next: SequenceFrame) {
+        let current = std::mem::replace(&mut self.current, next);
+        self.prev = self.keep_prev.then_some(current);
+    }
+}
+
+/// What a still is rendered with besides its sample: its mesh ready for tracing and, in a
+/// sequence, its frame and the frames around it.
+struct Still<'a> {
+    trace_mesh: Arc<TraceMesh>,
+    frame: Option<FrameRecord>,
+    neighbours: FrameNeighbours<'a>,
+    /// With motion blur, the structures at each sub-instant of the exposure, and when (empty:
+    /// the frame's instant alone).
+    exposure: &'a [(&'a BuiltSample, f64)],
+}
+
 /// Writes one still of the sample: its own files and every view, clean and augmented; in a
-/// sequence, frame `frame` of it, its RGB images averaged over `exposure` (the structures at
-/// each sub-instant of its motion blur, and when; empty: the frame's instant alone).
+/// sequence, frame `still.frame` of it, its RGB images averaged over `still.exposure`; the
+/// meshes of its sub-instants come from `shared`.
 fn write_still(
     recipe: &Recipe,
     sample: &BuiltSample,
+    still: Still,
     shared: &SharedTraceMeshes,
     stage: &mut SampleStage,
-    frame: Option<FrameRecord>,
-    exposure: &[(&BuiltSample, f64)],
 ) -> Result<()> {
     let dataset = &recipe.dataset;
-    let renderer = renderer_of(dataset, shared, sample);
-    let during: Vec<SubInstant> = (exposure.iter())
+    let frame = still.frame;
+    let renderer = SampleRenderer::with_trace_mesh(dataset, sample, still.trace_mesh)
+        .between(still.neighbours);
+    let during: Vec<SubInstant> = (still.exposure.iter())
         .map(|&(s, time)| SubInstant {
             renderer: renderer_of(dataset, shared, s),
             time,
@@ -243,22 +325,9 @@ fn for_each_image_at(
 ) -> Result<()> {
     let (dataset, sample) = (renderer.dataset(), renderer.sample());
     let augment = &dataset.augment;
-    let standing = view_camera(dataset, sample, view)?;
-    let path = (dataset.sequence.iter())
-        .flat_map(|s| &s.paths)
-        .find(|p| p.view == view);
-    // The view's camera at an instant: where its path has it, then shaken on its mount.
-    let at = |t: Option<f64>| {
-        let Some(t) = t else {
-            return standing;
-        };
-        let mut drawn = path.map_or(standing, |path| flown(standing, path, t));
-        if let Some(offset) = mount_offset(dataset, sample.index, view, t) {
-            drawn.camera = shaken(drawn.camera, &offset);
-        }
-        drawn
-    };
-    let drawn = at(time);
+    // The view's camera at an instant: where its path has it, shaken on its mount.
+    let at = |t: Option<f64>| frame_camera(dataset, sample, view, t);
+    let drawn = at(time)?;
     // Each image's camera from the view's camera as drawn (and shaken) at one instant.
     let expose = |rendered: &RenderedView, camera_of: &dyn Fn(&ViewCamera) -> Result<Camera>| {
         if during.is_empty() {
@@ -266,7 +335,7 @@ fn for_each_image_at(
         }
         let films = (during.iter())
             .map(|sub| {
-                let drawn = at(Some(sub.time));
+                let drawn = at(Some(sub.time))?;
                 let camera = camera_of(&drawn)?;
                 Ok(sub.renderer.view_with(view, camera, drawn).film())
             })
@@ -295,7 +364,7 @@ fn for_each_image_at(
         let rendered;
         let (base, warp) = match (augment.mode, geometry) {
             (GeometryMode::Exact, Some(_)) => {
-                rendered = renderer.view_with(view, camera, drawn);
+                rendered = renderer.view_with(view, camera, drawn).as_copy(copy);
                 let of = (sample.index, view, copy);
                 expose(&rendered, &|d| Ok(copy_camera(dataset, of, d)?.1))?;
                 (&rendered, None)

@@ -1,20 +1,22 @@
 //! Rendering the views of a built sample into memory: the camera of each view, its trace, and
 //! the layers writers and previews ask for, each computed once and only when asked for. The
 //! unloaded structure (for the rest image, its depth and the flow) is traced through a second
-//! BVH, built once per sample when a view first needs it.
+//! BVH, built once per sample when a view first needs it. In a sequence, a frame's renderer
+//! also holds the frames before and after it (`FrameNeighbours`), for the flow between frames.
 
-use super::augmented::{Applied, draw_sensor, photometric};
+use super::augmented::{Applied, copy_camera, draw_sensor, photometric};
 use super::damage::sample_damage;
+use super::sequence::{flown, mount_offset, shaken};
 use crate::augment::defocus_by_depth;
 use crate::build::{BackdropDraw, BuiltSample, draw_backdrop};
 use crate::cameras::{Camera, ViewDraw};
 use crate::materials::Backdrop;
 use crate::materials::cache::FieldCache;
-use crate::output::{DamageLayers, Flow, ViewLayers};
+use crate::output::{DamageLayers, Flow, FrameFlow, ViewLayers};
 use crate::render::{
     CacheSettings, DamagedSurfaces, Deformed, GBuffer, ImageVisibility, LightCache, NO_HIT,
-    SampleDamage, SampleSurfaces, SecondaryRays, SeenMesh, Shaded, Surfaces, TraceMesh, Traced,
-    ViewVisibility, displacement, flow, normals, ray_distance, shade,
+    OtherFrame, SampleDamage, SampleSurfaces, SecondaryRays, SeenMesh, Shaded, Surfaces, TraceMesh,
+    Traced, ViewVisibility, displacement, flow, frame_flow, normals, ray_distance, shade,
 };
 use crate::scene::{DatasetSpec, NormalsFrame, Shading};
 use crate::seeds::{self, Scope, Stream};
@@ -85,6 +87,87 @@ pub fn view_camera(dataset: &DatasetSpec, sample: &BuiltSample, view: u32) -> Re
     })
 }
 
+/// The camera of view `view` at instant `time` of a sequence (None for a still): the drawn
+/// camera, where its flight path has it then (if it has one), its mount displaced as the
+/// sequence's mount shake has it then.
+pub fn frame_camera(
+    dataset: &DatasetSpec,
+    sample: &BuiltSample,
+    view: u32,
+    time: Option<f64>,
+) -> Result<ViewCamera> {
+    let standing = view_camera(dataset, sample, view)?;
+    let Some(t) = time else {
+        return Ok(standing);
+    };
+    let path = (dataset.sequence.iter())
+        .flat_map(|s| &s.paths)
+        .find(|p| p.view == view);
+    let mut drawn = path.map_or(standing, |path| flown(standing, path, t));
+    if let Some(offset) = mount_offset(dataset, sample.index, view, t) {
+        drawn.camera = shaken(drawn.camera, &offset);
+    }
+    Ok(drawn)
+}
+
+/// One frame of a sequence as built, kept while its neighbours are rendered: its structures at
+/// its instant, its mesh ready for tracing and, on first use, its unloaded twin (where the flow
+/// between frames finds material points).
+pub struct SequenceFrame {
+    /// The sample as built at the frame's instant.
+    pub sample: BuiltSample,
+    /// The frame's instant, seconds.
+    pub time: f64,
+    /// The loaded mesh, ready for tracing.
+    pub trace_mesh: Arc<TraceMesh>,
+    rest: OnceLock<Traced>,
+}
+
+impl SequenceFrame {
+    /// Frame `sample`, built at `time`, with its mesh prepared for tracing.
+    pub fn new(sample: BuiltSample, time: f64, trace_mesh: Arc<TraceMesh>) -> Self {
+        SequenceFrame {
+            sample,
+            time,
+            trace_mesh,
+            rest: OnceLock::new(),
+        }
+    }
+
+    fn rest(&self) -> &Traced {
+        self.rest.get_or_init(|| unloaded_twin(&self.sample))
+    }
+
+    fn deformed(&self) -> Deformed<'_> {
+        deformed(&self.sample, &self.trace_mesh)
+    }
+}
+
+/// The unloaded structure of `sample` ready for tracing: its mesh's triangles over the
+/// undeformed vertices.
+fn unloaded_twin(sample: &BuiltSample) -> Traced {
+    Traced::with_positions(&sample.mesh, &sample.rest, sample.structure_triangles())
+}
+
+/// The loaded structure of `sample` (traced as `traced`) with its vertices' unloaded positions.
+fn deformed<'a>(sample: &'a BuiltSample, traced: &'a TraceMesh) -> Deformed<'a> {
+    Deformed {
+        mesh: &sample.mesh,
+        traced,
+        rest: &sample.rest,
+    }
+}
+
+/// The frames before and after the one being rendered (None at the ends of a sequence, and
+/// for a still).
+#[derive(Clone, Copy, Default)]
+pub struct FrameNeighbours<'a> {
+    /// The previous frame.
+    pub prev: Option<&'a SequenceFrame>,
+    /// The next frame.
+    pub next: Option<&'a SequenceFrame>,
+}
+
 /// Refuses a camera at or below the ground: it would see the ground's underside, or nothing
 /// of the structure. Cameras a few millimetres above it are fine.
 pub fn above_ground(sample: &BuiltSample, camera: &Camera, draw: &ViewDraw) -> Result<(), String> {
@@ -128,6 +211,8 @@ pub struct SampleRenderer<'a> {
     damage: Option<SampleDamage>,
     /// How finely those caches sample the light (the default, or `for_preview`'s).
     light_settings: CacheSettings,
+    /// In a sequence, the frames around this one.
+    neighbours: FrameNeighbours<'a>,
 }
 
 /// One view of a sample: its camera and centre-ray trace, with the other layers rendered on
@@ -158,6 +243,9 @@ pub struct RenderedView<'a> {
     rest_rgb: OnceLock<Shaded>,
     /// Whether the flow's occlusion rays were traced.
     flow_traced: AtomicBool,
+    /// The augmented copy rendered through its own camera, None for the clean view: the flow
+    /// between frames films the other frames through the copy's camera then.
+    copy: Option<u32>,
 }
 
 /// A view's layers, and how the ones asked for so far were found: rasterised or traced, and
@@ -195,6 +283,7 @@ impl<'a> SampleRenderer<'a> {
             light_caches: Default::default(),
             damage: sample_damage(sample),
             light_settings: CacheSettings::default(),
+            neighbours: FrameNeighbours::default(),
         }
     }
 
@@ -215,6 +304,11 @@ impl<'a> SampleRenderer<'a> {
             cache: fraction.map(FieldCache::new),
             ..self
         }
+    }
+
+    /// The same renderer for a frame of a sequence between `neighbours`.
+    pub fn between(self, neighbours: FrameNeighbours<'a>) -> Self {
+        SampleRenderer { neighbours, ..self }
     }
 
     /// Lattice points of material fields the cache holds (0 per pixel).
@@ -248,19 +342,12 @@ impl<'a> SampleRenderer<'a> {
     /// The unloaded structure ready for tracing, prepared on first use: the loaded mesh's
     /// triangles over the undeformed vertices.
     fn rest(&self) -> &Traced {
-        self.rest.get_or_init(|| {
-            let s = self.sample;
-            Traced::with_positions(&s.mesh, &s.rest, s.structure_triangles())
-        })
+        self.rest.get_or_init(|| unloaded_twin(self.sample))
     }
 
     /// The loaded structure with the undeformed position of every vertex.
     fn deformed(&self) -> Deformed<'_> {
-        Deformed {
-            mesh: &self.sample.mesh,
-            traced: &self.trace_mesh,
-            rest: &self.sample.rest,
-        }
+        deformed(self.sample, &self.trace_mesh)
     }
 
     /// The dataset the views belong to.
@@ -315,6 +402,7 @@ impl<'a> SampleRenderer<'a> {
             rest_gbuffer: OnceLock::new(),
             rest_rgb: OnceLock::new(),
             flow_traced: AtomicBool::new(false),
+            copy: None,
         }
     }
 }
@@ -344,6 +432,51 @@ fn without_ground(g: &GBuffer, first_ground: usize) -> GBuffer {
 }
 
 impl RenderedView<'_> {
+    /// The same view as augmented copy `copy`, rendered through the copy's camera.
+    pub fn as_copy(self, copy: u32) -> Self {
+        RenderedView {
+            copy: Some(copy),
+            ..self
+        }
+    }
+
+    /// This view's camera at frame `other` of the sequence: the drawn camera shaken as then,
+    /// moved as this copy's augmentation moves it. None if it cannot be drawn (the other
+    /// frame, rendering the same camera, then reports why).
+    fn camera_at(&self, other: &SequenceFrame) -> Option<Camera> {
+        let r = self.renderer;
+        let drawn = frame_camera(r.dataset, &other.sample, self.view, Some(other.time)).ok()?;
+        match self.copy {
+            None => Some(drawn.camera),
+            Some(copy) => copy_camera(r.dataset, (r.sample.index, self.view, copy), &drawn)
+                .ok()
+                .map(|(_, camera)| camera),
+        }
+    }
+
+    /// Flow from this frame's image to frame `other`'s (invalid everywhere without one).
+    fn flow_to(&self, other: Option<&SequenceFrame>) -> Flow {
+        let field = other.and_then(|other| {
+            let camera = self.camera_at(other)?;
+            self.flow_traced.store(true, Ordering::Relaxed);
+            let other = OtherFrame {
+                deformed: other.deformed(),
+                rest: other.rest(),
+                camera,
+            };
+            Some(frame_flow(
+                self.geometric(),
+                &self.camera,
+                &self.renderer.deformed(),
+                &other,
+            ))
+        });
+        match field {
+            Some(field) => Flow::from_field(&field),
+            None => Flow::invalid(self.gbuffer.triangle.len()),
+        }
+    }
+
     /// What the structures alone are seen as: the trace without the ground (the mask's).
     fn structure(&self) -> &GBuffer {
         let sample = self.renderer.sample;
@@ -597,12 +730,14 @@ impl ViewLayers for RenderedView<'_> {
             self.renderer.rest(),
             &self.renderer.deformed(),
         );
-        Flow {
-            vectors: field.iter().map(|f| f.unwrap_or_default()).collect(),
-            valid: field
-                .iter()
-                .map(|f| if f.is_some() { 255 } else { 0 })
-                .collect(),
+        Flow::from_field(&field)
+    }
+
+    fn frame_flow(&self) -> FrameFlow {
+        let neighbours = self.renderer.neighbours;
+        FrameFlow {
+            next: self.flow_to(neighbours.next),
+            prev: self.flow_to(neighbours.prev),
         }
     }
 

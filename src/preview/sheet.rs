@@ -99,13 +99,15 @@ enum Layer {
     Cracks,
     Normals,
     Flow,
+    /// The flow from a frame of a sequence to the next.
+    FrameFlow,
     Displacement,
     Damage,
 }
 
 /// Every column the sheet can show, in the sheet's order: the layer, its name in
 /// `dataset.outputs` and its title.
-const COLUMNS: [(Layer, &str, &str); 15] = [
+const COLUMNS: [(Layer, &str, &str); 16] = [
     (Layer::Rgb, "rgb", "RGB"),
     (Layer::RestRgb, "rest_rgb", "rest RGB"),
     (Layer::Depth, "depth", "depth"),
@@ -119,6 +121,7 @@ const COLUMNS: [(Layer, &str, &str); 15] = [
     (Layer::Cracks, "cracks", "cracks"),
     (Layer::Normals, "normals", "normals"),
     (Layer::Flow, "flow", "flow"),
+    (Layer::FrameFlow, "frame_flow", "flow to next frame"),
     (Layer::Displacement, "displacement", "displacement"),
     (Layer::Damage, "damage", "damage class"),
 ];
@@ -153,7 +156,7 @@ impl Layer {
             Layer::Valid => "nothing valid",
             Layer::Erased => "nothing erased",
             Layer::Cracks => "no cracks",
-            Layer::Flow => "no flow",
+            Layer::Flow | Layer::FrameFlow => "no flow",
             _ => "empty",
         }
     }
@@ -178,6 +181,7 @@ impl Layer {
             ),
             Layer::Normals => Cell::Normals(view.normals()),
             Layer::Flow => Cell::Flow(view.flow()),
+            Layer::FrameFlow => Cell::Flow(view.frame_flow().next),
             Layer::Displacement => Cell::Displacement(
                 view.displacement(),
                 view.depth().iter().map(|&z| z > 0.0).collect(),
@@ -359,6 +363,7 @@ fn needs_legend(layer: Layer) -> bool {
                 | Layer::Damage
                 | Layer::Normals
                 | Layer::Flow
+                | Layer::FrameFlow
                 | Layer::Displacement
         )
 }
@@ -857,7 +862,7 @@ impl Sheet<'_> {
                     }
                 }
                 Layer::Normals => Legend::Normals(self.dataset.normals),
-                Layer::Flow => Legend::Flow { max: ranges.flow },
+                Layer::Flow | Layer::FrameFlow => Legend::Flow { max: ranges.flow },
                 Layer::Parts | Layer::Instances | Layer::Damage => Legend::Names {
                     title: layer.title(),
                     names: ranges.names.get(&column).cloned().unwrap_or_default(),

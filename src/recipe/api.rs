@@ -207,6 +207,7 @@ fn dataset(map: Map, files: &RecipeFiles, site: SourceSite) -> OptResult<Dataset
     let sequence = super::time_api::sequence(o.sub("sequence")?, views)?;
     let outputs = outputs(o.take("outputs"))?;
     check_flow_warps(&outputs, &augment)?;
+    check_frame_flow(&outputs, sequence.is_some())?;
     let normals = normals_frame(o.string("normals", "camera")?)?;
     let points = o.integer(
         "points",
@@ -319,8 +320,21 @@ fn check_flow_warps(outputs: &Outputs, augment: &AugmentSpec) -> OptResult<()> {
     let warps = augment.copies > 0
         && augment.mode == GeometryMode::Image
         && augment.operations.iter().any(Operation::is_geometric);
-    if warps && outputs.wants("flow") {
-        return Err("dataset.outputs has \"flow\" and dataset.augment warps the images (mode \"image\"): flow is not defined on a warped image; use mode \"exact\" (the camera moves and the view is rendered again, flow included) or leave \"flow\" out".into());
+    for flow in ["flow", "frame_flow"] {
+        if warps && outputs.wants(flow) {
+            return Err(format!(
+                "dataset.outputs has \"{flow}\" and dataset.augment warps the images (mode \"image\"): flow is not defined on a warped image; use mode \"exact\" (the camera moves and the view is rendered again, flow included) or leave \"{flow}\" out"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The flow between frames needs frames: a still asking for it is refused rather than given
+/// files no pixel of which is valid.
+fn check_frame_flow(outputs: &Outputs, sequence: bool) -> OptResult<()> {
+    if outputs.wants("frame_flow") && !sequence {
+        return Err("dataset.outputs has \"frame_flow\" (flow between consecutive frames) but the dataset has no dataset.sequence: declare one, or use \"flow\" (unloaded -> loaded image) for a still".into());
     }
     Ok(())
 }

@@ -1,10 +1,13 @@
 //! Per-pixel geometric fields of a view beyond depth: surface normals, distance along the ray,
-//! displacement from the unloaded structure, and optical flow from the unloaded image to the
-//! loaded one. Every field follows the one centre ray per pixel the depth label uses (never
-//! anti-aliased); pixels that see no surface hold the default (zero, or None).
+//! displacement from the unloaded structure, optical flow from the unloaded image to the
+//! loaded one, and optical flow between frames of a sequence. Every field follows the one
+//! centre ray per pixel the depth label uses (never anti-aliased); pixels that see no surface
+//! hold the default (zero, or None).
 //!
 //! The unloaded and loaded meshes share their triangles and vertex order, so a surface point
-//! is carried between them by its barycentric weights on its triangle.
+//! is carried between them by its barycentric weights on its triangle. Two frames of a
+//! sequence may not (a beam's stations follow its moving loads): a point is found on the other
+//! frame's unloaded mesh by its unloaded position, then carried there the same way.
 
 use super::shade::{facing_normal, hit_geometry};
 use super::surfaces::barycentric;
@@ -111,6 +114,33 @@ fn occlusion_tolerance(camera: &Camera) -> f64 {
     8.0 / f64::from(1u32 << 24) + 0.01 / k.fx.max(k.fy)
 }
 
+/// Where world point `moved` lands in the image of `camera`, minus pixel (row, col)'s centre,
+/// in pixels (through the lens, when it distorts): None when it lies behind the camera or
+/// outside the frame, or when `scene` (traced from the camera towards it) hides it.
+fn landing(
+    camera: &Camera,
+    scene: &TraceMesh,
+    moved: DVec3,
+    (row, col): (u32, u32),
+) -> Option<[f32; 2]> {
+    let k = camera.intrinsics;
+    let (width, height) = (f64::from(k.width), f64::from(k.height));
+    let moved = camera.world_to_camera(moved);
+    if !(moved.z > 0.0) {
+        return None;
+    }
+    let (u, v) = k.project(moved);
+    if !((0.0..width).contains(&u) && (0.0..height).contains(&v)) {
+        return None;
+    }
+    let tolerance = occlusion_tolerance(camera);
+    let hidden = scene
+        .first_hit(camera, moved / moved.z)
+        .is_some_and(|(z, _)| f64::from(z) < moved.z * (1.0 - tolerance));
+    let (u0, v0) = (f64::from(col) + 0.5, f64::from(row) + 0.5);
+    (!hidden).then_some([(u - u0) as f32, (v - v0) as f32])
+}
+
 /// Optical flow on the unloaded image: for each pixel of `rest_g` (the unloaded structure
 /// `rest` traced through `camera`), where its surface point lands in the loaded image, minus the
 /// pixel centre, in pixels (through the lens, when it distorts). None where no surface is
@@ -123,24 +153,76 @@ pub fn flow(
     deformed: &Deformed,
 ) -> Vec<Option<[f32; 2]>> {
     let k = camera.intrinsics;
-    let (width, height) = (f64::from(k.width), f64::from(k.height));
-    let tolerance = occlusion_tolerance(camera);
     per_hit(rest_g, |row, col, tri, depth| {
         let view = k.ray_through_pixel(row, col);
         let (p, _, _) = hit_geometry(camera, &rest.trace_mesh, tri, view, depth);
-        let moved = camera.world_to_camera(carried(&rest.mesh, tri, p, &deformed.mesh.positions));
-        if !(moved.z > 0.0) {
-            return None;
-        }
-        let (u, v) = k.project(moved);
-        if !((0.0..width).contains(&u) && (0.0..height).contains(&v)) {
-            return None;
-        }
-        let hidden = deformed
-            .traced
-            .first_hit(camera, moved / moved.z)
-            .is_some_and(|(z, _)| f64::from(z) < moved.z * (1.0 - tolerance));
-        let (u0, v0) = (f64::from(col) + 0.5, f64::from(row) + 0.5);
-        (!hidden).then_some([(u - u0) as f32, (v - v0) as f32])
+        let moved = carried(&rest.mesh, tri, p, &deformed.mesh.positions);
+        landing(camera, deformed.traced, moved, (row, col))
+    })
+}
+
+/// Another frame of a sequence, as the flow between frames reads it: its structure as built at
+/// its instant, its unloaded twin (the same material points, its own tessellation) and the
+/// camera of the view then (its mount shaken as at that instant).
+pub struct OtherFrame<'a> {
+    /// The frame's loaded structure with its unloaded vertex positions.
+    pub deformed: Deformed<'a>,
+    /// The frame's unloaded structure, traced to find material points on it.
+    pub rest: &'a Traced,
+    /// The view's camera at that frame.
+    pub camera: Camera,
+}
+
+/// The triangle of `other`'s unloaded mesh holding the material point at unloaded position
+/// `at`, on a face of unit normal `normal` whose triangle's longest edge is `size`, and the point
+/// as it lies on that triangle's plane: a ray along the normal from just off the surface meets
+/// the same face of the other tessellation there (the unloaded surfaces of two frames are the
+/// same prisms and planes, tessellated differently). None where no face of the other frame
+/// passes through the point (within rounding: a millionth of the face, and of the distance
+/// from the origin for the f64 planes).
+fn located(other: &Traced, at: DVec3, normal: DVec3, size: f64) -> Option<(u32, DVec3)> {
+    let rounding = 1e-9 * at.length();
+    let lift = 1e-4 * size + 1e3 * rounding;
+    let (tri, found) = other.trace_mesh.first_along(at + lift * normal, -normal)?;
+    ((found - at).length() <= 1e-6 * size + rounding).then_some((tri, found))
+}
+
+/// Unit normal and longest edge of triangle `tri` of `mesh` at the vertex positions
+/// `positions`; None for a degenerate triangle.
+fn triangle_shape(mesh: &Mesh, tri: u32, positions: &[DVec3]) -> Option<(DVec3, f64)> {
+    let [a, b, c] = mesh.triangles[tri as usize].map(|i| positions[i as usize]);
+    let normal = (b - a).cross(c - a).try_normalize()?;
+    let size = (b - a).length().max((c - b).length()).max((a - c).length());
+    Some((normal, size))
+}
+
+/// Optical flow from this frame of a sequence to `other` (the next or the previous): for each
+/// pixel of `g` (this frame's loaded structure `this` traced through `camera`), the material
+/// point it sees is found on the other frame's unloaded structure by its unloaded position,
+/// carried to where the other frame's loaded structure has it, and projected through the other
+/// frame's camera; minus the pixel centre, in pixels. Exact when the frames tessellate the same
+/// unloaded surface differently (a beam's stations follow its moving loads). None where no
+/// surface is seen, where the point has no match on the other frame, lands behind its camera or
+/// outside its frame, or is hidden there (traced from that camera towards it).
+pub fn frame_flow(
+    g: &GBuffer,
+    camera: &Camera,
+    this: &Deformed,
+    other: &OtherFrame,
+) -> Vec<Option<[f32; 2]>> {
+    let k = camera.intrinsics;
+    per_hit(g, |row, col, tri, depth| {
+        let view = k.ray_through_pixel(row, col);
+        let (p, _, _) = hit_geometry(camera, this.traced, tri, view, depth);
+        let at = carried(this.mesh, tri, p, this.rest);
+        let (normal, size) = triangle_shape(this.mesh, tri, this.rest)?;
+        let (found, point) = located(other.rest, at, normal, size)?;
+        let moved = carried(
+            &other.rest.mesh,
+            found,
+            point,
+            &other.deformed.mesh.positions,
+        );
+        landing(&other.camera, other.deformed.traced, moved, (row, col))
     })
 }

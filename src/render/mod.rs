@@ -33,7 +33,7 @@ pub use damage::{
     DamageAt, DamageClass, DamagedPiece, DamagedSurfaces, FaceSegment, Mark, MarkShape, PieceFace,
     SampleDamage, SeenMesh,
 };
-pub use fields::{Deformed, displacement, flow, normals, ray_distance};
+pub use fields::{Deformed, OtherFrame, displacement, flow, frame_flow, normals, ray_distance};
 pub use light_cache::{CacheSettings, LightCache};
 pub use shade::{Shaded, Surfaces, shade};
 pub use shared_meshes::SharedTraceMeshes;

@@ -462,6 +462,15 @@ impl TraceMesh {
         self.closest_hit(camera.position - self.anchor, camera.rotation * view)
     }
 
+    /// The triangle first met by the ray from world point `origin` along `dir`, and where the
+    /// ray meets that triangle's plane (f64, world): the BVH picks the triangle in f32, its
+    /// plane places the point.
+    pub fn first_along(&self, origin: DVec3, dir: DVec3) -> Option<(u32, DVec3)> {
+        let (_, tri) = self.closest_hit(origin - self.anchor, dir)?;
+        let t = self.plane_hit(tri, origin, dir);
+        t.is_finite().then(|| (tri, origin + t * dir))
+    }
+
     /// Whether anything blocks the way from surface point `p` (world) with outward `normal`
     /// towards `direction`. The ray starts a little off the surface so that it cannot hit the
     /// triangle it leaves.
