@@ -12,6 +12,10 @@ use shmgen::recipe::Recipe;
 use std::path::Path;
 use std::time::Instant;
 
+#[path = "support/mod.rs"]
+mod support;
+use support::median;
+
 /// The outputs this benchmark prices, per view; depth and RGB for scale (the machine is shared
 /// and noisy, so ratios travel better than milliseconds).
 const PER_VIEW: [&str; 8] = [
@@ -27,11 +31,6 @@ const PER_VIEW: [&str; 8] = [
 const SAMPLES: u64 = 2;
 const VIEWS: u32 = 4;
 const RUNS: usize = 3;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 fn ms(start: Instant) -> f64 {
     start.elapsed().as_secs_f64() * 1e3

@@ -29,17 +29,9 @@ use shmgen::seeds::{Scope, Stream};
 use std::path::Path;
 use std::time::Instant;
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-fn setting(name: &str, default: u64) -> u64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
+#[path = "support/mod.rs"]
+mod support;
+use support::{median, setting};
 
 /// Texel bounds of the table (None: the per-pixel reference).
 const FRACTIONS: [Option<f64>; 5] = [None, Some(0.5), Some(1.0), Some(2.0), Some(4.0)];

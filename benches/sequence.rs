@@ -24,17 +24,9 @@ use shmgen::render::TraceMesh;
 use std::path::Path;
 use std::sync::Arc;
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-fn setting(name: &str, default: u64) -> u64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
+#[path = "support/mod.rs"]
+mod support;
+use support::{median, setting};
 
 /// CPU seconds this thread has used.
 fn thread_cpu_seconds() -> f64 {

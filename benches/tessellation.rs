@@ -13,10 +13,9 @@ use shmgen::scene::{BeamSpec, Tessellation};
 use shmgen::seeds::{Scope, Stream};
 use std::time::Instant;
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
+#[path = "support/mod.rs"]
+mod support;
+use support::median;
 
 /// A1-like beams: length 1 m, paper proportions, peak deflection 0.05 L.
 fn beams() -> Vec<(String, BeamSpec)> {
