@@ -26,7 +26,7 @@ use shmgen::cameras::Camera;
 use shmgen::materials::environment::EnvironmentMap;
 use shmgen::materials::{Backdrop, EnvironmentLight};
 use shmgen::output::{depth_exr, mask_png, rgb_png};
-use shmgen::pipeline::{self, RunOptions, Shard, prepare, view_camera};
+use shmgen::pipeline::{prepare, view_camera};
 use shmgen::recipe::Recipe;
 use shmgen::render::{
     CacheSettings, GBuffer, LightCache, NO_HIT, SampleSurfaces, TraceMesh, shade,
@@ -39,7 +39,7 @@ use std::time::Instant;
 
 #[path = "support/mod.rs"]
 mod support;
-use support::{median, setting};
+use support::{median, run_in_temp, setting};
 
 /// Environment variable under which the benchmark runs one streaming count in a child.
 const CHILD: &str = "SHMGEN_BENCH_STREAM_CHILD";
@@ -58,15 +58,7 @@ fn load(path: &Path, sets: &[(&str, &str)]) -> Recipe {
 
 /// One whole run into a fresh folder: (pairs per second, seconds).
 fn run_once(recipe: &Recipe, threads: usize) -> (f64, f64) {
-    let dir = tempfile::tempdir().unwrap();
-    let options = RunOptions {
-        out: dir.path().join("ds"),
-        threads: Some(threads),
-        shard: Shard::WHOLE,
-        force: false,
-        quiet: true,
-    };
-    let summary = pipeline::run(recipe, &options).expect("run");
+    let summary = run_in_temp(recipe, threads);
     (summary.pairs as f64 / summary.seconds, summary.seconds)
 }
 

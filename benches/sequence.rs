@@ -16,9 +16,7 @@
 
 use shmgen::build::build_framed;
 use shmgen::output::{SAMPLE_WRITERS, ViewLayers, WRITERS};
-use shmgen::pipeline::{
-    self, RunOptions, SampleGeometry, SampleMotion, SampleRenderer, Shard, prepare,
-};
+use shmgen::pipeline::{SampleGeometry, SampleMotion, SampleRenderer, prepare};
 use shmgen::recipe::Recipe;
 use shmgen::render::TraceMesh;
 use std::path::Path;
@@ -26,7 +24,7 @@ use std::sync::Arc;
 
 #[path = "support/mod.rs"]
 mod support;
-use support::{median, setting};
+use support::{median, run_in_temp, setting};
 
 /// CPU seconds this thread has used.
 fn thread_cpu_seconds() -> f64 {
@@ -61,16 +59,8 @@ fn monitoring(sets: &[(&str, &str)]) -> Recipe {
 /// One whole run into a fresh folder on `threads` threads: (rig frames per second of wall
 /// time, CPU milliseconds per rig frame).
 fn run_once(recipe: &Recipe, threads: usize) -> (f64, f64) {
-    let dir = tempfile::tempdir().unwrap();
-    let options = RunOptions {
-        out: dir.path().join("ds"),
-        threads: Some(threads),
-        shard: Shard::WHOLE,
-        force: false,
-        quiet: true,
-    };
     let cpu = process_cpu_seconds();
-    let summary = pipeline::run(recipe, &options).expect("run");
+    let summary = run_in_temp(recipe, threads);
     let cpu = process_cpu_seconds() - cpu;
     let frames = summary.pairs as f64 / f64::from(recipe.dataset.cameras_per_sample());
     (frames / summary.seconds, 1e3 * cpu / frames)

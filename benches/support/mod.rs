@@ -16,3 +16,20 @@ pub fn setting(name: &str, default: u64) -> u64 {
         .and_then(|v| v.parse().ok())
         .unwrap_or(default)
 }
+
+/// One whole quiet run of `recipe` into a fresh temporary folder on `threads` threads.
+#[allow(dead_code)]
+pub fn run_in_temp(
+    recipe: &shmgen::recipe::Recipe,
+    threads: usize,
+) -> shmgen::pipeline::RunSummary {
+    let dir = tempfile::tempdir().unwrap();
+    let options = shmgen::pipeline::RunOptions {
+        out: dir.path().join("ds"),
+        threads: Some(threads),
+        shard: shmgen::pipeline::Shard::WHOLE,
+        force: false,
+        quiet: true,
+    };
+    shmgen::pipeline::run(recipe, &options).expect("run")
+}
