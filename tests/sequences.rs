@@ -1,7 +1,7 @@
 //! Monitoring sequences seen from outside: a recipe declaring `dataset.sequence` and time loads
 //! on a beam, run by the binary. Frames of a load history that has stopped changing are the
 //! still of that load, byte for byte; each frame's deflection is the modal response at its
-//! instant; runs are the same on any thread count and after a kill mid-sequence; bad values are
+//! instant; runs are the same on any thread count, split into shards and after a kill mid-sequence; bad values are
 //! refused at their line with their value.
 
 mod common;
@@ -197,7 +197,7 @@ fn monitoring(out: &Path, extra: &[&str]) -> std::process::Output {
 }
 
 #[test]
-fn sequences_are_the_same_bytes_on_any_thread_count_and_after_a_kill() {
+fn sequences_are_the_same_bytes_on_any_thread_count_shard_split_and_after_a_kill() {
     let dir = tempfile::tempdir().unwrap();
     let one = dir.path().join("one");
     let two = dir.path().join("two");
@@ -206,6 +206,11 @@ fn sequences_are_the_same_bytes_on_any_thread_count_and_after_a_kill() {
     let reference = hashes(&one);
     assert!(reference.keys().any(|f| f.ends_with("_01_f0014.rgb.png")));
     assert_eq!(reference, hashes(&two));
+    // Two shards (by sample) into one folder, the second on one thread.
+    let sharded = dir.path().join("sharded");
+    ok(monitoring(&sharded, &["--shard", "1/2"]));
+    ok(monitoring(&sharded, &["--shard", "0/2", "--threads", "1"]));
+    assert_eq!(reference, hashes(&sharded));
 
     // Killed once the first sample is listed: the second is then mid-sequence.
     let killed = dir.path().join("killed");
