@@ -1,8 +1,8 @@
 //! Monitoring sequences seen from outside: a recipe declaring `dataset.sequence` and time loads
 //! on a beam, run by the binary. Frames of a load history that has stopped changing are the
 //! still of that load, byte for byte; each frame's deflection is the modal response at its
-//! instant; runs are the same on any thread count, split into shards and after a kill mid-sequence; bad values are
-//! refused at their line with their value.
+//! instant; runs are the same on any thread count, split into shards and after a kill
+//! mid-sequence; bad values are refused at their line with their value.
 
 mod common;
 
