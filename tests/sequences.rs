@@ -509,6 +509,38 @@ fn a_flying_camera_is_written_where_its_path_is_and_sees_fixed_points_where_they
 }
 
 #[test]
+fn a_flying_camera_looks_at_the_target_its_waypoints_sweep_between() {
+    // A pass along the beam whose gaze sweeps from its left end to its right end; the middle
+    // waypoint takes the path's target.
+    let path = "#{ view: 0, target: [1.0, 0.0, 0.0], waypoints: [
+        [0.0, [0.4, -3.0, 0.5], [0.0, 0.0, 0.0]],
+        [0.1, [1.0, -3.0, 0.5]],
+        [0.2, [1.6, -3.0, 0.5], [2.0, 0.0, 0.1]] ] }";
+    let (_dir, out) = render(&flight_recipe(path), &[]);
+    for k in 0..4u32 {
+        let t = f64::from(k) / 20.0;
+        let s = (t / 0.1).fract();
+        let (from, to) = if t < 0.1 {
+            ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0])
+        } else {
+            ([1.0, 0.0, 0.0], [2.0, 0.0, 0.1])
+        };
+        let aim: [f64; 3] = std::array::from_fn(|i| from[i] + s * (to[i] - from[i]));
+        let record = read_json(&out.join(format!("samples/0000/000000_00_f{k:04}.json")));
+        let w2c: [[f64; 4]; 4] = common::matrix(&record["camera"]["w2c_opencv"]);
+        // The point aimed at then lies on the optical axis, in front of the camera.
+        let c = common::transform(&w2c, aim);
+        assert!(
+            c[0].abs() < 1e-9 && c[1].abs() < 1e-9 && c[2] > 0.0,
+            "frame {k}: {aim:?} seen at {c:?}"
+        );
+        // The camera stays level: world z up is in the image's vertical plane.
+        let right = [w2c[0][0], w2c[0][1], w2c[0][2]];
+        assert!(right[2].abs() < 1e-12, "frame {k}: {right:?}");
+    }
+}
+
+#[test]
 fn bad_flight_paths_are_refused_at_the_dataset_call_with_their_value() {
     let dir = tempfile::tempdir().unwrap();
     let cases = [
@@ -531,6 +563,14 @@ fn bad_flight_paths_are_refused_at_the_dataset_call_with_their_value() {
         (
             "#{ view: 0, from: [0.0, -3.0, 0.0], target: [1.0, 0.0, 0.0] }",
             "takes either waypoints",
+        ),
+        (
+            "#{ view: 0, waypoints: [[0.0, [0.0, -3.0, 0.0], [1.0, 0.0, 0.0]], [0.1, [1.0, -3.0, 0.0]]] }",
+            "[1] = [0.1, [1.0, -3.0, 0.0]] has no target of its own and the path no `target`",
+        ),
+        (
+            "#{ view: 0, waypoints: [[0.0, [0.0, -3.0, 0.0], [2.0, -3.0, 0.0]], [0.2, [2.0, -3.0, 0.0], [0.0, -3.0, 0.0]]] }",
+            "passes through its target [1.0, -3.0, 0.0] (at [1.0, -3.0, 0.0], t = 0.1 s)",
         ),
     ];
     for (i, (path, says)) in cases.into_iter().enumerate() {

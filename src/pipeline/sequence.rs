@@ -315,16 +315,18 @@ fn linear_at(values: &[f64], s: f64) -> f64 {
 }
 
 /// The view's camera `drawn` at `time` of its flight `path`: the rig's lens at the path's
-/// position then, looking at its target with world z up (recorded as the view's aim).
+/// position then, looking at its target then with world z up (recorded as the view's aim).
 pub fn flown(drawn: ViewCamera, path: &CameraPath, time: f64) -> ViewCamera {
     let position = DVec3::from_array(path.position_at(time));
-    let target = DVec3::from_array(path.target);
+    let aim = path.target_at(time);
     ViewCamera {
-        camera: Camera::look_at(drawn.camera.intrinsics, position, target, DVec3::Z),
-        draw: ViewDraw {
-            aim: path.target,
-            ..drawn.draw
-        },
+        camera: Camera::look_at(
+            drawn.camera.intrinsics,
+            position,
+            DVec3::from_array(aim),
+            DVec3::Z,
+        ),
+        draw: ViewDraw { aim, ..drawn.draw },
         ..drawn
     }
 }

@@ -71,8 +71,10 @@ pub(super) fn sequence(options: Option<Options>, views: u32) -> OptResult<Option
     }
 }
 
-/// `sequence.paths`: `[#{ view, waypoints: [[time, [x, y, z]], ...], target }, ...]`, or a
-/// straight flight `#{ view, from, to, target }` from `from` at t = 0 to `to` at the end.
+/// `sequence.paths`: `[#{ view, waypoints: [[time, [x, y, z]], ...], target }, ...]`, each
+/// waypoint optionally with its own target (`[time, [x, y, z], [tx, ty, tz]]`, `target` then
+/// the default of the others), or a straight flight `#{ view, from, to, target }` from `from`
+/// at t = 0 to `to` at the end.
 fn camera_paths(list: &Dynamic, at: &str, duration: f64) -> OptResult<Vec<CameraPath>> {
     let items = list.clone().try_cast::<Array>().ok_or_else(|| {
         format!("{at} = {list} must be a list of paths like [#{{ view, waypoints, target }}]")
@@ -95,21 +97,19 @@ fn camera_path(mut o: Options, here: &str, duration: f64) -> OptResult<CameraPat
     let view = (view.as_int().ok())
         .and_then(|v| u32::try_from(v).ok())
         .ok_or_else(|| format!("{here}.view = {view} must be a view index, a whole number ≥ 0"))?;
-    let target = o
-        .point("target")?
-        .ok_or_else(|| format!("missing option `{}`", o.path("target")))?;
+    let target = o.point("target")?;
+    let missing_target = format!("missing option `{}`", o.path("target"));
     let waypoints = match (o.take("waypoints"), o.point("from")?, o.point("to")?) {
-        (Some(list), None, None) => waypoints(&list, &o.path("waypoints"))?,
-        (None, Some(from), Some(to)) => vec![
-            Waypoint {
-                time: 0.0,
-                position: from,
-            },
-            Waypoint {
-                time: duration,
-                position: to,
-            },
-        ],
+        (Some(list), None, None) => waypoints(&list, &o.path("waypoints"), target)?,
+        (None, Some(from), Some(to)) => {
+            let target = target.ok_or(missing_target)?;
+            let at = |time, position| Waypoint {
+                time,
+                position,
+                target,
+            };
+            vec![at(0.0, from), at(duration, to)]
+        }
         _ => {
             return Err(format!(
                 "{here} takes either waypoints: [[time, [x, y, z]], ...] or both from and to"
@@ -117,31 +117,42 @@ fn camera_path(mut o: Options, here: &str, duration: f64) -> OptResult<CameraPat
         }
     };
     o.finish()?;
-    Ok(CameraPath {
-        view,
-        waypoints,
-        target,
-    })
+    Ok(CameraPath { view, waypoints })
 }
 
-/// `[[time, [x, y, z]], ...]`.
-fn waypoints(list: &Dynamic, at: &str) -> OptResult<Vec<Waypoint>> {
-    let shape = || format!("{at} = {list} must be a list of [time, [x, y, z]]");
+/// `[[time, [x, y, z]], ...]`, an entry `[time, [x, y, z], [tx, ty, tz]]` with its own target;
+/// the others look at `target`, which they then need.
+fn waypoints(list: &Dynamic, at: &str, target: Option<[f64; 3]>) -> OptResult<Vec<Waypoint>> {
+    let shape = || {
+        format!(
+            "{at} = {list} must be a list of [time, [x, y, z]] or [time, [x, y, z], [tx, ty, tz]]"
+        )
+    };
+    let point = |item: &Dynamic, what: &str| -> OptResult<[f64; 3]> {
+        let xyz = item.clone().try_cast::<Array>().filter(|p| p.len() == 3);
+        let xyz = xyz.ok_or_else(shape)?;
+        let axis = |i: usize, name: &str| number(&xyz[i], &format!("{at} {what}{name}"));
+        Ok([axis(0, "x")?, axis(1, "y")?, axis(2, "z")?])
+    };
     let items = list.clone().try_cast::<Array>().ok_or_else(shape)?;
     items
         .iter()
-        .map(|item| {
-            let pair = item.clone().try_cast::<Array>().filter(|p| p.len() == 2);
-            let pair = pair.ok_or_else(shape)?;
-            let xyz = pair[1].clone().try_cast::<Array>().filter(|p| p.len() == 3);
-            let xyz = xyz.ok_or_else(shape)?;
+        .enumerate()
+        .map(|(j, item)| {
+            let entry = item.clone().try_cast::<Array>();
+            let entry = entry
+                .filter(|p| (2..=3).contains(&p.len()))
+                .ok_or_else(shape)?;
+            let target = match entry.get(2) {
+                Some(own) => point(own, "t")?,
+                None => target.ok_or_else(|| {
+                    format!("{at}[{j}] = {item} has no target of its own and the path no `target`")
+                })?,
+            };
             Ok(Waypoint {
-                time: number(&pair[0], &format!("{at} time"))?,
-                position: [
-                    number(&xyz[0], &format!("{at} x"))?,
-                    number(&xyz[1], &format!("{at} y"))?,
-                    number(&xyz[2], &format!("{at} z"))?,
-                ],
+                time: number(&entry[0], &format!("{at} time"))?,
+                position: point(&entry[1], "")?,
+                target,
             })
         })
         .collect()

@@ -46,40 +46,53 @@ pub struct SequenceSpec {
 
 /// A view's camera flying over the sequence: its centre of projection moves through the
 /// waypoints, straight between them at constant speed (held before the first and after the
-/// last), always looking at `target` with world z up; its lens is the rig's.
+/// last), looking with world z up at the point its waypoints aim at, which moves between them
+/// likewise (a drone sweeping its gaze along a girder); its lens is the rig's.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct CameraPath {
     /// The view (camera index in the rig) that flies.
     pub view: u32,
-    /// Where the camera is when, in increasing time.
+    /// Where the camera is and what it looks at when, in increasing time.
     pub waypoints: Vec<Waypoint>,
-    /// The point it looks at, world metres.
-    pub target: [f64; 3],
 }
 
-/// A point of a camera's path: where its centre of projection is at `time`.
+/// A point of a camera's path: where its centre of projection is at `time`, and the point it
+/// looks at then.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Waypoint {
     /// Seconds from the start of the sequence.
     pub time: f64,
     /// World metres.
     pub position: [f64; 3],
+    /// The point looked at, world metres.
+    pub target: [f64; 3],
 }
 
 impl CameraPath {
     /// Where the camera is at `time`: linear between the waypoints around it, held outside.
     pub fn position_at(&self, time: f64) -> [f64; 3] {
+        self.along(time, |w| w.position)
+    }
+
+    /// The point the camera looks at at `time`: linear between the waypoints around it, held
+    /// outside.
+    pub fn target_at(&self, time: f64) -> [f64; 3] {
+        self.along(time, |w| w.target)
+    }
+
+    /// The point `of` each waypoint, at `time` between the waypoints around it.
+    fn along(&self, time: f64, of: impl Fn(&Waypoint) -> [f64; 3]) -> [f64; 3] {
         let w = &self.waypoints;
         let after = w.partition_point(|p| p.time <= time);
         if after == 0 {
-            return w[0].position;
+            return of(&w[0]);
         }
         if after == w.len() {
-            return w[w.len() - 1].position;
+            return of(&w[w.len() - 1]);
         }
-        let (a, b) = (w[after - 1], w[after]);
-        let s = (time - a.time) / (b.time - a.time);
-        std::array::from_fn(|i| a.position[i] + s * (b.position[i] - a.position[i]))
+        let (a, b) = (of(&w[after - 1]), of(&w[after]));
+        let s = (time - w[after - 1].time) / (w[after].time - w[after - 1].time);
+        std::array::from_fn(|i| a[i] + s * (b[i] - a[i]))
     }
 
     /// The problem with the path of entry `i` of `sequence.paths`, naming the value; None when
@@ -99,12 +112,6 @@ impl CameraPath {
             ));
         }
         let finite = |p: &[f64; 3]| p.iter().all(|c| c.is_finite());
-        if !finite(&self.target) {
-            return Some(format!(
-                "{at}.target = {:?} must be a finite point",
-                self.target
-            ));
-        }
         let mut last = f64::NEG_INFINITY;
         for (j, w) in self.waypoints.iter().enumerate() {
             if !(w.time.is_finite() && w.time > last) {
@@ -119,33 +126,39 @@ impl CameraPath {
                     w.position
                 ));
             }
+            if !finite(&w.target) {
+                return Some(format!(
+                    "{at}.waypoints[{j}]: target {:?} must be a finite point",
+                    w.target
+                ));
+            }
             last = w.time;
         }
         self.passes_through_target(&at)
     }
 
-    /// Refuses a path that passes through its target: the camera would look nowhere there.
+    /// Refuses a path whose camera reaches the point it looks at: it would look nowhere there.
+    /// Between two waypoints the gaze (target − position) moves linearly too, so it vanishes
+    /// on a leg only where the segment between its two ends passes through zero.
     fn passes_through_target(&self, at: &str) -> Option<String> {
-        let target = glam::DVec3::from_array(self.target);
-        let legs = self
-            .waypoints
-            .windows(2)
-            .map(|w| (w[0].position, w[1].position));
-        let first = self.waypoints[0].position;
-        std::iter::once((first, first)).chain(legs).find_map(|(a, b)| {
-            let (a, b) = (glam::DVec3::from_array(a), glam::DVec3::from_array(b));
-            let along = (b - a).length_squared();
+        let gaze =
+            |w: &Waypoint| glam::DVec3::from_array(w.target) - glam::DVec3::from_array(w.position);
+        let first = &self.waypoints[0];
+        let legs = self.waypoints.windows(2).map(|w| (w[0], w[1]));
+        std::iter::once((*first, *first)).chain(legs).find_map(|(a, b)| {
+            let (ga, gb) = (gaze(&a), gaze(&b));
+            let along = (gb - ga).length_squared();
             let s = if along > 0.0 {
-                ((target - a).dot(b - a) / along).clamp(0.0, 1.0)
+                (-ga.dot(gb - ga) / along).clamp(0.0, 1.0)
             } else {
                 0.0
             };
-            let closest = a + s * (b - a);
-            (closest.distance(target) < 1e-6).then(|| {
+            ((ga + s * (gb - ga)).length() < 1e-6).then(|| {
+                let time = a.time + s * (b.time - a.time);
                 format!(
-                    "{at}: the camera passes through its target {:?} (at {:?}) and would look nowhere there",
-                    self.target,
-                    closest.to_array()
+                    "{at}: the camera passes through its target {:?} (at {:?}, t = {time} s) and would look nowhere there",
+                    self.target_at(time),
+                    self.position_at(time)
                 )
             })
         })
@@ -320,9 +333,12 @@ mod tests {
             view: 0,
             waypoints: waypoints
                 .iter()
-                .map(|&(time, position)| Waypoint { time, position })
+                .map(|&(time, position)| Waypoint {
+                    time,
+                    position,
+                    target: [0.0, 0.0, 0.0],
+                })
                 .collect(),
-            target: [0.0, 0.0, 0.0],
         }
     }
 
@@ -347,6 +363,27 @@ mod tests {
         assert!(why(through, 1).contains("passes through its target [0.0, 0.0, 0.0]"));
         let nan = flight(&[(0.0, [f64::NAN, 0.0, 1.0])]);
         assert!(why(nan, 1).contains("position [NaN, 0.0, 1.0]"));
+        let mut aimless = ok.clone();
+        aimless.waypoints[1].target = [0.0, f64::INFINITY, 0.0];
+        assert!(why(aimless, 1).contains("waypoints[1]: target [0.0, inf, 0.0]"));
+        // A gaze sweeping along with the camera: the two meet halfway, at t = 0.5 s.
+        let mut chased = ok;
+        chased.waypoints[0].target = [2.0, -4.0, 1.0];
+        chased.waypoints[1].target = [-1.0, -4.0, 1.0];
+        assert!(why(chased, 1).contains(
+            "passes through its target [0.5, -4.0, 1.0] (at [0.5, -4.0, 1.0], t = 0.5 s)"
+        ));
+    }
+
+    #[test]
+    fn a_camera_gaze_sweeps_between_the_targets_of_its_waypoints() {
+        let mut path = flight(&[(1.0, [0.0, -4.0, 1.0]), (3.0, [4.0, -4.0, 3.0])]);
+        path.waypoints[0].target = [0.0, 0.0, 0.0];
+        path.waypoints[1].target = [8.0, 0.0, 2.0];
+        assert_eq!(path.target_at(0.0), [0.0, 0.0, 0.0]);
+        assert_eq!(path.target_at(2.0), [4.0, 0.0, 1.0]);
+        assert_eq!(path.target_at(9.0), [8.0, 0.0, 2.0]);
+        assert_eq!(path.problem(0, 1), None);
     }
 
     #[test]
