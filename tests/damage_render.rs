@@ -320,3 +320,72 @@ fn a_crack_no_view_resolves_is_warned_about_with_its_width_and_pixel_size() {
     let output = run(&path, &dir.path().join("near"), &[]);
     assert!(!stderr(&output).contains("warning"), "{}", stderr(&output));
 }
+
+/// A 4 m steel I-girder (300 × 500 mm, 30 mm flanges, 15 mm web) along x, centred on the
+/// origin, seen from −y and 25° above, its bottom corroded along the whole span (or sound).
+fn girder_recipe(corroded: bool) -> String {
+    let corrosion = r#".corrosion(#{ from: 0.0, to: 4.0, faces: ["bottom"], section_loss: 0.05, stain_length: 0.1 })"#;
+    format!(
+        r#"
+dataset(#{{
+    name: "girder", seed: 3, samples: 1, views: 1,
+    outputs: ["rgb", "depth", "mask", "displacement", "damage"],
+    camera: #{{ width: 320, height: 240, fov_y: deg(40), distance: [1.5, 1.5],
+               pitch: [deg(25), deg(25)], yaw: [deg(-90), deg(-90)] }},
+    scene: |rng| {{
+        beam(#{{ length: 4.0, section: i_section(0.3, 0.5, 0.03, 0.015) }})
+            .point_force(2.0, 1.0e3){}
+            .material("A photo of a painted steel beam")
+    }},
+}});
+"#,
+        if corroded { corrosion } else { "" }
+    )
+}
+
+#[test]
+fn a_corroded_bottom_flange_is_rusty_on_top_and_at_its_junction_with_the_web() {
+    let (_a, out) = render(&girder_recipe(true), &[]);
+    let (_b, sound_out) = render(&girder_recipe(false), &[]);
+    let (v, sound) = (damage_view(&out), damage_view(&sound_out));
+    // The bottom flange (z from −0.25 to −0.22) and one flange thickness of web above it.
+    let reach = -0.25 + 2.0 * 0.03;
+    let (mut band, mut above) = (Vec::new(), Vec::new());
+    for (i, rest) in v.rest.iter().enumerate() {
+        let Some(p) = rest else { continue };
+        if p[0].abs() > 1.5 {
+            continue;
+        }
+        if p[2] < reach - 2e-3 {
+            band.push(i);
+        } else if p[2] > reach + 2e-3 {
+            above.push(i);
+        }
+    }
+    // The camera looks down on the flange: its top surface and edge are in view.
+    assert!(band.len() > 500, "{} flange pixels", band.len());
+    let rusty = band.iter().filter(|&&i| v.class[i] == 4).count();
+    assert!(
+        rusty as f64 > 0.98 * band.len() as f64,
+        "{rusty} of {} flange pixels labelled corrosion",
+        band.len()
+    );
+    assert!(above.iter().all(|&i| v.class[i] == 0));
+    // Drawn so: browner and darker than the sound girder's same pixels.
+    let mean = |rgb: &[u8], channel: usize| {
+        band.iter()
+            .map(|&i| f64::from(rgb[3 * i + channel]))
+            .sum::<f64>()
+            / band.len() as f64
+    };
+    let (r, b) = (mean(&v.rgb, 0), mean(&v.rgb, 2));
+    let (r0, b0) = (mean(&sound.rgb, 0), mean(&sound.rgb, 2));
+    assert!(
+        r / b > 1.3 * (r0 / b0),
+        "red/blue {r}/{b} against sound {r0}/{b0}"
+    );
+    assert!(
+        r + b < 0.8 * (r0 + b0),
+        "{r} + {b} against sound {r0} + {b0}"
+    );
+}

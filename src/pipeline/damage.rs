@@ -7,6 +7,7 @@
 
 use crate::build::{BuiltSample, Relief, spall_bars};
 use crate::cameras::Camera;
+use crate::mechanics::Section;
 use crate::mechanics::damage::{Damage, DamageShape, Face, SurfacePoint};
 use crate::render::{
     DamageClass, DamagedPiece, FaceSegment, Mark, MarkShape, PieceFace, SampleDamage,
@@ -87,6 +88,17 @@ fn rust_strength(section_loss: f64) -> f64 {
     (0.45 + 0.5 * (section_loss / 0.15)).min(0.95)
 }
 
+/// How far above the underside a corroded bottom reaches on every face: on an I-section the
+/// bottom flange (its underside, edges and top, where water and debris lie) and the foot of
+/// the web over one more flange thickness (the flange–web junction, where the FHWA manual
+/// finds corrosion concentrated); 0 on other sections, whose underside is one face.
+fn bottom_flange_reach(section: &Section) -> f64 {
+    match section {
+        Section::ISection { flange, .. } => 2.0 * flange,
+        _ => 0.0,
+    }
+}
+
 /// The mark of damage `index` of `beam`.
 fn mark(beam: &BeamSpec, index: usize, damage: &Damage) -> Mark {
     let reach = Relief::of(damage).map_or(0.0, |r| r.reach());
@@ -132,6 +144,7 @@ fn mark(beam: &BeamSpec, index: usize, damage: &Damage) -> Mark {
             DamageClass::Corrosion,
             MarkShape::Corrosion {
                 faces: faces.iter().copied().map(piece_face).collect(),
+                rises: bottom_flange_reach(&beam.section),
                 from: *from,
                 to: *to,
                 strength: rust_strength(*section_loss),

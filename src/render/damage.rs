@@ -156,6 +156,10 @@ pub enum MarkShape {
     Corrosion {
         /// The faces.
         faces: Vec<PieceFace>,
+        /// With the bottom among `faces`: how far above the underside every face is corroded
+        /// too, metres (an I-section's bottom flange, on which water and debris lie, and its
+        /// junction with the web; 0 for sections whose underside is one face).
+        rises: f64,
         /// Start along the axis, metres.
         from: f64,
         /// End, metres.
@@ -378,8 +382,9 @@ fn pitting(p: DVec2, salt: u64) -> f64 {
 impl DamagedPiece {
     /// The damage a pixel's footprint shows: the crack covering most of it, else a spall, a
     /// dent or corrosion (first of the piece's marks of that kind); rust is reported wherever
-    /// corrosion lies, under any crack.
-    pub fn at(&self, footprint: &Footprint, face: PieceFace) -> DamageAt {
+    /// corrosion lies, under any crack. On an inner face (an I's flange seen from the web's
+    /// side) only a corroded bottom's rise reaches.
+    pub fn at(&self, footprint: &Footprint, face: PieceFace, outer: bool) -> DamageAt {
         let p = face.coordinates(footprint.point);
         let (du, dv) = (
             face.coordinates(footprint.du),
@@ -388,6 +393,9 @@ impl DamagedPiece {
         let mut found = DamageAt::default();
         let mut region: Option<(DamageClass, u16)> = None;
         for mark in &self.marks {
+            if !outer && !matches!(mark.shape, MarkShape::Corrosion { .. }) {
+                continue;
+            }
             let covered = |(offset, normal): (f64, DVec2), width: f64| {
                 crack_piece_coverage(offset, normal, width, du, dv)
             };
@@ -408,12 +416,21 @@ impl DamagedPiece {
                 }
                 MarkShape::Corrosion {
                     faces,
+                    rises,
                     from,
                     to,
                     strength,
                     stain_length,
                 } if (*from..=*to).contains(&p.x) => {
-                    let rust = self.rust(p, face, faces, *strength, *stain_length);
+                    let low = faces.contains(&PieceFace::Bottom)
+                        && footprint.point.z <= *rises - self.half_height;
+                    let rust = if low {
+                        *strength
+                    } else if outer {
+                        self.rust(p, face, faces, *strength, *stain_length)
+                    } else {
+                        0.0
+                    };
                     if rust > 0.0 {
                         found.rust = found.rust.max(rust * pitting(p, u64::from(mark.instance)));
                         region = Some(prevailing(region, (mark.class, mark.instance)));
@@ -599,15 +616,11 @@ impl SampleDamage {
         let [a, b, c] = seen.mesh.triangles[tri as usize].map(|i| seen.rest[i as usize]);
         let rest_normal = piece.rotation.transpose() * (b - a).cross(c - a).normalize_or_zero();
         let face = PieceFace::facing(rest_normal)?;
-        // Top and bottom are the outer faces only (not the inner faces of an I's flanges).
-        if !face.is_side() {
-            let z = local.z;
-            if (z.abs() - piece.half_height).abs() > 0.01 * piece.half_height {
-                return None;
-            }
-        }
+        // Top and bottom are the outer faces (not the inner faces of an I's flanges).
+        let outer =
+            face.is_side() || (local.z.abs() - piece.half_height).abs() <= 0.01 * piece.half_height;
         let footprint = footprint(seen, tri, p, uv, piece)?;
-        Some(piece.at(&footprint, face))
+        Some(piece.at(&footprint, face, outer))
     }
 
     /// The per-pixel damage labels of what `g` saw through `camera` on `seen`.
@@ -717,6 +730,8 @@ const CRACK_ALBEDO: [f64; 3] = [0.02, 0.018, 0.016];
 /// Linear albedo of dense rust: dark brown (FHWA: corrosion "dark brown to black" where
 /// active, with orange-brown stains).
 const RUST_ALBEDO: [f64; 3] = [0.09, 0.035, 0.012];
+/// Linear albedo of light surface rust and stains: orange-brown.
+const SURFACE_RUST_ALBEDO: [f64; 3] = [0.25, 0.09, 0.03];
 /// What a spall's cavity keeps of the light beyond the shadows its walls now cast: fresh
 /// fracture surfaces of concrete are rougher and dustier than the formed face.
 const SPALL_SHADE: f64 = 0.8;
@@ -730,9 +745,13 @@ pub fn drawn(mut surface: Surface, d: &DamageAt) -> Surface {
         std::array::from_fn(|k| base[k] * (1.0 - t) + to[k] * t)
     };
     if d.rust > 0.0 {
-        surface.albedo = mix(surface.albedo, RUST_ALBEDO, d.rust.clamp(0.0, 1.0));
+        // Rust hides the coat over more of the surface than its density alone says (paint
+        // lifts around each pit), and darkens from orange-brown to dark brown as it thickens.
+        let rust = d.rust.clamp(0.0, 1.0);
+        let colour = mix(SURFACE_RUST_ALBEDO, RUST_ALBEDO, rust);
+        surface.albedo = mix(surface.albedo, colour, rust.sqrt());
         surface.roughness = surface.roughness.max(0.9);
-        surface.specular *= 1.0 - d.rust.clamp(0.0, 1.0);
+        surface.specular *= 1.0 - rust;
     }
     if d.rebar {
         surface.albedo = REBAR_ALBEDO;
