@@ -20,11 +20,64 @@ const BEAM_PART: &str = "beam";
 /// The share of a pixel a crack must cover in some view for it to count as resolved.
 pub const RESOLVED_COVERAGE: f64 = 0.05;
 
-/// The damage of every damaged beam of `sample`, ready to draw; None for a sound sample.
+/// The damage of every damaged beam and frame member of `sample`, ready to draw; None for a
+/// sound sample.
 pub fn sample_damage(sample: &BuiltSample) -> Option<SampleDamage> {
-    let part = sample.parts.iter().position(|p| p == BEAM_PART)? as u32;
-    let pieces = damaged_pieces(sample, part);
-    SampleDamage::new(pieces, &sample.owner, &sample.part)
+    let mut pieces = match sample.parts.iter().position(|p| p == BEAM_PART) {
+        Some(part) => damaged_pieces(sample, part as u32),
+        None => Vec::new(),
+    };
+    pieces.extend(damaged_members(sample));
+    SampleDamage::new(pieces, &sample.owner, &sample.part, &sample.piece)
+}
+
+/// The damaged members of every frame of `sample`: each member a prism in its own frame (x
+/// from its start node, z the section's height), drawn through the beam's path; instance ids
+/// are index + 1 in the frame's `analysis.damage.items`.
+fn damaged_members(sample: &BuiltSample) -> Vec<DamagedPiece> {
+    let mut out = Vec::new();
+    for (i, (structure, labels)) in sample
+        .scene
+        .structures
+        .iter()
+        .zip(&sample.frames)
+        .enumerate()
+    {
+        let (Structure::Frame(frame), Some(damage)) =
+            (structure, labels.as_ref().and_then(|l| l.damage.as_ref()))
+        else {
+            continue;
+        };
+        // A frame's mesh pieces are its members, in order.
+        let first_piece = sample.pieces.iter().position(|(s, _)| *s == i as u32);
+        for md in &damage.members {
+            let model = &frame.model;
+            let member = &model.members[md.member];
+            let Some(part) = sample.parts.iter().position(|p| *p == member.part) else {
+                continue;
+            };
+            let axes = model.member_axes(md.member);
+            let start = DVec3::from_array(model.nodes[member.start]);
+            let length = start.distance(DVec3::from_array(model.nodes[member.end]));
+            let items = &damage.items[md.first_item..md.first_item + md.item_count];
+            out.push(DamagedPiece {
+                structure: i as u32,
+                part: part as u32,
+                mesh_piece: first_piece.map(|p| (p + md.member) as u32),
+                rotation: axes.transpose(),
+                centre: start + 0.5 * length * axes.row(0),
+                length,
+                half_height: 0.5 * member.section.height(),
+                half_width: 0.5 * member.section.width(),
+                marks: items
+                    .iter()
+                    .enumerate()
+                    .map(|(k, item)| mark(None, md.first_item + k, item))
+                    .collect(),
+            });
+        }
+    }
+    out
 }
 
 fn damaged_pieces(sample: &BuiltSample, part: u32) -> Vec<DamagedPiece> {
@@ -39,6 +92,7 @@ fn damaged_pieces(sample: &BuiltSample, part: u32) -> Vec<DamagedPiece> {
             Some(DamagedPiece {
                 structure: i as u32,
                 part,
+                mesh_piece: None,
                 rotation: DMat3::from_rotation_z(beam.yaw),
                 centre: DVec3::from_array(beam.centre),
                 length: beam.length,
@@ -48,7 +102,7 @@ fn damaged_pieces(sample: &BuiltSample, part: u32) -> Vec<DamagedPiece> {
                     .items
                     .iter()
                     .enumerate()
-                    .map(|(index, item)| mark(beam, index, item))
+                    .map(|(index, item)| mark(Some(beam), index, item))
                     .collect(),
             })
         })
@@ -87,8 +141,9 @@ fn rust_strength(section_loss: f64) -> f64 {
     (0.45 + 0.5 * (section_loss / 0.15)).min(0.95)
 }
 
-/// The mark of damage `index` of `beam`.
-fn mark(beam: &BeamSpec, index: usize, damage: &Damage) -> Mark {
+/// The mark of damage `index` of a beam or frame member (`beam`: the beam, whose spalls may
+/// bare its bars).
+fn mark(beam: Option<&BeamSpec>, index: usize, damage: &Damage) -> Mark {
     let reach = Relief::of(damage).map_or(0.0, |r| r.reach());
     let (class, shape) = match &damage.shape {
         DamageShape::FlexuralCrack { path, width_mm } => (
@@ -139,7 +194,7 @@ fn mark(beam: &BeamSpec, index: usize, damage: &Damage) -> Mark {
             },
         ),
         DamageShape::Spall { outline, depth } => {
-            let bars = spall_bars(beam, damage);
+            let bars = beam.map_or_else(Vec::new, |b| spall_bars(b, damage));
             (
                 DamageClass::Spall,
                 MarkShape::Spall {
