@@ -184,7 +184,7 @@ fn an_rc_portal_under_sway_cracks_on_the_faces_its_moment_diagram_stretches() {
 fn a_wrong_frame_damage_call_points_at_the_recipe() {
     let dir = tempfile::tempdir().unwrap();
     let damage = r#"f.damage(#{ member: m, type: "crack", at: 4.0 });"#;
-    let path = write(dir.path(), "recipe.rhai", &COLUMN.replace("DAMAGE", damage));
+    let path = write(dir.path(), "recipe.rhai", COLUMN.replace("DAMAGE", damage));
     let output = run(&path, &dir.path().join("out"), &[]);
     assert!(!output.status.success());
     let err = stderr(&output);
@@ -194,10 +194,26 @@ fn a_wrong_frame_damage_call_points_at_the_recipe() {
         "{err}"
     );
     let damage = r#"f.damage(#{ member: m, type: "spall", at: 1.0 });"#;
-    let path = write(dir.path(), "recipe.rhai", &COLUMN.replace("DAMAGE", damage));
+    let path = write(dir.path(), "recipe.rhai", COLUMN.replace("DAMAGE", damage));
     let err = stderr(&run(&path, &dir.path().join("out2"), &[]));
     assert!(
         err.contains("spalls and dents are cut only into beams"),
+        "{err}"
+    );
+}
+
+#[test]
+fn cracks_on_frame_members_no_view_resolves_are_named_where_the_frame_lists_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = PORTAL
+        .replace("CONCRETE", "f.reinforced_concrete();")
+        .replace("width: 480, height: 480", "width: 48, height: 48");
+    let path = write(dir.path(), "recipe.rhai", recipe);
+    let output = run(&path, &dir.path().join("out"), &[]);
+    assert!(output.status.success());
+    let err = stderr(&output);
+    assert!(
+        err.contains("structures[0].analysis.damage.items[0] ("),
         "{err}"
     );
 }

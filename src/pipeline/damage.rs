@@ -230,6 +230,9 @@ fn mark(beam: Option<&BeamSpec>, index: usize, damage: &Damage) -> Mark {
 pub struct Unresolved {
     /// Structure index.
     pub structure: u32,
+    /// Where its structure's damage items are: "damage" (a beam) or "analysis.damage" (a
+    /// frame).
+    pub items_at: &'static str,
     /// Instance id (index + 1 in the structure's damage items).
     pub instance: u16,
     /// Width, millimetres.
@@ -257,6 +260,10 @@ pub fn unresolved_cracks(damage: &SampleDamage, cameras: &[Camera]) -> Vec<Unres
             if footprint.is_none_or(|f| width / f < RESOLVED_COVERAGE) {
                 out.push(Unresolved {
                     structure: piece.structure,
+                    items_at: match piece.mesh_piece {
+                        Some(_) => "analysis.damage",
+                        None => "damage",
+                    },
                     instance: mark.instance,
                     width_mm: width * 1e3,
                     footprint_mm: footprint.map(|f| f * 1e3),
@@ -308,8 +315,9 @@ pub fn unresolved_warning(sample: u64, cracks: &[Unresolved]) -> Option<String> 
                 None => "seen by no view".to_string(),
             };
             format!(
-                "structures[{}].damage.items[{}] ({:.2} mm wide; {seen})",
+                "structures[{}].{}.items[{}] ({:.2} mm wide; {seen})",
                 c.structure,
+                c.items_at,
                 c.instance - 1,
                 c.width_mm
             )

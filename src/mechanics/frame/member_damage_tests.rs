@@ -56,6 +56,11 @@ fn column(h: f64, p: f64) -> FrameModel {
     m.nodes = vec![[0.0; 3], [0.0, 0.0, h]];
     m.members = vec![Member::new(0, 1, square(0.2))];
     m.supports = vec![NodeSupport::fixed(0)];
+    pushed_at_node_1(m, p)
+}
+
+/// `m` in the x–z plane with a horizontal force `p` (world +X) at node 1.
+fn pushed_at_node_1(mut m: FrameModel, p: f64) -> FrameModel {
     m.plane = Some(Plane::Xz);
     m.loads = vec![NodalLoad {
         node: 1,
@@ -108,13 +113,7 @@ fn linked_columns(h: f64, span: f64, p: f64) -> FrameModel {
         Member::new(3, 2, square(0.2)),
     ];
     m.supports = vec![NodeSupport::fixed(0), NodeSupport::fixed(3)];
-    m.plane = Some(Plane::Xz);
-    m.loads = vec![NodalLoad {
-        node: 1,
-        force: [p, 0.0, 0.0],
-        moment: [0.0; 3],
-    }];
-    m
+    pushed_at_node_1(m, p)
 }
 
 #[test]
@@ -204,12 +203,7 @@ fn rc_portal(h: f64, w: f64) -> FrameModel {
         },
     ];
     m.supports = vec![NodeSupport::fixed(0), NodeSupport::fixed(3)];
-    m.plane = Some(Plane::Xz);
-    m.loads = vec![NodalLoad {
-        node: 1,
-        force: [h, 0.0, 0.0],
-        moment: [0.0; 3],
-    }];
+    let mut m = pushed_at_node_1(m, h);
     for k in 0..3 {
         m.damage.insert(
             k,
@@ -313,6 +307,9 @@ fn a_cracked_cantilever_column_deflects_by_its_cracked_curvature_integrated() {
     assert!((got / want - 1.0).abs() < 1e-6, "{got} vs {want}");
 }
 
+/// An exposure corrosion record: rule, from, to, faces, stain direction.
+type ExposedRegion = (String, f64, f64, Vec<Face>, [f64; 3]);
+
 #[test]
 fn exposure_corrodes_joints_base_plates_and_the_beams_underside_with_stains_down() {
     let mut model = linked_columns(3.0, 5.0, 3e4);
@@ -327,7 +324,7 @@ fn exposure_corrodes_joints_base_plates_and_the_beams_underside_with_stains_down
     }
     let (_, damage) = model.solve_damaged().unwrap();
     let damage = damage.unwrap();
-    let rules = |k: usize| -> Vec<(String, f64, f64, Vec<Face>, [f64; 3])> {
+    let rules = |k: usize| -> Vec<ExposedRegion> {
         let md = &damage.members[k];
         damage.items[md.first_item..md.first_item + md.item_count]
             .iter()
