@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{hashes, read_json, render, run, stderr, write};
+use common::{hashes, read_json, render, run, schema_valid, stderr, write};
 use serde_json::Value;
 use std::path::Path;
 
@@ -29,17 +29,6 @@ fn recipe(extra: &str) -> String {
 
 fn view_json(out: &Path) -> Value {
     read_json(&out.join("samples/0000/000000_00.json"))
-}
-
-fn schema_valid(record: &Value) {
-    let schema =
-        read_json(&Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/schema/view.schema.json"));
-    let validator = jsonschema::validator_for(&schema).unwrap();
-    let errors: Vec<String> = validator
-        .iter_errors(record)
-        .map(|e| e.to_string())
-        .collect();
-    assert!(errors.is_empty(), "{errors:?}");
 }
 
 #[test]

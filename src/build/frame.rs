@@ -7,7 +7,7 @@
 use super::beam::{section_outline, stations};
 use super::tessellation::{chord_tolerance, segments_for_chord};
 use crate::geometry::{Frame3, sweep};
-use crate::mechanics::frame::{FrameLabels, FrameSolution, SpaceSection};
+use crate::mechanics::frame::{FrameLabels, FrameSolution, SectionScale, SpaceSection};
 use crate::scene::FrameSpec;
 use glam::{DQuat, DVec3};
 
@@ -46,9 +46,18 @@ pub fn mesh_frame(frame: &FrameSpec, pixel_footprint: f64) -> Result<BuiltFrame<
         ));
     }
     let model = &frame.model;
-    let solution = match &frame.displaced {
-        Some(displaced) => model.displaced_by(displaced.clone())?,
-        None => model.solve()?,
+    // A frame of a sequence moves as its sound modal model says: damage is drawn on the
+    // static analysis only.
+    let (solution, damage) = match &frame.displaced {
+        Some(displaced) => (model.displaced_by(displaced.clone())?, None),
+        None => model.solve_damaged()?,
+    };
+    let scale_of = |i: usize| {
+        damage
+            .iter()
+            .flat_map(|d| &d.members)
+            .find(|d| d.member == i)
+            .map_or(SectionScale::ONE, |d| d.section_scale)
     };
     let tolerance = chord_tolerance(frame.tessellation, pixel_footprint);
     let overhang = joint_overhangs(frame, &solution);
@@ -57,7 +66,7 @@ pub fn mesh_frame(frame: &FrameSpec, pixel_footprint: f64) -> Result<BuiltFrame<
         .iter()
         .enumerate()
         .map(|(i, member)| {
-            let props = SpaceSection::of(&member.section, member.poisson);
+            let props = SpaceSection::of(&member.section, member.poisson).scaled(scale_of(i));
             let e = member.elastic_modulus * member.stiffness_factor;
             let r = &solution.members[i];
             let curvature = frame.display_scale
@@ -83,6 +92,7 @@ pub fn mesh_frame(frame: &FrameSpec, pixel_footprint: f64) -> Result<BuiltFrame<
     if frame.displaced.is_some() {
         labels.analysis = "modal_response";
     }
+    labels.damage = damage;
     Ok(BuiltFrame { members, labels })
 }
 

@@ -21,11 +21,64 @@ const BEAM_PART: &str = "beam";
 /// The share of a pixel a crack must cover in some view for it to count as resolved.
 pub const RESOLVED_COVERAGE: f64 = 0.05;
 
-/// The damage of every damaged beam of `sample`, ready to draw; None for a sound sample.
+/// The damage of every damaged beam and frame member of `sample`, ready to draw; None for a
+/// sound sample.
 pub fn sample_damage(sample: &BuiltSample) -> Option<SampleDamage> {
-    let part = sample.parts.iter().position(|p| p == BEAM_PART)? as u32;
-    let pieces = damaged_pieces(sample, part);
-    SampleDamage::new(pieces, &sample.owner, &sample.part)
+    let mut pieces = match sample.parts.iter().position(|p| p == BEAM_PART) {
+        Some(part) => damaged_pieces(sample, part as u32),
+        None => Vec::new(),
+    };
+    pieces.extend(damaged_members(sample));
+    SampleDamage::new(pieces, &sample.owner, &sample.part, &sample.piece)
+}
+
+/// The damaged members of every frame of `sample`: each member a prism in its own frame (x
+/// from its start node, z the section's height), drawn through the beam's path; instance ids
+/// are index + 1 in the frame's `analysis.damage.items`.
+fn damaged_members(sample: &BuiltSample) -> Vec<DamagedPiece> {
+    let mut out = Vec::new();
+    for (i, (structure, labels)) in sample
+        .scene
+        .structures
+        .iter()
+        .zip(&sample.frames)
+        .enumerate()
+    {
+        let (Structure::Frame(frame), Some(damage)) =
+            (structure, labels.as_ref().and_then(|l| l.damage.as_ref()))
+        else {
+            continue;
+        };
+        // A frame's mesh pieces are its members, in order.
+        let first_piece = sample.pieces.iter().position(|(s, _)| *s == i as u32);
+        for md in &damage.members {
+            let model = &frame.model;
+            let member = &model.members[md.member];
+            let Some(part) = sample.parts.iter().position(|p| *p == member.part) else {
+                continue;
+            };
+            let axes = model.member_axes(md.member);
+            let start = DVec3::from_array(model.nodes[member.start]);
+            let length = start.distance(DVec3::from_array(model.nodes[member.end]));
+            let items = &damage.items[md.first_item..md.first_item + md.item_count];
+            out.push(DamagedPiece {
+                structure: i as u32,
+                part: part as u32,
+                mesh_piece: first_piece.map(|p| (p + md.member) as u32),
+                rotation: axes.transpose(),
+                centre: start + 0.5 * length * axes.row(0),
+                length,
+                half_height: 0.5 * member.section.height(),
+                half_width: 0.5 * member.section.width(),
+                marks: items
+                    .iter()
+                    .enumerate()
+                    .map(|(k, item)| mark(None, &member.section, md.first_item + k, item))
+                    .collect(),
+            });
+        }
+    }
+    out
 }
 
 fn damaged_pieces(sample: &BuiltSample, part: u32) -> Vec<DamagedPiece> {
@@ -40,6 +93,7 @@ fn damaged_pieces(sample: &BuiltSample, part: u32) -> Vec<DamagedPiece> {
             Some(DamagedPiece {
                 structure: i as u32,
                 part,
+                mesh_piece: None,
                 rotation: DMat3::from_rotation_z(beam.yaw),
                 centre: DVec3::from_array(beam.centre),
                 length: beam.length,
@@ -49,7 +103,7 @@ fn damaged_pieces(sample: &BuiltSample, part: u32) -> Vec<DamagedPiece> {
                     .items
                     .iter()
                     .enumerate()
-                    .map(|(index, item)| mark(beam, index, item))
+                    .map(|(index, item)| mark(Some(beam), &beam.section, index, item))
                     .collect(),
             })
         })
@@ -99,8 +153,9 @@ fn bottom_flange_reach(section: &Section) -> f64 {
     }
 }
 
-/// The mark of damage `index` of `beam`.
-fn mark(beam: &BeamSpec, index: usize, damage: &Damage) -> Mark {
+/// The mark of damage `index` of a beam or frame member of `section` (`beam`: the beam, whose
+/// spalls may bare its bars).
+fn mark(beam: Option<&BeamSpec>, section: &Section, index: usize, damage: &Damage) -> Mark {
     let reach = Relief::of(damage).map_or(0.0, |r| r.reach());
     let (class, shape) = match &damage.shape {
         DamageShape::FlexuralCrack { path, width_mm } => (
@@ -144,7 +199,7 @@ fn mark(beam: &BeamSpec, index: usize, damage: &Damage) -> Mark {
             DamageClass::Corrosion,
             MarkShape::Corrosion {
                 faces: faces.iter().copied().map(piece_face).collect(),
-                rises: bottom_flange_reach(&beam.section),
+                rises: bottom_flange_reach(section),
                 from: *from,
                 to: *to,
                 strength: rust_strength(*section_loss),
@@ -152,7 +207,7 @@ fn mark(beam: &BeamSpec, index: usize, damage: &Damage) -> Mark {
             },
         ),
         DamageShape::Spall { outline, depth } => {
-            let bars = spall_bars(beam, damage);
+            let bars = beam.map_or_else(Vec::new, |b| spall_bars(b, damage));
             (
                 DamageClass::Spall,
                 MarkShape::Spall {
@@ -188,6 +243,9 @@ fn mark(beam: &BeamSpec, index: usize, damage: &Damage) -> Mark {
 pub struct Unresolved {
     /// Structure index.
     pub structure: u32,
+    /// Where its structure's damage items are: "damage" (a beam) or "analysis.damage" (a
+    /// frame).
+    pub items_at: &'static str,
     /// Instance id (index + 1 in the structure's damage items).
     pub instance: u16,
     /// Width, millimetres.
@@ -215,6 +273,10 @@ pub fn unresolved_cracks(damage: &SampleDamage, cameras: &[Camera]) -> Vec<Unres
             if footprint.is_none_or(|f| width / f < RESOLVED_COVERAGE) {
                 out.push(Unresolved {
                     structure: piece.structure,
+                    items_at: match piece.mesh_piece {
+                        Some(_) => "analysis.damage",
+                        None => "damage",
+                    },
                     instance: mark.instance,
                     width_mm: width * 1e3,
                     footprint_mm: footprint.map(|f| f * 1e3),
@@ -266,8 +328,9 @@ pub fn unresolved_warning(sample: u64, cracks: &[Unresolved]) -> Option<String> 
                 None => "seen by no view".to_string(),
             };
             format!(
-                "structures[{}].damage.items[{}] ({:.2} mm wide; {seen})",
+                "structures[{}].{}.items[{}] ({:.2} mm wide; {seen})",
                 c.structure,
+                c.items_at,
                 c.instance - 1,
                 c.width_mm
             )

@@ -824,7 +824,7 @@ impl<'a> SampleRecord<'a> {
             },
             damage: recipe.dataset.outputs.wants("damage").then_some(DamageConvention {
                 classes: crate::render::DamageClass::NAMES,
-                instance: "index + 1 of the damage in scene.structures[s].damage.items, where s + 1 is the pixel's value in instances; 0 = none",
+                instance: "index + 1 of the damage in scene.structures[s].damage.items (a frame's: scene.structures[s].analysis.damage.items), where s + 1 is the pixel's value in instances; 0 = none",
                 crack_width: "width of the crack the pixel's footprint touches, millimetres; 0 elsewhere",
                 crack_coverage: "share of the pixel's footprint the crack covers, 0-1, from the crack's band over the footprint's parallelogram on the surface",
                 channel: SCALAR_CHANNELS.names[0],

@@ -80,6 +80,7 @@ pub fn register(
     super::beam_api::register(engine);
     super::damage_api::register(engine);
     super::frame_api::register(engine);
+    super::frame_damage_api::register(engine);
     super::time_api::register(engine);
     super::sensor_api::register(engine);
     super::shape_api::register(engine, files);

@@ -58,7 +58,7 @@ pub fn register(engine: &mut Engine) {
     }
 }
 
-type Placer = fn(&BeamSpec, &mut Options) -> OptResult<Damage>;
+pub(super) type Placer = fn(&BeamSpec, &mut Options) -> OptResult<Damage>;
 
 /// Runs `change` on the beam with the options of `map` (all of which it must read), marking
 /// the call as where the beam's mechanics was declared.
@@ -78,7 +78,7 @@ fn edit(
 
 /// `reinforced_concrete(#{ fck, cover, bar_diameter, bars, sustained })`: the beam becomes
 /// reinforced concrete (E = E_cm, ν = 0.2, strength f_ck for the plausibility label).
-fn reinforced_concrete(b: &mut BeamSpec, o: &mut Options) -> OptResult<()> {
+pub(super) fn reinforced_concrete(b: &mut BeamSpec, o: &mut Options) -> OptResult<()> {
     if !matches!(b.section, Section::Rectangle { .. }) {
         return Err(format!(
             "reinforced_concrete needs a rectangular section; this beam's is {:?}",
@@ -102,7 +102,7 @@ fn reinforced_concrete(b: &mut BeamSpec, o: &mut Options) -> OptResult<()> {
 }
 
 /// `corrosion_by_exposure(#{ end_length, end_loss, bottom_loss })`.
-fn corrosion_by_exposure(b: &mut BeamSpec, o: &mut Options) -> OptResult<()> {
+pub(super) fn corrosion_by_exposure(b: &mut BeamSpec, o: &mut Options) -> OptResult<()> {
     let d = ExposureRules::default();
     let end_length = match o.take("end_length") {
         None => None,
@@ -218,7 +218,7 @@ fn placed(
 /// `crack(#{ kind, at, face, width_mm, depth, height, angle, length })`: a flexural crack
 /// across the top or bottom face rising `depth` up both sides, or a straight (shear) crack on
 /// a side face through (at, height) at `angle` from the axis.
-fn crack(b: &BeamSpec, o: &mut Options) -> OptResult<Damage> {
+pub(super) fn crack(b: &BeamSpec, o: &mut Options) -> OptResult<Damage> {
     let kind = o.choice("kind", &["flexural", "shear"], Some("flexural"))?;
     let at = along(b, o, "at")?;
     let width_mm = positive(o, "width_mm", 0.3, "millimetres")?;
@@ -293,7 +293,7 @@ fn crack(b: &BeamSpec, o: &mut Options) -> OptResult<Damage> {
 }
 
 /// `map_cracking(#{ from, to, face, cell, width_mm })`.
-fn map_cracking(b: &BeamSpec, o: &mut Options) -> OptResult<Damage> {
+pub(super) fn map_cracking(b: &BeamSpec, o: &mut Options) -> OptResult<Damage> {
     let (from, to) = stretch(b, o)?;
     let face = face(o, "bottom")?;
     let cell = positive(o, "cell", 0.15, "metres")?;
@@ -333,7 +333,7 @@ fn stretch(b: &BeamSpec, o: &mut Options) -> OptResult<(f64, f64)> {
 }
 
 /// `corrosion(#{ from, to, faces, section_loss, stain_length })`.
-fn corrosion(b: &BeamSpec, o: &mut Options) -> OptResult<Damage> {
+pub(super) fn corrosion(b: &BeamSpec, o: &mut Options) -> OptResult<Damage> {
     let (from, to) = stretch(b, o)?;
     let faces_path = o.path("faces");
     let faces = match o.take("faces") {

@@ -141,7 +141,7 @@ fn frame_options(f: &mut FrameSpec, map: Map) -> OptResult<()> {
 
 /// Applies `change` to the frame, which now points errors found when analysing it at this
 /// call, and returns the frame (so calls chain).
-fn changed(
+pub(super) fn changed(
     ctx: &NativeCallContext,
     f: &mut FrameSpec,
     change: impl FnOnce(&mut FrameSpec) -> OptResult<()>,
@@ -166,7 +166,7 @@ fn node(f: &FrameSpec, n: INT, what: &str) -> OptResult<usize> {
 }
 
 /// Member index `m` of `f`, checked.
-fn member(f: &FrameSpec, m: INT, what: &str) -> OptResult<usize> {
+pub(super) fn member(f: &FrameSpec, m: INT, what: &str) -> OptResult<usize> {
     usize::try_from(m)
         .ok()
         .filter(|&i| i < f.model.members.len())

@@ -19,6 +19,7 @@ mod engine;
 mod environment_api;
 mod files;
 mod frame_api;
+mod frame_damage_api;
 mod ground_api;
 mod material_api;
 mod memory;

@@ -216,6 +216,9 @@ pub struct DamagedPiece {
     pub structure: u32,
     /// The part index its triangles have.
     pub part: u32,
+    /// When several pieces of a structure share a part (a frame's members), the mesh piece
+    /// (`BuiltSample::piece`) its triangles have; None: every triangle of the part.
+    pub mesh_piece: Option<u32>,
     /// Rotation from the piece frame to the world.
     pub rotation: DMat3,
     /// World position of the piece frame's point (length/2, 0, 0): the undeformed centre.
@@ -574,19 +577,27 @@ pub struct SampleDamage {
 }
 
 impl SampleDamage {
-    /// The damage of `pieces` on a mesh whose triangles have `owner` (structure) and `part`
-    /// indices; None when no piece has damage (then nothing changes).
-    pub fn new(pieces: Vec<DamagedPiece>, owner: &[u32], part: &[u32]) -> Option<SampleDamage> {
+    /// The damage of `pieces` on a mesh whose triangles have `owner` (structure), `part` and
+    /// `mesh_piece` indices; None when no piece has damage (then nothing changes).
+    pub fn new(
+        pieces: Vec<DamagedPiece>,
+        owner: &[u32],
+        part: &[u32],
+        mesh_piece: &[u32],
+    ) -> Option<SampleDamage> {
         if pieces.iter().all(|p| p.marks.is_empty()) {
             return None;
         }
         let piece_of = owner
             .iter()
             .zip(part)
-            .map(|(&o, &p)| {
+            .zip(mesh_piece)
+            .map(|((&o, &p), &m)| {
                 pieces
                     .iter()
-                    .position(|d| d.structure == o && d.part == p)
+                    .position(|d| {
+                        d.structure == o && d.part == p && d.mesh_piece.is_none_or(|k| k == m)
+                    })
                     .map_or(u32::MAX, |k| k as u32)
             })
             .collect();

@@ -154,6 +154,18 @@ pub fn blake3_hex(bytes: &[u8]) -> String {
     blake3::hash(bytes).to_hex().to_string()
 }
 
+/// Asserts `record` (a view's JSON) is valid against the published view schema.
+pub fn schema_valid(record: &Value) {
+    let schema =
+        read_json(&Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/schema/view.schema.json"));
+    let validator = jsonschema::validator_for(&schema).unwrap();
+    let errors: Vec<String> = validator
+        .iter_errors(record)
+        .map(|e| e.to_string())
+        .collect();
+    assert!(errors.is_empty(), "{errors:?}");
+}
+
 pub fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }

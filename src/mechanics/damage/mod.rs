@@ -14,7 +14,10 @@ mod placement;
 mod stiffness;
 
 pub use concrete::{ConcreteSection, REBAR_E, Reinforcement, concrete_modulus, tensile_strength};
-pub use placement::{DamageLabels, DamageRequest, DamagedMember, ExposureRules, solve_damage};
+pub use placement::{
+    DamageLabels, DamageRequest, DamagedMember, ExposureRules, InternalForces, crack_width_mm,
+    exposed_corrosion, section_loss_regions, solve_damage, stress_cracks,
+};
 pub use stiffness::SteppedBeam;
 
 use serde::Serialize;

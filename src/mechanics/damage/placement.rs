@@ -41,6 +41,24 @@ impl Default for ExposureRules {
     }
 }
 
+/// A member's internal forces along its axis, as the crack rules read them: the bending moment
+/// about the strong axis (sagging-positive, stretching the −z face) and the shear V = dM/dx.
+pub trait InternalForces {
+    /// Bending moment at x, N·m, sagging-positive.
+    fn moment(&self, x: f64) -> f64;
+    /// Shear force V = dM/dx at x, N.
+    fn shear(&self, x: f64) -> f64;
+}
+
+impl InternalForces for SteppedBeam {
+    fn moment(&self, x: f64) -> f64 {
+        SteppedBeam::moment(self, x)
+    }
+    fn shear(&self, x: f64) -> f64 {
+        SteppedBeam::shear(self, x)
+    }
+}
+
 /// What damage a beam has or should get, as the recipe declared it.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct DamageRequest {
@@ -174,10 +192,11 @@ pub fn solve_damage(
     };
     let mut cracked = false;
     if let (Some(c), Some(axis)) = (&concrete, &axis) {
-        let flexural = flexural_cracks(member.length, c, axis);
-        cracked = !flexural.is_empty();
-        items.extend(flexural);
-        items.extend(shear_cracks(member.length, c, axis));
+        let cracks = stress_cracks(MEMBER, member.length, c, axis);
+        cracked = cracks
+            .iter()
+            .any(|d| matches!(d.shape, DamageShape::FlexuralCrack { .. }));
+        items.extend(cracks);
     }
     let stiffness_changed = cracked || !regions.is_empty();
     let axis = axis.filter(|_| stiffness_changed);
@@ -203,8 +222,25 @@ pub fn solve_damage(
     Ok((axis, labels))
 }
 
+/// The cracks the stresses of a reinforced-concrete member of `length` put on it: flexural
+/// where |M| > M_cr, then web-shear where the section is uncracked in bending but |V| exceeds
+/// the web-shear cracking force; each record names `member`.
+pub fn stress_cracks(
+    member: &str,
+    length: f64,
+    c: &ConcreteSection,
+    forces: &dyn InternalForces,
+) -> Vec<Damage> {
+    let mut cracks = flexural_cracks(length, c, forces);
+    cracks.extend(shear_cracks(length, c, forces));
+    for d in &mut cracks {
+        d.member = member.into();
+    }
+    cracks
+}
+
 /// The corrosion regions that lose section: (from, to, fraction of the section remaining).
-fn section_loss_regions(items: &[Damage]) -> Vec<(f64, f64, f64)> {
+pub fn section_loss_regions(items: &[Damage]) -> Vec<(f64, f64, f64)> {
     items
         .iter()
         .filter_map(|d| match d.shape {
@@ -219,7 +255,8 @@ fn section_loss_regions(items: &[Damage]) -> Vec<(f64, f64, f64)> {
         .collect()
 }
 
-fn crack_width_mm(d: &Damage) -> f64 {
+/// A crack's width, millimetres (0 for damage that is not a crack).
+pub fn crack_width_mm(d: &Damage) -> f64 {
     match d.shape {
         DamageShape::FlexuralCrack { width_mm, .. }
         | DamageShape::ShearCrack { width_mm, .. }
@@ -252,7 +289,7 @@ fn crack_severity(width_mm: f64) -> Severity {
 
 /// Flexural cracks in every stretch where |M| > M_cr: s_r,max apart, centred on the stretch,
 /// rising from the tension face to the cracked section's neutral axis.
-fn flexural_cracks(length: f64, c: &ConcreteSection, axis: &SteppedBeam) -> Vec<Damage> {
+fn flexural_cracks(length: f64, c: &ConcreteSection, axis: &dyn InternalForces) -> Vec<Damage> {
     let over = |x: f64| axis.moment(x).abs() > c.cracking_moment;
     let mut cracks = Vec::new();
     for (from, to) in stretches(length, &over) {
@@ -310,7 +347,7 @@ fn flexural_path(x: f64, sagging: bool, c: &ConcreteSection) -> Vec<SurfacePoint
 /// Web-shear cracks where the section is uncracked in bending (|M| ≤ M_cr) and |V| exceeds
 /// the web-shear cracking force: at 45°, normal to the principal tension at the centroid,
 /// rising towards mid-span, one on each side face, s_r,max apart.
-fn shear_cracks(length: f64, c: &ConcreteSection, axis: &SteppedBeam) -> Vec<Damage> {
+fn shear_cracks(length: f64, c: &ConcreteSection, axis: &dyn InternalForces) -> Vec<Damage> {
     let limit = c.shear_cracking_force();
     // Half the crack's reach along the axis (and up the web): to the bars' level.
     let reach = 0.5 * c.height - (c.height - c.effective_depth);
@@ -359,16 +396,26 @@ fn shear_cracks(length: f64, c: &ConcreteSection, axis: &SteppedBeam) -> Vec<Dam
 /// Corrosion by the exposure rules: each supported end over `end_length` (bottom and sides),
 /// and the underside along the span; stains run down by the section height.
 fn exposure_corrosion(member: &DamagedMember, rules: &ExposureRules) -> Vec<Damage> {
-    let (l, h, b) = (
-        member.length,
-        member.section.height(),
-        member.section.width(),
-    );
-    let end = rules.end_length.unwrap_or(h.max(0.1 * l)).min(l);
     let supported_ends: &[f64] = match member.support {
         Support::Cantilever => &[0.0],
-        _ => &[0.0, l],
+        _ => &[0.0, member.length],
     };
+    exposed_corrosion(member.length, member.section, supported_ends, rules)
+}
+
+/// Corrosion by the exposure rules on a member of `length` and `section` whose ends at
+/// `ends` (0 or `length`) are where water collects (bearings, joints, base plates): each over
+/// `end_length` (bottom and sides), and the underside along the whole member; stains run down
+/// by the section height.
+pub fn exposed_corrosion(
+    length: f64,
+    section: &Section,
+    ends: &[f64],
+    rules: &ExposureRules,
+) -> Vec<Damage> {
+    let (l, h, b) = (length, section.height(), section.width());
+    let end = rules.end_length.unwrap_or(h.max(0.1 * l)).min(l);
+    let supported_ends = ends;
     let ends = [Face::Bottom, Face::SideNegY, Face::SidePosY];
     let mut items: Vec<Damage> = supported_ends
         .iter()

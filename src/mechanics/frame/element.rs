@@ -144,7 +144,10 @@ impl Element {
         let far = DVec3::from_array(model.nodes[m.end]);
         let length = origin.distance(far);
         let axes = local_axes(origin, far, m.roll);
-        let props = SpaceSection::of(&m.section, m.poisson);
+        let sound = SpaceSection::of(&m.section, m.poisson);
+        // A damaged member is stiffer or softer by its section scale; it weighs what the
+        // sound member weighs (the loads stay the sound structure's).
+        let props = sound.scaled(m.section_scale);
         let e = m.elastic_modulus * m.stiffness_factor;
         let g = e / (2.0 * (1.0 + m.poisson));
         let timoshenko = m.theory == MemberTheory::Timoshenko;
@@ -169,7 +172,7 @@ impl Element {
                 load: Load::Distributed {
                     from: 0.0,
                     to: length,
-                    intensity: m.density * super::GRAVITY * props.area,
+                    intensity: m.density * super::GRAVITY * sound.area,
                 },
                 direction: [0.0, 0.0, -1.0],
                 axes: Axes::Global,

@@ -37,6 +37,11 @@ pub struct FrameLabels {
     /// effective masses. Absent for a static analysis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub modes: Option<ModalLabels>,
+    /// The frame's damage (placed, cracked by the solved moment and shear, corroded by
+    /// exposure) and what it left of each damaged member's stiffness; the fields above are the
+    /// damaged frame's. Absent for a sound frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damage: Option<super::FrameDamage>,
 }
 
 impl FrameLabels {
@@ -64,6 +69,7 @@ impl FrameLabels {
             max_utilisation_member,
             physically_plausible: max_utilisation <= 1.0,
             modes: solution.modal.clone(),
+            damage: None,
         }
     }
 }

@@ -21,6 +21,9 @@ mod dynamics;
 mod dynamics_tests;
 mod element;
 mod labels;
+mod member_damage;
+#[cfg(test)]
+mod member_damage_tests;
 mod modes;
 #[cfg(test)]
 mod modes_tests;
@@ -33,14 +36,17 @@ mod tests;
 
 pub use dynamics::{FrameDynamics, FrameState, Lane};
 pub use labels::FrameLabels;
+pub use member_damage::{FrameDamage, MemberDamage};
 pub use modes::{DENSE_MODES_MAX_DOFS, FrameModeLabel, ModalLabels, NaturalModes};
 pub use results::{FrameSolution, MemberResult, NodeResult, Reaction, StrongAxis};
-pub use section::SpaceSection;
+pub use section::{SectionScale, SpaceSection};
 pub use sensors::{FrameExcitation, MemberSensor, record_members};
 pub use solve::{DENSE_MAX_DOFS, Solver};
 
+use super::damage::DamageRequest;
 use super::{Load, STEEL_E, STEEL_FY, STEEL_NU, Section};
 use serde::Serialize;
+use std::collections::BTreeMap;
 
 /// Density of structural steel, kg/m³ (EN 1991-1-1 Table A.4).
 pub const STEEL_DENSITY: f64 = 7850.0;
@@ -77,6 +83,10 @@ pub struct FrameModel {
     /// members' geometric stiffness, iterated on their axial forces.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub second_order: bool,
+    /// Damage asked for on members, by member index: placed exactly, cracked by the
+    /// mechanics (reinforced concrete) or corroded by exposure (`damage`, docs/damage.md).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub damage: BTreeMap<usize, DamageRequest>,
     /// Masses added at nodes (equipment, a deck's share carried by the node), for the natural
     /// modes; the members' own mass is ρ A per metre.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -208,6 +218,10 @@ pub struct Member {
     pub density: f64,
     /// Stiffness kept by a damaged member: E is multiplied by it (1 = intact).
     pub stiffness_factor: f64,
+    /// What its damage leaves of its section's stiffness (set by the damaged analysis,
+    /// `FrameModel::solve_damaged`; 1 = sound). Not part of the recipe's description.
+    #[serde(skip)]
+    pub section_scale: SectionScale,
     /// Beam theory of the member.
     pub theory: MemberTheory,
     /// Releases at the start and at the end.
@@ -232,6 +246,7 @@ impl Member {
             yield_strength: STEEL_FY,
             density: STEEL_DENSITY,
             stiffness_factor: 1.0,
+            section_scale: SectionScale::ONE,
             theory: MemberTheory::EulerBernoulli,
             releases: [Release::default(); 2],
             roll: 0.0,
@@ -335,6 +350,7 @@ impl FrameModel {
             self_weight: false,
             plane: None,
             second_order: false,
+            damage: BTreeMap::new(),
             masses: Vec::new(),
             mass_matrix: MassMatrix::Consistent,
             vibration: Vec::new(),

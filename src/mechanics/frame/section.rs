@@ -82,6 +82,48 @@ impl SpaceSection {
     }
 }
 
+/// How much of its section a damaged member keeps, as uniform factors on its stiffness
+/// properties: `area` on A and the shear areas, `strong` on I_y, `weak` on I_z and J. The
+/// damage model sets them (`damage`); 1 everywhere is a sound member.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct SectionScale {
+    /// Factor on A and the shear areas.
+    pub area: f64,
+    /// Factor on I_y (bending in the x–z plane, the section's height).
+    pub strong: f64,
+    /// Factor on I_z and the torsion constant J.
+    pub weak: f64,
+}
+
+impl SectionScale {
+    /// A sound member's: every factor 1.
+    pub const ONE: SectionScale = SectionScale {
+        area: 1.0,
+        strong: 1.0,
+        weak: 1.0,
+    };
+}
+
+impl Default for SectionScale {
+    fn default() -> Self {
+        SectionScale::ONE
+    }
+}
+
+impl SpaceSection {
+    /// The properties with `scale` applied; the extreme fibres stay (the outline is drawn
+    /// whole).
+    pub fn scaled(mut self, scale: SectionScale) -> SpaceSection {
+        self.area *= scale.area;
+        self.shear_area_y *= scale.area;
+        self.shear_area_z *= scale.area;
+        self.i_y *= scale.strong;
+        self.i_z *= scale.weak;
+        self.torsion *= scale.weak;
+        self
+    }
+}
+
 /// St Venant torsion constant of a solid rectangle, J = β a b³ with a ≥ b (Roark, Table 10.7:
 /// β = 1/3 − 0.21 (b/a)(1 − b⁴/(12 a⁴)), within 0.5 % of the series solution).
 fn rectangle_torsion(width: f64, height: f64) -> f64 {
