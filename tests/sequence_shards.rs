@@ -101,8 +101,21 @@ fn frame_ranges_in_shards_give_the_bytes_of_one_thread_into_one_folder_or_merged
     // Units of 4 frames (0–3, 4–7, 8–10): boundaries inside each sequence, where the flow to
     // the frame before and after and the blurred exposure need frames of another unit.
     let whole = setup.out("units");
-    let said = setup.run(&whole, &["--frames-per-unit", "4"]);
+    let loud = Command::new(BIN)
+        .args(["run", setup.recipe.to_str().unwrap(), "--out"])
+        .arg(&whole)
+        .args(["--frames-per-unit", "4"])
+        .output()
+        .unwrap();
+    let loud = ok(loud);
+    let said = String::from_utf8_lossy(&loud.stdout).to_string();
     assert!(said.contains("done: 6 units of frames rendered"), "{said}");
+    // Progress counts what is dealt out.
+    let progress = stderr(&loud);
+    assert!(
+        progress.contains("rendering: 6 units of frames"),
+        "{progress}"
+    );
     assert_same(&reference, &whole);
 
     // Two shards of units of 3 frames into one folder, the second on one thread.

@@ -249,7 +249,8 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
         .map(|unit| units.sample(unit))
         .filter(move |&sample| last.replace(sample) != Some(sample))
         .collect::<Vec<_>>();
-    let progress = Progress::new("validating", first_samples.len() as u64, options.quiet);
+    let count = first_samples.len() as u64;
+    let progress = Progress::new("validating", "samples", count, options.quiet);
     in_order(first_samples.into_iter(), |index| {
         prepare(recipe, index)?;
         progress.sample_done();
@@ -261,7 +262,8 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
     let folder = DatasetFolder::open(&options.out, &identity, options.force, shard_id)?;
     let done = folder.completed(shard_id, extent)?;
     let todo = mine - done.len();
-    let progress = Progress::new("rendering", todo, options.quiet);
+    let noun = units.frames.map_or("samples", |_| "units of frames");
+    let progress = Progress::new("rendering", noun, todo, options.quiet);
     let (rendered, pairs) = (AtomicU64::new(0), AtomicU64::new(0));
     let shared = SharedTraceMeshes::default();
     let bytes = in_order(shard.samples(total).filter(|u| !done.contains(*u)), |unit| {
