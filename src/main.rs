@@ -45,9 +45,18 @@ enum Command {
         /// Worker threads, 1 to 1024 (default: every core). Does not change a single output byte.
         #[arg(long, value_parser = parse_threads)]
         threads: Option<usize>,
-        /// Render only samples with index ≡ K (mod N), e.g. 0/4. Shards share one --out.
+        /// Render only samples with index ≡ K (mod N), e.g. 0/4. Shards share one --out (or
+        /// write one each, gathered by `shmgen merge`). With --frames-per-unit, the units
+        /// dealt out are frame ranges of the sequence samples instead.
         #[arg(long, default_value = "0/1")]
         shard: Shard,
+        /// Split each sequence sample (dataset.sequence) into units of F consecutive frames,
+        /// each rendered, committed and resumed alone, and dealt out by --shard (unit u =
+        /// sample × units per sample + range, taken by shard u mod N): one long sequence
+        /// spread over N nodes. Every file has the bytes a run without it gives. Default:
+        /// whole samples.
+        #[arg(long, value_name = "F")]
+        frames_per_unit: Option<u32>,
         /// Replace a different dataset already in --out: says first what differs and how many
         /// finished samples it deletes; refused while another process writes that dataset.
         /// Never needed to resume the same dataset.
@@ -249,6 +258,7 @@ fn execute(command: Command) -> Result<()> {
             sets,
             threads,
             shard,
+            frames_per_unit,
             force,
             quiet,
         } => {
@@ -259,14 +269,20 @@ fn execute(command: Command) -> Result<()> {
                     out: out.clone(),
                     threads,
                     shard,
+                    frames_per_unit,
                     force,
                     quiet,
                 },
             )?;
             let rate = summary.pairs as f64 / summary.seconds.max(1e-9);
             println!(
-                "done: {} samples rendered ({} already present), {} image/depth pairs in {:.2} s = {rate:.1} pairs/s, {:.1} MB written to {}{}",
+                "done: {} {} rendered ({} already present), {} image/depth pairs in {:.2} s = {rate:.1} pairs/s, {:.1} MB written to {}{}",
                 summary.rendered,
+                if frames_per_unit.is_some() {
+                    "units of frames"
+                } else {
+                    "samples"
+                },
                 summary.skipped,
                 summary.pairs,
                 summary.seconds,
@@ -421,11 +437,12 @@ fn merge(out: &std::path::Path, parts: &[PathBuf]) -> Result<()> {
         ),
     };
     println!(
-        "merged into {}: {} ({} already there, {} duplicates identical in several parts taken once; {} files linked, {} copied; {} files or lines of unfinished samples in the parts ignored); {state}",
+        "merged into {}: {} ({} already there, {} duplicates identical in several parts taken once; {} units of frames of unfinished samples; {} files linked, {} copied; {} files or lines of unfinished samples in the parts ignored); {state}",
         out.display(),
         from.join(", "),
         summary.already,
         summary.duplicates,
+        summary.units,
         summary.linked,
         summary.copied,
         summary.unfinished,
@@ -482,6 +499,9 @@ fn status(dataset: &std::path::Path, json: bool, shards: Option<u64>) -> Result<
     }
 }
 
+/// Partly done samples listed by `status` (all of them with `--json`).
+const PARTIAL_SHOWN: usize = 10;
+
 /// The status for people.
 fn status_text(dataset: &std::path::Path, s: &pipeline::Status) -> String {
     use std::fmt::Write;
@@ -508,7 +528,18 @@ fn status_text(dataset: &std::path::Path, s: &pipeline::Status) -> String {
             counts.join(", ")
         );
     }
-    let _ = writeln!(t, "shards of {}:", s.shard_count);
+    match s.frames_per_unit {
+        Some(f) => {
+            let _ = writeln!(
+                t,
+                "shards of {}, counted in units of {f} frames:",
+                s.shard_count
+            );
+        }
+        None => {
+            let _ = writeln!(t, "shards of {}:", s.shard_count);
+        }
+    }
     for shard in &s.shards {
         let _ = writeln!(
             t,
@@ -518,6 +549,20 @@ fn status_text(dataset: &std::path::Path, s: &pipeline::Status) -> String {
             shard.done,
             shard.expected,
             if shard.running { " (running)" } else { "" }
+        );
+    }
+    for partial in s.partial.iter().take(PARTIAL_SHOWN) {
+        let _ = writeln!(
+            t,
+            "  sample {}: {} of {} frames",
+            partial.sample, partial.frames_done, partial.frames
+        );
+    }
+    if s.partial.len() > PARTIAL_SHOWN {
+        let more = s.partial.len() - PARTIAL_SHOWN;
+        let _ = writeln!(
+            t,
+            "  ... and {more} more samples partly done (--json lists them)"
         );
     }
     for lock in &s.locks {
@@ -536,7 +581,10 @@ fn status_text(dataset: &std::path::Path, s: &pipeline::Status) -> String {
             .iter()
             .map(|k| format!("--shard {k}/{}", s.shard_count))
             .collect();
-        let _ = writeln!(t, "resubmit: {}", shards.join(" "));
+        let units = (s.frames_per_unit).map_or(String::new(), |f| {
+            format!(" (each with --frames-per-unit {f})")
+        });
+        let _ = writeln!(t, "resubmit: {}{units}", shards.join(" "));
         let _ = writeln!(t, "slurm: --array={}", s.resubmit_array);
     }
     if let Some(p) = &s.progress {

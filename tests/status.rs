@@ -253,6 +253,8 @@ fn the_json_has_the_documented_fields() {
         "running",
         "shard_counts_seen",
         "shard_count",
+        "frames_per_unit",
+        "partial",
         "shards",
         "locks",
         "resubmit",

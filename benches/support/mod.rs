@@ -28,6 +28,7 @@ pub fn run_in_temp(
         out: dir.path().join("ds"),
         threads: Some(threads),
         shard: shmgen::pipeline::Shard::WHOLE,
+        frames_per_unit: None,
         force: false,
         quiet: true,
     };

@@ -773,6 +773,10 @@ class Dataset(Sequence[View]):
                 where = f"{path}: line {number}"
                 try:
                     entry = json.loads(line)
+                    if isinstance(entry, dict) and "unit" in entry and "sample" not in entry:
+                        # Frames of a sample not finished yet (`run --frames-per-unit`): the
+                        # sample's own line follows once all its frames are written.
+                        continue
                     index, files = int(entry["sample"]), entry["files"]
                     if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
                         raise TypeError("files is not a list of names")

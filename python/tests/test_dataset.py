@@ -214,6 +214,11 @@ def test_missing_and_unfinished_datasets_are_named(box, tmp_path):
     assert all(v.sample == 1 for v in partial)
     with pytest.raises(KeyError, match="no sample 0"):
         partial.sample(0)
+    # Frames of sample 0 written as a unit (`run --frames-per-unit`) are not a sample yet.
+    unit = ('{"unit": {"sample": 0, "frames": [0, 2], "of": 5, "per_unit": 2}, "views": 1, '
+            '"files": ["samples/0000/000000_00.json"], "hashes": {}}\n')
+    manifest.write_text(lines[1] + unit)
+    assert [s.index for s in Dataset(copy, complete=False).samples] == [1]
     # A sample without a points file, asked for one.
     (copy / "manifest.jsonl").write_text(
         "".join(line for line in lines if '"sample":0' in line.replace(" ", "")).replace(

@@ -5,11 +5,13 @@
 //! may end in a torn manifest line (a killed run): only the samples its manifest lists are
 //! its own, and each of them must record the size and BLAKE3 hash of every file, because a
 //! merge passes on no byte it has not checked. Files no line lists are a run's unfinished
-//! work: they are counted, never read.
+//! work: they are counted, never read. A part written in units of frames
+//! (`run --frames-per-unit`) may hold unit lines of samples it has not finished: each is a
+//! finished unit, passed on as it is (OUT seals a sample once its units cover it).
 
 use super::content::Check;
 use super::files::open_inside;
-use super::{Run, each_line, read_run, sample_of};
+use super::{Line, Run, each_line, read_run, sample_of};
 use anyhow::{Result, bail};
 use serde_json::Value;
 use std::collections::{BTreeMap, HashSet};
@@ -27,13 +29,32 @@ pub struct Part {
     pub total: u64,
     /// Its finished samples by index.
     pub samples: BTreeMap<u64, PartSample>,
+    /// Its finished units of frames of sequence samples, by (sample, first frame, end frame),
+    /// for the samples it has not finished.
+    pub units: BTreeMap<(u64, u32, u32), PartSample>,
     /// Manifest lines that are torn or do not parse (a run killed while appending).
     pub torn: u64,
     /// Files under `samples/` that no manifest line lists (samples a run did not finish).
     pub unlisted: u64,
 }
 
-/// A finished sample of a part.
+/// A unit line of the manifest (`output::folder` writes them): frames [start, end) of a
+/// sample, with their files.
+#[derive(serde::Deserialize)]
+struct UnitLine {
+    unit: UnitOf,
+    files: Vec<String>,
+    #[serde(default)]
+    hashes: BTreeMap<String, Check>,
+}
+
+#[derive(serde::Deserialize)]
+struct UnitOf {
+    sample: u64,
+    frames: [u32; 2],
+}
+
+/// A finished sample (or unit of frames) of a part.
 pub struct PartSample {
     /// Its manifest line, as written (newline included).
     pub line: Vec<u8>,
@@ -59,12 +80,16 @@ impl Part {
             run: value,
             total,
             samples: BTreeMap::new(),
+            units: BTreeMap::new(),
             torn: 0,
             unlisted: 0,
         };
         if fs::symlink_metadata(root.join("manifest.jsonl")).is_ok() {
             part.read_lines()?;
         }
+        let finished = &part.samples;
+        part.units
+            .retain(|(sample, _, _), _| !finished.contains_key(sample));
         part.unlisted = part.count_unlisted()?;
         Ok(part)
     }
@@ -72,10 +97,26 @@ impl Part {
     fn read_lines(&mut self) -> Result<()> {
         let name = self.root.join("manifest.jsonl").display().to_string();
         let (total, samples, torn) = (self.total, &mut self.samples, &mut self.torn);
+        let units = &mut self.units;
         each_line(&self.root, |number, bytes, parsed| {
-            let Some(line) = parsed else {
-                *torn += 1;
-                return Ok(());
+            let unit = (parsed.is_none() && bytes.ends_with(b"\n"))
+                .then(|| serde_json::from_slice::<UnitLine>(bytes).ok())
+                .flatten();
+            let (line, key) = match (parsed, unit) {
+                (Some(line), _) => (line, None),
+                (None, Some(u)) if u.unit.frames[0] < u.unit.frames[1] => {
+                    let [start, end] = u.unit.frames;
+                    let line = Line {
+                        sample: u.unit.sample,
+                        files: u.files,
+                        hashes: u.hashes,
+                    };
+                    (line, Some((u.unit.sample, start, end)))
+                }
+                _ => {
+                    *torn += 1;
+                    return Ok(());
+                }
             };
             if line.sample >= total {
                 bail!(
@@ -93,12 +134,15 @@ impl Part {
                 };
                 files.insert(file.clone(), *check);
             }
-            let line_bytes = bytes.to_vec();
-            // The first line of a sample is the one every reader takes.
-            samples.entry(line.sample).or_insert(PartSample {
-                line: line_bytes,
+            let finished = PartSample {
+                line: bytes.to_vec(),
                 files,
-            });
+            };
+            // The first line of a sample (or unit) is the one every reader takes.
+            match key {
+                Some(key) => units.entry(key).or_insert(finished),
+                None => samples.entry(line.sample).or_insert(finished),
+            };
             Ok(())
         })
     }
@@ -106,9 +150,8 @@ impl Part {
     /// Files under `samples/` no manifest line lists, refusing links (a part is read as
     /// untrusted input, and a link there could pass a file from outside into the merge).
     fn count_unlisted(&self) -> Result<u64> {
-        let listed: HashSet<&str> = self
-            .samples
-            .values()
+        let listed: HashSet<&str> = (self.samples.values())
+            .chain(self.units.values())
             .flat_map(|s| s.files.keys().map(String::as_str))
             .collect();
         let mut unlisted = 0;

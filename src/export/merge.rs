@@ -8,6 +8,9 @@
 //! OUT is written through `output::MergeTarget`: sample by sample, files before manifest line,
 //! so a killed merge leaves a partial dataset that the same merge (or `shmgen run`) finishes.
 //! Files are hard-linked where the filesystem allows (as `export` does), copied otherwise.
+//! Parts written in units of frames (`run --frames-per-unit`, one sequence spread over nodes)
+//! give their finished units of unfinished samples: each is placed with its unit line, and
+//! OUT seals a sample (its one line, as a single run writes it) once its units cover it.
 
 use super::staging::Placer;
 use crate::dataset::{Check, Part};
@@ -20,12 +23,14 @@ use std::path::{Path, PathBuf};
 /// What a merge did.
 #[derive(Debug, Default)]
 pub struct MergeSummary {
-    /// Each part, with the samples taken from it.
+    /// Each part, with the samples and units of frames taken from it.
     pub taken: Vec<(PathBuf, u64)>,
     /// Samples OUT had already (identical in the parts that have them too).
     pub already: u64,
     /// Samples found in more than one part (identical), taken once.
     pub duplicates: u64,
+    /// Units of frames of samples no part finished, taken from the parts.
+    pub units: u64,
     /// Files of unfinished samples in the parts (no manifest line lists them) and torn
     /// manifest lines: ignored.
     pub unfinished: u64,
@@ -45,6 +50,8 @@ pub struct MergeSummary {
 struct Plan {
     /// Sample → index of the part it is taken from.
     take: BTreeMap<u64, usize>,
+    /// (sample, first frame, end frame) of a unit → index of the part it is taken from.
+    take_units: BTreeMap<(u64, u32, u32), usize>,
     already: u64,
     duplicates: u64,
 }
@@ -75,9 +82,10 @@ pub fn merge(out: &Path, parts: &[PathBuf]) -> Result<MergeSummary> {
     let target = MergeTarget::open(out, &identity)?;
     let mut placer = Placer::new(false);
     let mut taken = vec![0u64; parts.len()];
-    for (&sample, &from) in &plan.take {
+    let samples = (plan.take.iter()).map(|(&s, &from)| (s, from, &parts[from].samples[&s]));
+    let units = (plan.take_units.iter()).map(|(key, &from)| (key.0, from, &parts[from].units[key]));
+    for (sample, from, finished) in samples.chain(units) {
         let part = &parts[from];
-        let finished = &part.samples[&sample];
         let mut arrival = target.arrive(sample)?;
         for (relative, &check) in &finished.files {
             let to = arrival.place(relative);
@@ -90,9 +98,9 @@ pub fn merge(out: &Path, parts: &[PathBuf]) -> Result<MergeSummary> {
     }
     target.finish(total)?;
 
-    let have = |s: &u64| {
-        plan.take.contains_key(s) || existing.as_ref().is_some_and(|e| e.samples.contains_key(s))
-    };
+    // What OUT holds now, its samples sealed from units included.
+    let merged = Part::open(out).with_context(|| format!("OUT {}", out.display()))?;
+    let have = |s: &u64| merged.samples.contains_key(s);
     let missing = (0..total).filter(|s| !have(s)).count() as u64;
     Ok(MergeSummary {
         taken: parts
@@ -102,6 +110,7 @@ pub fn merge(out: &Path, parts: &[PathBuf]) -> Result<MergeSummary> {
             .collect(),
         already: plan.already,
         duplicates: plan.duplicates,
+        units: plan.take_units.len() as u64,
         unfinished: parts.iter().map(|p| p.torn + p.unlisted).sum(),
         missing,
         first_missing: (0..total).find(|s| !have(s)),
@@ -171,6 +180,7 @@ fn same_dataset(a: &Value, b: &Value) -> bool {
 fn plan(parts: &[Part], existing: Option<&Part>) -> Result<Plan> {
     let mut plan = Plan {
         take: BTreeMap::new(),
+        take_units: BTreeMap::new(),
         already: 0,
         duplicates: 0,
     };
@@ -200,7 +210,41 @@ fn plan(parts: &[Part], existing: Option<&Part>) -> Result<Plan> {
             }
         }
     }
+    plan_units(parts, existing, &mut plan)?;
     Ok(plan)
+}
+
+/// Which part each unit of frames is taken from: the first that has it, for the samples
+/// neither OUT nor any part finished and the units OUT does not have. A unit in several parts
+/// must have the same files with the same sizes and hashes there.
+fn plan_units(parts: &[Part], existing: Option<&Part>, plan: &mut Plan) -> Result<()> {
+    let finished = |s: &u64| {
+        plan.take.contains_key(s) || existing.is_some_and(|out| out.samples.contains_key(s))
+    };
+    let mut take_units: BTreeMap<(u64, u32, u32), usize> = BTreeMap::new();
+    for (index, part) in parts.iter().enumerate() {
+        for (key, unit) in part.units.iter().filter(|(key, _)| !finished(&key.0)) {
+            if existing.is_some_and(|out| out.units.contains_key(key)) {
+                continue;
+            }
+            let Some(&first) = take_units.get(key) else {
+                take_units.insert(*key, index);
+                continue;
+            };
+            if let Some(file) = first_difference(&parts[first].units[key].files, &unit.files) {
+                bail!(
+                    "frames {}–{} of sample {} differ between PART {} and PART {} ({file}); they are not the same frames, so nothing was merged",
+                    key.1,
+                    key.2 - 1,
+                    key.0,
+                    parts[first].root().display(),
+                    part.root().display()
+                );
+            }
+        }
+    }
+    plan.take_units = take_units;
+    Ok(())
 }
 
 /// The first file (by name) listed by one sample's record and not the other, or recorded with

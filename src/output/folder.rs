@@ -7,15 +7,22 @@
 //! (that shard's staging) and `merge/` (a merge's staging, see `merge`).
 //! Temporary files of `run.json` and `manifest.jsonl` are written only under `folder.lock`,
 //! so any found while holding it are stale and removed.
+//!
+//! A sample of a sequence may be written in units of a few frames (`FrameUnits`), each
+//! committed with a unit line (`{"unit": {"sample", "frames": [start, end], "of"}, ...}`) that
+//! readers of finished samples do not take for one. Once the unit lines of a sample cover all
+//! its frames, the sample's own line — the one a whole-sample commit writes, byte for byte — is
+//! appended ("sealed"), and the unit lines are dropped when the finished manifest is sorted.
 
 use super::fault::{self, Fault};
 use super::lock::{Lock, is_held, open_no_wait, recorded_holder};
 use anyhow::{Context, Result, bail};
 use serde_json::Value;
-use std::collections::{BTreeSet, HashSet};
+use std::collections::{BTreeMap, BTreeSet, HashSet};
 use std::fmt::Display;
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -48,9 +55,61 @@ pub(super) struct ShardLease {
     staging: PathBuf,
 }
 
+/// How each sequence sample's frames are dealt out as units of work: `per_unit` consecutive
+/// frames each (the last unit of a sample takes what is left), of `frames` frames a sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameUnits {
+    /// Frames of a sample.
+    pub frames: u32,
+    /// Frames of a unit, ≥ 1.
+    pub per_unit: u32,
+}
+
+impl FrameUnits {
+    /// Units of one sample.
+    pub fn per_sample(&self) -> u64 {
+        u64::from(self.frames.div_ceil(self.per_unit.max(1)).max(1))
+    }
+
+    /// The frames of unit `unit` of a sample (0 ≤ unit < `per_sample`).
+    pub fn range(&self, unit: u64) -> Range<u32> {
+        let start = u32::try_from(unit)
+            .unwrap_or(u32::MAX)
+            .saturating_mul(self.per_unit);
+        start.min(self.frames)..start.saturating_add(self.per_unit).min(self.frames)
+    }
+
+    /// Whether the frames of unit `unit` are among those a unit line `span` holds.
+    pub(super) fn held_by(&self, unit: u64, span: FrameSpan) -> bool {
+        let frames = self.range(unit);
+        span.of == self.frames && span.start <= frames.start && frames.end <= span.end
+    }
+}
+
+/// What one manifest line records: a finished sample, a unit of a sample's frames (its
+/// sample, its frames [start, end) and the sample's frame count), or nothing readable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Entry {
+    Sample(u64),
+    Unit(u64, FrameSpan),
+    Unreadable,
+}
+
+/// Frames [start, end) of a sample of `of` frames, as a unit line records them, with the
+/// frames per unit of the run that wrote it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct FrameSpan {
+    pub start: u32,
+    pub end: u32,
+    pub of: u32,
+    pub per_unit: u32,
+}
+
 /// A sample being written: its files go into a private staging folder first.
 pub struct SampleStage {
     sample: u64,
+    /// The frames staged when this is a unit of a sequence sample (None: the whole sample).
+    frames: Option<FrameSpan>,
     dir: PathBuf,
     root: PathBuf,
     files: Vec<String>,
@@ -149,12 +208,12 @@ impl DatasetFolder {
         identity: Identity,
         force: bool,
         shard: (u64, u64),
-        total: u64,
+        (total, units): (u64, Option<FrameUnits>),
     ) -> Result<SampleSet> {
         let (holds, _) = survey(root, identity)?;
         refuse(root, &holds, force)?;
         match holds {
-            Holds::Same { .. } => completed_in(root, shard, total),
+            Holds::Same { .. } => completed_in(root, shard, total, units),
             _ => Ok(SampleSet::new(shard.1)),
         }
     }
@@ -382,25 +441,58 @@ impl DatasetFolder {
         Ok(())
     }
 
-    /// The samples of shard `shard` = (K, N) below `total` listed in the manifest. Lines that
-    /// do not parse (a torn write after a crash) are ignored: their sample is simply redone.
-    pub fn completed(&self, shard: (u64, u64), total: u64) -> Result<SampleSet> {
-        completed_in(&self.root, shard, total)
+    /// The units of work of shard `shard` = (K, N) below `total` samples listed in the
+    /// manifest: samples, or with `units` the (sample, frame range) units numbered
+    /// `sample × units per sample + unit` (a finished sample has all its units; a unit line
+    /// covers the units whose frames it holds). Lines that do not parse (a torn write after a
+    /// crash) are ignored: their work is simply redone.
+    pub fn completed(
+        &self,
+        shard: (u64, u64),
+        (total, units): (u64, Option<FrameUnits>),
+    ) -> Result<SampleSet> {
+        completed_in(&self.root, shard, total, units)
     }
 
     /// A fresh staging area for `sample`, discarding leftovers of an interrupted attempt.
     pub fn stage(&self, sample: u64) -> Result<SampleStage> {
+        self.stage_as(sample, None)
+    }
+
+    /// A fresh staging area for frames `frames` of sample `sample`, a unit of `units`:
+    /// committed, they are a unit line, and the sample is finished once its units cover it.
+    pub fn stage_frames(
+        &self,
+        sample: u64,
+        frames: Range<u32>,
+        units: FrameUnits,
+    ) -> Result<SampleStage> {
+        let range = FrameSpan {
+            start: frames.start,
+            end: frames.end,
+            of: units.frames,
+            per_unit: units.per_unit,
+        };
+        self.stage_as(sample, Some(range))
+    }
+
+    fn stage_as(&self, sample: u64, frames: Option<FrameSpan>) -> Result<SampleStage> {
         let staging = &self
             .shard
             .as_ref()
             .expect("an open folder holds its shard")
             .staging;
-        let dir = staging.join(format!("{sample:06}"));
+        let name = match frames {
+            Some(f) => format!("{sample:06}_f{:04}", f.start),
+            None => format!("{sample:06}"),
+        };
+        let dir = staging.join(name);
         remove_all(&dir)?;
         fs::create_dir_all(&dir)
             .map_err(|e| io_error(e, format_args!("staging sample {sample}"), &self.root))?;
         Ok(SampleStage {
             sample,
+            frames,
             dir,
             root: self.root.clone(),
             files: Vec::new(),
@@ -409,26 +501,57 @@ impl DatasetFolder {
         })
     }
 
-    /// Moves the staged files into place, then records the sample in the manifest.
+    /// Moves the staged files into place, then records the sample in the manifest; a unit
+    /// of a sequence sample is recorded as a unit line, and the sample's own line follows it
+    /// once its units cover every frame. `views`: the images of the whole sample.
     pub fn commit(&self, stage: SampleStage, views: u32) -> Result<()> {
         self.move_into_place(&stage.dir, &stage.files)?;
         fault::check("commit")?;
-        // Sorted by name whatever order the files were written in, and whichever map type
-        // serde_json is built with: the line's bytes depend on the files' bytes alone.
-        let mut hashes: Vec<(String, Value)> = stage.hashes.into_iter().collect();
-        hashes.sort_by(|a, b| a.0.cmp(&b.0));
-        let hashes: serde_json::Map<String, Value> = hashes.into_iter().collect();
-        let line = serde_json::json!({
-            "sample": stage.sample,
-            "views": views,
-            "files": stage.files,
-            "hashes": hashes,
-        });
-        let mut line = serde_json::to_vec(&line)?;
+        let mut line = match stage.frames {
+            None => sample_line(stage.sample, views, stage.files, stage.hashes)?,
+            Some(frames) => unit_line(stage.sample, frames, views, stage.files, stage.hashes)?,
+        };
         line.push(b'\n');
         self.append_line(&line)?;
+        if stage.frames.is_some() {
+            self.seal_covered(Some(stage.sample))?;
+        }
         fault::check("committed")?;
         fs::remove_dir(&stage.dir)?;
+        Ok(())
+    }
+
+    /// Appends the line of each sample (only `only`, if given) whose unit lines cover all its
+    /// frames and that the manifest does not list yet: the line a whole-sample commit would
+    /// have written, its files in frame order, each once. Under the manifest's lock, so two
+    /// shards committing a sample's last units seal it once.
+    pub(super) fn seal_covered(&self, only: Option<u64>) -> Result<()> {
+        let lock = self.lock_manifest()?;
+        let path = self.path(MANIFEST);
+        let mut finished = HashSet::new();
+        let mut units: BTreeMap<u64, Vec<(FrameSpan, u64, usize)>> = BTreeMap::new();
+        scan_entries(&path, |entry, offset, len| match entry {
+            Entry::Sample(sample) => {
+                finished.insert(sample);
+            }
+            Entry::Unit(sample, frames) if only.is_none_or(|s| s == sample) => {
+                units.entry(sample).or_default().push((frames, offset, len));
+            }
+            _ => {}
+        })?;
+        for (sample, mut lines) in units {
+            if finished.contains(&sample) {
+                continue;
+            }
+            lines.sort_by_key(|(f, _, _)| (f.start, f.end));
+            if !covers(lines.iter().map(|(f, _, _)| *f)) {
+                continue;
+            }
+            let mut line = sealed_line(&path, sample, &lines)?;
+            line.push(b'\n');
+            fault::write_through("append", &line, |b| lock.file().write_all(b))
+                .map_err(|e| io_error(e, "appending to manifest.jsonl", &self.root))?;
+        }
         Ok(())
     }
 
@@ -488,6 +611,8 @@ impl DatasetFolder {
     /// `finish`'s work once the folder lock is held: the manifest sorted if the dataset is
     /// complete (returned), leftovers of interrupted runs and merges removed.
     pub(super) fn tidy(&self, total: u64) -> Result<bool> {
+        // Units whose sample a crash left unsealed after its last unit line.
+        self.seal_covered(None)?;
         let complete = self.finalize_manifest(total)?;
         self.remove_stale_temporaries()?;
         // Shards no process holds: their lock files and staging go.
@@ -769,17 +894,124 @@ fn finished_samples(root: &Path) -> Result<u64> {
     Ok(samples.len() as u64)
 }
 
-fn completed_in(root: &Path, (index, count): (u64, u64), total: u64) -> Result<SampleSet> {
+fn completed_in(
+    root: &Path,
+    (index, count): (u64, u64),
+    total: u64,
+    units: Option<FrameUnits>,
+) -> Result<SampleSet> {
     let mut done = SampleSet::new(count);
-    scan_manifest(&root.join(MANIFEST), |line| {
-        if let Some((sample, _, _)) = line
-            && sample < total
-            && sample % count == index
-        {
-            done.insert(sample);
+    let per_sample = units.map_or(1, |u| u.per_sample());
+    // Unit `chunk` of `sample` is done when `held` frames hold its frames.
+    let mut mark = |sample: u64, held: Option<FrameSpan>| {
+        for chunk in 0..per_sample {
+            let unit = sample * per_sample + chunk;
+            let inside = match (held, units) {
+                (None, _) => true,
+                (Some(held), Some(units)) => units.held_by(chunk, held),
+                (Some(_), None) => false,
+            };
+            if inside && unit % count == index {
+                done.insert(unit);
+            }
         }
+    };
+    scan_entries(&root.join(MANIFEST), |entry, _, _| match entry {
+        Entry::Sample(sample) if sample < total => mark(sample, None),
+        Entry::Unit(sample, frames) if sample < total => mark(sample, Some(frames)),
+        _ => {}
     })?;
     Ok(done)
+}
+
+/// The manifest line (without its newline) of a finished sample: its files in the order
+/// written, with their sizes and hashes.
+fn sample_line(
+    sample: u64,
+    views: u32,
+    files: Vec<String>,
+    hashes: serde_json::Map<String, Value>,
+) -> Result<Vec<u8>> {
+    let line = serde_json::json!({
+        "sample": sample,
+        "views": views,
+        "files": files,
+        "hashes": sorted(hashes),
+    });
+    Ok(serde_json::to_vec(&line)?)
+}
+
+/// The manifest line (without its newline) of frames `frames` of a sample.
+fn unit_line(
+    sample: u64,
+    frames: FrameSpan,
+    views: u32,
+    files: Vec<String>,
+    hashes: serde_json::Map<String, Value>,
+) -> Result<Vec<u8>> {
+    let line = serde_json::json!({
+        "unit": {
+            "sample": sample,
+            "frames": [frames.start, frames.end],
+            "of": frames.of,
+            "per_unit": frames.per_unit,
+        },
+        "views": views,
+        "files": files,
+        "hashes": sorted(hashes),
+    });
+    Ok(serde_json::to_vec(&line)?)
+}
+
+/// `hashes` sorted by name whatever order the files were written in, and whichever map type
+/// serde_json is built with: a line's bytes depend on the files' bytes alone.
+fn sorted(hashes: serde_json::Map<String, Value>) -> serde_json::Map<String, Value> {
+    let mut hashes: Vec<(String, Value)> = hashes.into_iter().collect();
+    hashes.sort_by(|a, b| a.0.cmp(&b.0));
+    hashes.into_iter().collect()
+}
+
+/// Whether frame ranges sorted by start cover every frame of their sample.
+fn covers(ranges: impl Iterator<Item = FrameSpan>) -> bool {
+    let mut reach = 0;
+    let mut of = None;
+    for range in ranges {
+        if range.start > reach || of.is_some_and(|n| n != range.of) {
+            return false;
+        }
+        reach = reach.max(range.end);
+        of = Some(range.of);
+    }
+    of.is_some_and(|n| reach >= n)
+}
+
+/// The line of `sample` made of its unit lines at (frames, offset, length) in the manifest at
+/// `path`, sorted by their first frame: their files in that order, each once.
+fn sealed_line(path: &Path, sample: u64, lines: &[(FrameSpan, u64, usize)]) -> Result<Vec<u8>> {
+    #[derive(serde::Deserialize)]
+    struct UnitLine {
+        views: u32,
+        files: Vec<String>,
+        hashes: serde_json::Map<String, Value>,
+    }
+    let mut source = File::open(path).with_context(|| format!("reading {}", path.display()))?;
+    let (mut views, mut files, mut hashes) = (0, Vec::new(), serde_json::Map::new());
+    let mut seen = HashSet::new();
+    for &(_, offset, len) in lines {
+        let mut bytes = vec![0; len];
+        source.seek(SeekFrom::Start(offset))?;
+        source.read_exact(&mut bytes)?;
+        let unit: UnitLine = serde_json::from_slice(&bytes)
+            .with_context(|| format!("{}: a unit line of sample {sample}", path.display()))?;
+        views = unit.views;
+        for file in unit.files {
+            if seen.insert(file.clone()) {
+                hashes.extend(unit.hashes.get(&file).map(|h| (file.clone(), h.clone())));
+                files.push(file);
+            }
+        }
+    }
+    sample_line(sample, views, files, hashes)
 }
 
 /// The longest manifest line read (a sample's file list with its hashes: a few kB): a
@@ -794,9 +1026,26 @@ pub(super) fn scan_manifest(
     path: &Path,
     mut each: impl FnMut(Option<(u64, u64, usize)>),
 ) -> Result<()> {
+    scan_entries(path, |entry, offset, len| match entry {
+        Entry::Sample(sample) => each(Some((sample, offset, len))),
+        _ => each(None),
+    })
+}
+
+/// [`scan_manifest`] telling unit lines apart: calls `each` with every line's entry, byte
+/// offset and length.
+pub(super) fn scan_entries(path: &Path, mut each: impl FnMut(Entry, u64, usize)) -> Result<()> {
     #[derive(serde::Deserialize)]
     struct Line {
+        sample: Option<u64>,
+        unit: Option<UnitOf>,
+    }
+    #[derive(serde::Deserialize)]
+    struct UnitOf {
         sample: u64,
+        frames: [u32; 2],
+        of: u32,
+        per_unit: u32,
     }
     let Some(file) = open_manifest(path)? else {
         return Ok(());
@@ -821,7 +1070,26 @@ pub(super) fn scan_manifest(
         let parsed = serde_json::from_slice::<Line>(&line)
             .ok()
             .filter(|_| line.ends_with(b"\n"));
-        each(parsed.map(|l| (l.sample, offset, len)));
+        let entry = match parsed {
+            Some(Line {
+                sample: Some(sample),
+                unit: None,
+            }) => Entry::Sample(sample),
+            Some(Line {
+                sample: None,
+                unit: Some(u),
+            }) if u.frames[0] < u.frames[1] && u.frames[1] <= u.of => Entry::Unit(
+                u.sample,
+                FrameSpan {
+                    start: u.frames[0],
+                    end: u.frames[1],
+                    of: u.of,
+                    per_unit: u.per_unit.max(1),
+                },
+            ),
+            _ => Entry::Unreadable,
+        };
+        each(entry, offset, len);
         offset += len as u64;
     }
     Ok(())
@@ -1033,7 +1301,7 @@ mod tests {
             .open(dir.path().join(MANIFEST))
             .unwrap();
         f.write_all(b"{\"sample\": 7, \"vie").unwrap();
-        let done = folder.completed((0, 1), 10).unwrap();
+        let done = folder.completed((0, 1), (10, None)).unwrap();
         assert_eq!(done.len(), 3);
         assert!((0..3).all(|s| done.contains(s)) && !done.contains(7));
         assert!(!folder.finish(4).unwrap());
@@ -1049,6 +1317,85 @@ mod tests {
             .collect();
         assert_eq!(order, vec![0, 1, 2]);
         assert!(!dir.path().join(STAGING).exists());
+    }
+
+    /// Stages `frames` of sample 0 (one file a frame, frame 0 with a sensor file first) as a
+    /// unit of `units`, or the whole sample (None), and commits it.
+    fn commit_frames(folder: &DatasetFolder, units: FrameUnits, frames: Option<Range<u32>>) {
+        let mut stage = match &frames {
+            Some(range) => folder.stage_frames(0, range.clone(), units).unwrap(),
+            None => folder.stage(0).unwrap(),
+        };
+        let range = frames.unwrap_or(0..units.frames);
+        if range.start == 0 {
+            stage.write("samples/s.csv".into(), b"series").unwrap();
+        }
+        for k in range {
+            let bytes = format!("frame {k}");
+            stage
+                .write(format!("samples/f{k}"), bytes.as_bytes())
+                .unwrap();
+        }
+        folder.commit(stage, 7).unwrap();
+    }
+
+    #[test]
+    fn units_covering_a_sample_seal_it_with_the_line_of_a_whole_sample_commit() {
+        let units = FrameUnits {
+            frames: 10,
+            per_unit: 4,
+        };
+        assert_eq!(units.per_sample(), 3);
+        assert_eq!(
+            (0..3).map(|u| units.range(u)).collect::<Vec<_>>(),
+            [0..4, 4..8, 8..10]
+        );
+        let whole = tempfile::tempdir().unwrap();
+        let folder = DatasetFolder::open(whole.path(), &identity(b"{}"), true, (0, 1)).unwrap();
+        commit_frames(&folder, units, None);
+        let expected = fs::read(whole.path().join(MANIFEST)).unwrap();
+
+        let dir = tempfile::tempdir().unwrap();
+        let folder = DatasetFolder::open(dir.path(), &identity(b"{}"), true, (0, 1)).unwrap();
+        let lines = || fs::read_to_string(dir.path().join(MANIFEST)).unwrap();
+        // Out of order, and a unit of another split (frames 0–4) holding the first unit and
+        // part of the second.
+        let odd = FrameUnits {
+            frames: 10,
+            per_unit: 5,
+        };
+        commit_frames(&folder, units, Some(8..10));
+        commit_frames(&folder, odd, Some(0..5));
+        let done = folder.completed((0, 1), (1, Some(units))).unwrap();
+        assert!(done.contains(0) && !done.contains(1) && done.contains(2));
+        assert_eq!(lines().lines().count(), 2, "not yet sealed");
+        commit_frames(&folder, units, Some(4..8));
+        // Frames 5–7 were missing until now: sealed once, the whole sample's line.
+        assert_eq!(lines().lines().count(), 4);
+        let sealed = lines().lines().last().unwrap().to_string() + "\n";
+        assert_eq!(sealed.as_bytes(), &expected[..]);
+        let done = folder.completed((0, 1), (1, Some(units))).unwrap();
+        assert_eq!(done.len(), 3);
+        // Sealing again adds nothing; finishing drops the unit lines.
+        folder.seal_covered(None).unwrap();
+        assert_eq!(lines().lines().count(), 4);
+        assert!(folder.finish(1).unwrap());
+        assert_eq!(fs::read(dir.path().join(MANIFEST)).unwrap(), expected);
+    }
+
+    #[test]
+    fn spans_cover_a_sample_only_without_gaps_and_of_one_length() {
+        let span = |start, end, of| FrameSpan {
+            start,
+            end,
+            of,
+            per_unit: 1,
+        };
+        assert!(covers([span(0, 4, 9), span(2, 9, 9)].into_iter()));
+        assert!(!covers([span(0, 4, 9), span(5, 9, 9)].into_iter()));
+        assert!(!covers([span(1, 9, 9)].into_iter()));
+        assert!(!covers([span(0, 4, 9), span(4, 9, 8)].into_iter()));
+        assert!(!covers(std::iter::empty()));
     }
 
     #[test]

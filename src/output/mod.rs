@@ -31,7 +31,9 @@ pub use encode::{
     DEPTH_CHANNEL, ExrChannels, FLOW_CHANNELS, MAX_SEGMENTATION_ID, SCALAR_CHANNELS,
     VECTOR_CHANNELS, depth_exr, grey16_png, id_png, mask_png, npy, rgb_png, rgb16_png, vector_exr,
 };
-pub use folder::{DatasetFolder, Identity, SampleSet, SampleStage, differences, write_atomic};
+pub use folder::{
+    DatasetFolder, FrameUnits, Identity, SampleSet, SampleStage, differences, write_atomic,
+};
 pub use guard::refuse_data_target;
 pub use merge::{Arrival, MergeTarget, hard_link_opened};
 pub use meshes::{MeshLayer, PointLayer};

@@ -13,10 +13,14 @@
 //! differ), so progress comes from file times: a sample's files are renamed into place with
 //! the time they were written, and the manifest lists samples in the order they finished
 //! until the dataset is complete. The rate is measured over the last `RATE_WINDOW` lines.
+//!
+//! A run dealing out a sequence's frames (`run --frames-per-unit F`) leaves unit lines: the
+//! shards are then counted in units of F frames (F as those lines record it), and each
+//! unfinished sample with units says how many of its frames are done.
 
 use super::folder::{
-    MANIFEST, RUN_JSON, is_held_now, open_manifest, parse_shard, read_record, refuse_links,
-    scan_manifest, shard_lock_files, shards_finished,
+    Entry, FrameSpan, FrameUnits, MANIFEST, RUN_JSON, is_held_now, open_manifest, parse_shard,
+    read_record, refuse_links, scan_entries, shard_lock_files, shards_finished,
 };
 use super::lock::{parse_holder, recorded_holder, this_host};
 use anyhow::{Context, Result, bail};
@@ -62,6 +66,11 @@ pub struct Status {
     pub shard_counts_seen: Vec<u64>,
     /// The shard count the per-shard lines are for.
     pub shard_count: u64,
+    /// What the per-shard lines count: None, samples; Some(F), units of F frames of the
+    /// sequence samples (the manifest holds unit lines of a run with `--frames-per-unit F`).
+    pub frames_per_unit: Option<u32>,
+    /// The samples not finished of which some frames are (units of frames), by sample.
+    pub partial: Vec<PartialSample>,
     /// Each shard of `shard_count`.
     pub shards: Vec<ShardStatus>,
     /// Each shard lock file left in `.partial/`.
@@ -76,14 +85,25 @@ pub struct Status {
     pub progress: Option<Progress>,
 }
 
+/// A sample not finished with some of its frames done.
+#[derive(Serialize)]
+pub struct PartialSample {
+    /// Its index.
+    pub sample: u64,
+    /// Its frames whose units are in the manifest.
+    pub frames_done: u64,
+    /// Its frames.
+    pub frames: u64,
+}
+
 /// One shard K of `shard_count`.
 #[derive(Serialize)]
 pub struct ShardStatus {
     /// K.
     pub index: u64,
-    /// Its samples in the manifest.
+    /// Its samples (or units, see `frames_per_unit`) in the manifest.
     pub done: u64,
-    /// Its samples in the dataset.
+    /// Its samples (or units) in the dataset.
     pub expected: u64,
     /// Whether its lock is held now.
     pub running: bool,
@@ -145,6 +165,9 @@ pub fn status(root: &Path, shards: Option<u64>) -> Result<Status> {
         .and_then(Value::as_u64)
         .with_context(|| format!("{}: no dataset.samples", root.join(RUN_JSON).display()))?;
     let manifest = read_manifest(root, samples)?;
+    let grid = manifest.grid();
+    // Units of work: samples, or units of frames when the manifest has unit lines.
+    let total_units = samples.saturating_mul(grid.map_or(1, |g| g.per_sample()));
     let locks = lock_states(root)?;
     let finished = shards_finished(root)?;
     let counts_seen: BTreeSet<u64> = locks
@@ -152,7 +175,7 @@ pub fn status(root: &Path, shards: Option<u64>) -> Result<Status> {
         .map(|l| l.shard.as_str())
         .chain(finished.iter().map(String::as_str))
         .filter_map(|shard| parse_shard(shard).map(|(_, n)| n))
-        .filter(|&n| n <= samples.clamp(1, MAX_SHARDS))
+        .filter(|&n| n <= total_units.clamp(1, MAX_SHARDS))
         .collect();
     let running_now: Vec<(u64, u64)> = locks
         .iter()
@@ -172,7 +195,11 @@ pub fn status(root: &Path, shards: Option<u64>) -> Result<Status> {
             .or_else(|| counts_seen.last().copied())
             .unwrap_or(1),
     };
-    let shard_list = per_shard(&manifest.samples, samples, shard_count, &running_now);
+    let units = match grid {
+        Some(grid) => manifest.units_done(grid),
+        None => manifest.samples.iter().copied().collect(),
+    };
+    let shard_list = per_shard(units, total_units, shard_count, &running_now);
     let resubmit: Vec<u64> = shard_list
         .iter()
         .filter(|s| s.done < s.expected && !s.running)
@@ -189,6 +216,8 @@ pub fn status(root: &Path, shards: Option<u64>) -> Result<Status> {
         running: !running_now.is_empty(),
         shard_counts_seen: counts_seen.into_iter().collect(),
         shard_count,
+        frames_per_unit: grid.map(|g| g.per_unit),
+        partial: manifest.partial(),
         shards: shard_list,
         resubmit_array: array_list(&resubmit),
         resubmit,
@@ -227,6 +256,10 @@ fn identity(root: &Path) -> Result<Value> {
 /// each of the latest lines (for their times), and the lines that could not be read.
 struct Manifest {
     samples: HashSet<u64>,
+    /// The unit lines of the samples below the dataset's count, by sample.
+    units: BTreeMap<u64, Vec<FrameSpan>>,
+    /// The last unit line's span: the frames per unit and per sample of the latest run.
+    last_unit: Option<FrameSpan>,
     latest: Vec<String>,
     unreadable: u64,
 }
@@ -234,23 +267,86 @@ struct Manifest {
 fn read_manifest(root: &Path, total: u64) -> Result<Manifest> {
     let path = root.join(MANIFEST);
     let mut samples = HashSet::new();
+    let (mut units, mut last_unit) = (BTreeMap::<u64, Vec<FrameSpan>>::new(), None);
     let mut latest = VecDeque::with_capacity(RATE_WINDOW);
     let mut unreadable = 0;
-    scan_manifest(&path, |line| match line {
-        Some((sample, offset, len)) if sample < total => {
+    scan_entries(&path, |entry, offset, len| match entry {
+        Entry::Sample(sample) if sample < total => {
             samples.insert(sample);
             if latest.len() == RATE_WINDOW {
                 latest.pop_front();
             }
             latest.push_back((offset, len));
         }
+        Entry::Unit(sample, span) if sample < total => {
+            units.entry(sample).or_default().push(span);
+            last_unit = Some(span);
+        }
         _ => unreadable += 1,
     })?;
     Ok(Manifest {
         samples,
+        units,
+        last_unit,
         latest: first_files(&path, &latest)?,
         unreadable,
     })
+}
+
+impl Manifest {
+    /// How the latest run dealt out frames, if the manifest has unit lines.
+    fn grid(&self) -> Option<FrameUnits> {
+        self.last_unit.map(|span| FrameUnits {
+            frames: span.of,
+            per_unit: span.per_unit,
+        })
+    }
+
+    /// The units (numbered `sample × units per sample + unit`) done: every unit of a finished
+    /// sample, and those a unit line holds.
+    fn units_done(&self, grid: FrameUnits) -> Vec<u64> {
+        let per_sample = grid.per_sample();
+        let mut done = Vec::new();
+        for &sample in &self.samples {
+            done.extend((0..per_sample).map(|unit| sample * per_sample + unit));
+        }
+        for (sample, spans) in (self.units.iter()).filter(|(s, _)| !self.samples.contains(s)) {
+            let held = |unit| spans.iter().any(|&span| grid.held_by(unit, span));
+            done.extend(
+                (0..per_sample)
+                    .filter(|&u| held(u))
+                    .map(|u| sample * per_sample + u),
+            );
+        }
+        done
+    }
+
+    /// The samples not finished with frames done, and how many.
+    fn partial(&self) -> Vec<PartialSample> {
+        (self.units.iter())
+            .filter(|(sample, _)| !self.samples.contains(sample))
+            .map(|(&sample, spans)| PartialSample {
+                sample,
+                frames_done: frames_held(spans),
+                frames: spans.iter().map(|s| u64::from(s.of)).max().unwrap_or(0),
+            })
+            .collect()
+    }
+}
+
+/// Frames held by at least one of `spans`.
+fn frames_held(spans: &[FrameSpan]) -> u64 {
+    let mut spans: Vec<(u32, u32)> = spans.iter().map(|s| (s.start, s.end)).collect();
+    spans.sort_unstable();
+    let (mut held, mut reach) = (0u64, 0u32);
+    for (start, end) in spans {
+        let from = start.max(reach);
+        if end > from {
+            held += u64::from(end - from);
+            reach = end;
+        }
+    }
+    held
 }
 
 /// The first file each of the manifest's lines at (offset, length) lists.
@@ -339,7 +435,7 @@ fn pid_exists(_pid: u32) -> bool {
 
 /// Samples done and expected in each shard K of `count`.
 fn per_shard(
-    done: &HashSet<u64>,
+    done: impl IntoIterator<Item = u64>,
     total: u64,
     count: u64,
     running: &[(u64, u64)],
@@ -429,7 +525,7 @@ mod tests {
     fn shards_expect_the_samples_congruent_to_their_index() {
         // 10 samples in 4 shards: 0,4,8 / 1,5,9 / 2,6 / 3,7.
         let done: HashSet<u64> = [0, 4, 9, 3].into();
-        let shards = per_shard(&done, 10, 4, &[(2, 4)]);
+        let shards = per_shard(done.iter().copied(), 10, 4, &[(2, 4)]);
         let got: Vec<(u64, u64, bool)> = shards
             .iter()
             .map(|s| (s.done, s.expected, s.running))
@@ -439,6 +535,6 @@ mod tests {
             vec![(2, 3, false), (1, 3, false), (0, 2, true), (1, 2, false)]
         );
         // More shards than samples: the shards without samples are not listed.
-        assert_eq!(per_shard(&done, 2, 4, &[]).len(), 2);
+        assert_eq!(per_shard(done, 2, 4, &[]).len(), 2);
     }
 }

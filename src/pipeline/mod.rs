@@ -6,6 +6,11 @@
 //! scenes are described, meshed, traced or encoded (it calls those modules). The result never
 //! depends on the thread count, the shard split or interruptions: every sample is a pure
 //! function of (recipe, seed, sample index) and is committed atomically.
+//!
+//! The unit of work is a sample, or with `--frames-per-unit F` a range of F frames of a
+//! sequence sample (unit u = sample × units per sample + range): units are dealt to shards
+//! (u ≡ K mod N), rendered, committed and resumed alone, and each frame's files have the same
+//! bytes whichever unit wrote them.
 
 mod augmented;
 mod damage;
@@ -26,12 +31,12 @@ pub use crate::render::DamageClass;
 pub use geometry::SampleGeometry;
 pub use record::{FrameRecord, ViewFacts};
 pub use record::{RunRecord, ViewRecord, json_bytes, run_json, run_schema, view_schema};
-pub use sample::{for_each_image, prepare, write_sample};
+pub use sample::{for_each_image, prepare, write_sample, write_sample_frames};
 pub use sequence::{MountOffset, SampleMotion, mount_offset};
 pub use view::{RenderedView, SampleRenderer, view_camera};
 
-use crate::output::DatasetFolder;
 use crate::output::refuse_data_target;
+use crate::output::{DatasetFolder, FrameUnits};
 use crate::recipe::Recipe;
 use crate::render::SharedTraceMeshes;
 use anyhow::{Context, Result, bail};
@@ -42,7 +47,8 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
-/// This process renders the samples whose index ≡ `index` (mod `count`).
+/// This process renders the units of work (samples, or frame ranges of sequence samples)
+/// whose index ≡ `index` (mod `count`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Shard {
     /// This shard's index K, 0 ≤ K < N.
@@ -55,7 +61,7 @@ impl Shard {
     /// The whole dataset in one shard.
     pub const WHOLE: Shard = Shard { index: 0, count: 1 };
 
-    /// Whether this shard renders sample `sample`.
+    /// Whether this shard renders unit `sample` (a sample, unless frames are dealt out).
     pub fn owns(&self, sample: u64) -> bool {
         sample % self.count == self.index
     }
@@ -84,8 +90,10 @@ pub struct RunOptions {
     pub out: PathBuf,
     /// Worker threads; None uses every core.
     pub threads: Option<usize>,
-    /// The samples this process renders.
+    /// The units this process renders.
     pub shard: Shard,
+    /// Deal a sequence's frames out in units of this many frames (None: whole samples).
+    pub frames_per_unit: Option<u32>,
     /// Clear a folder holding another dataset (only what shmgen wrote there) instead of
     /// refusing it.
     pub force: bool,
@@ -96,9 +104,9 @@ pub struct RunOptions {
 /// What a run did.
 #[derive(Debug, Default)]
 pub struct RunSummary {
-    /// Samples rendered by this run.
+    /// Units (samples, or frame ranges with `frames_per_unit`) rendered by this run.
     pub rendered: u64,
-    /// Samples of this shard already in the folder, skipped.
+    /// Units of this shard already in the folder, skipped.
     pub skipped: u64,
     /// Views rendered (image/depth pairs).
     pub pairs: u64,
@@ -126,7 +134,7 @@ impl Shard {
         self.len(total) == 0
     }
 
-    /// The samples of a dataset of `total` samples this shard renders, in order.
+    /// The units of a dataset of `total` units this shard renders, in order.
     fn samples(&self, total: u64) -> impl Iterator<Item = u64> + Send + use<> {
         let (index, count) = (self.index, self.count);
         (0..self.len(total)).map(move |i| index + i * count)
@@ -143,24 +151,107 @@ pub fn run(recipe: &Recipe, options: &RunOptions) -> Result<RunSummary> {
     pool.install(|| run_in_pool(recipe, options, start))
 }
 
+/// The units of work of a run: whole samples, or each sequence sample's frames in ranges.
+#[derive(Clone, Copy)]
+struct Units {
+    samples: u64,
+    frames: Option<FrameUnits>,
+}
+
+impl Units {
+    /// The units of `recipe` with `frames_per_unit` frames each (None: whole samples); refused
+    /// for a dataset without a sequence, or 0 frames.
+    fn of(recipe: &Recipe, frames_per_unit: Option<u32>) -> Result<Units> {
+        let samples = recipe.dataset.samples;
+        let Some(per_unit) = frames_per_unit else {
+            return Ok(Units {
+                samples,
+                frames: None,
+            });
+        };
+        let Some(sequence) = &recipe.dataset.sequence else {
+            bail!(
+                "--frames-per-unit {per_unit}: the recipe films no sequence (no dataset.sequence); its units are whole samples, so leave the option out"
+            );
+        };
+        if per_unit == 0 {
+            bail!("--frames-per-unit 0: a unit holds at least one frame");
+        }
+        Ok(Units {
+            samples,
+            frames: Some(FrameUnits {
+                frames: sequence.frames(),
+                per_unit,
+            }),
+        })
+    }
+
+    /// Units of one sample.
+    fn per_sample(&self) -> u64 {
+        self.frames.map_or(1, |f| f.per_sample())
+    }
+
+    /// Units of the dataset.
+    fn total(&self) -> u64 {
+        self.samples.saturating_mul(self.per_sample())
+    }
+
+    /// The sample of unit `unit`.
+    fn sample(&self, unit: u64) -> u64 {
+        unit / self.per_sample()
+    }
+
+    /// The sample of unit `unit` and its frames (None: all of them).
+    fn work(&self, unit: u64) -> (u64, Option<std::ops::Range<u32>>) {
+        let per_sample = self.per_sample();
+        let frames = self.frames.map(|f| f.range(unit % per_sample));
+        (unit / per_sample, frames)
+    }
+
+    /// What a unit is called in messages.
+    fn name(&self, unit: u64) -> String {
+        match self.work(unit) {
+            (sample, Some(frames)) => format!(
+                "unit {unit} (frames {}–{} of sample {sample})",
+                frames.start,
+                frames.end.saturating_sub(1)
+            ),
+            (sample, None) => format!("sample {sample}"),
+        }
+    }
+}
+
 fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<RunSummary> {
-    let total = recipe.dataset.samples;
+    let units = Units::of(recipe, options.frames_per_unit)?;
+    let (samples, total) = (units.samples, units.total());
     let shard = options.shard;
     let mine = shard.len(total);
     if mine == 0 {
-        bail!("this shard has no samples (the dataset has {total} samples)");
+        match units.frames {
+            None => bail!("this shard has no samples (the dataset has {total} samples)"),
+            Some(_) => bail!(
+                "this shard has no units (the dataset has {total} units of --frames-per-unit frames)"
+            ),
+        }
     }
     let identity = |recorded: Option<&serde_json::Value>| run_json(recipe, recorded);
     let shard_id = (shard.index, shard.count);
+    let extent = (samples, units.frames);
 
-    // Before writing anything: the folder must be usable, and the first samples to render
-    // must build.
+    // Before writing anything: the folder must be usable, and the samples of the first units
+    // to render must build.
     refuse_data_target(&options.out, "--out", None, true)?;
-    let done = DatasetFolder::check(&options.out, &identity, options.force, shard_id, total)?;
-    let first = shard.samples(total).filter(|s| !done.contains(*s));
+    let done = DatasetFolder::check(&options.out, &identity, options.force, shard_id, extent)?;
+    let first = shard.samples(total).filter(|u| !done.contains(*u));
     let ahead = mine.saturating_sub(done.len()).min(VALIDATED_FIRST);
-    let progress = Progress::new("validating", ahead, options.quiet);
-    in_order(first.take(ahead as usize), |index| {
+    let mut last = None;
+    let first_samples = (first.take(ahead as usize))
+        .map(|unit| units.sample(unit))
+        .filter(move |&sample| last.replace(sample) != Some(sample))
+        .collect::<Vec<_>>();
+    let count = first_samples.len() as u64;
+    let progress = Progress::new("validating", "samples", count, options.quiet);
+    in_order(first_samples.into_iter(), |index| {
         prepare(recipe, index)?;
         progress.sample_done();
         Ok(0)
@@ -169,43 +260,60 @@ fn run_in_pool(recipe: &Recipe, options: &RunOptions, start: Instant) -> Result<
     progress.finish();
 
     let folder = DatasetFolder::open(&options.out, &identity, options.force, shard_id)?;
-    let done = folder.completed(shard_id, total)?;
+    let done = folder.completed(shard_id, extent)?;
     let todo = mine - done.len();
-    let progress = Progress::new("rendering", todo, options.quiet);
-    let rendered = AtomicU64::new(0);
+    let noun = units.frames.map_or("samples", |_| "units of frames");
+    let progress = Progress::new("rendering", noun, todo, options.quiet);
+    let (rendered, pairs) = (AtomicU64::new(0), AtomicU64::new(0));
     let shared = SharedTraceMeshes::default();
-    let bytes = in_order(
-        shard.samples(total).filter(|s| !done.contains(*s)),
-        |index| {
-            let sample = prepare(recipe, index)?;
-            let mut stage = folder.stage(index)?;
-            let views = write_sample(recipe, &sample, &shared, &mut stage)?;
-            let bytes = stage.bytes;
-            folder
-                .commit(stage, views)
-                .with_context(|| format!("committing sample {index}"))?;
-            rendered.fetch_add(1, Ordering::Relaxed);
-            progress.sample_done();
-            Ok(bytes)
-        },
-    )
-    .map_err(|(index, e)| {
+    let bytes = in_order(shard.samples(total).filter(|u| !done.contains(*u)), |unit| {
+        let (index, frames) = units.work(unit);
+        let sample = prepare(recipe, index)?;
+        let mut stage = match (&frames, units.frames) {
+            (Some(range), Some(all)) => folder.stage_frames(index, range.clone(), all)?,
+            _ => folder.stage(index)?,
+        };
+        let views = write_sample_frames(recipe, &sample, &shared, &mut stage, frames.clone())?;
+        let bytes = stage.bytes;
+        folder
+            .commit(stage, views)
+            .with_context(|| format!("committing {}", units.name(unit)))?;
+        rendered.fetch_add(1, Ordering::Relaxed);
+        pairs.fetch_add(images_of(recipe, frames), Ordering::Relaxed);
+        progress.sample_done();
+        Ok(bytes)
+    })
+    .map_err(|(unit, e)| {
         e.context(format!(
-            "the run stopped at sample {index}: every sample of this shard before it is complete and listed in {}",
+            "the run stopped at {}: all the work of this shard before it is complete and listed in {}",
+            units.name(unit),
             options.out.join("manifest.jsonl").display()
         ))
     })?;
     progress.finish();
-    let complete = folder.finish(total)?;
+    let complete = folder.finish(samples)?;
     let rendered = rendered.into_inner();
     Ok(RunSummary {
         rendered,
         skipped: done.len(),
-        pairs: rendered * u64::from(recipe.dataset.images_per_sample()),
+        pairs: pairs.into_inner(),
         bytes,
         seconds: start.elapsed().as_secs_f64(),
         complete,
     })
+}
+
+/// Images (image/depth pairs) of the frames `frames` of a sample (all of them: None).
+fn images_of(recipe: &Recipe, frames: Option<std::ops::Range<u32>>) -> u64 {
+    let dataset = &recipe.dataset;
+    match frames {
+        Some(range) => {
+            let per_frame =
+                u64::from(dataset.cameras_per_sample()) * u64::from(dataset.augment.per_view());
+            per_frame * u64::from(range.end - range.start)
+        }
+        None => u64::from(dataset.images_per_sample()),
+    }
 }
 
 /// Runs `work` on `samples` in their order on every thread of the current pool, each thread

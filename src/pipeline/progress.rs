@@ -10,6 +10,7 @@ pub enum Progress {
     Bar(ProgressBar),
     Lines {
         what: &'static str,
+        noun: &'static str,
         total: u64,
         done: AtomicU64,
         start: Instant,
@@ -19,25 +20,28 @@ pub enum Progress {
 }
 
 impl Progress {
-    /// Progress of `what` ("validating", "rendering") `total` samples.
-    pub fn new(what: &'static str, total: u64, quiet: bool) -> Self {
+    /// Progress of `what` ("validating", "rendering") `total` things called `noun` ("samples",
+    /// "units of frames").
+    pub fn new(what: &'static str, noun: &'static str, total: u64, quiet: bool) -> Self {
         if quiet || total == 0 {
             return Progress::Quiet;
         }
         if std::io::stderr().is_terminal() {
             let bar = ProgressBar::new(total);
             bar.set_style(
-                ProgressStyle::with_template("{spinner} {msg} [{elapsed_precise}] {bar:40} {pos}/{len} samples, {per_sec}, ETA {eta}")
+                ProgressStyle::with_template("{spinner} {msg} [{elapsed_precise}] {bar:40} {pos}/{len} {prefix}, {per_sec}, ETA {eta}")
                     .expect("valid template"),
             );
             bar.set_message(what);
+            bar.set_prefix(noun);
             bar.enable_steady_tick(Duration::from_millis(200));
             Progress::Bar(bar)
         } else {
             let now = Instant::now();
-            eprintln!("{what}: {total} samples");
+            eprintln!("{what}: {total} {noun}");
             Progress::Lines {
                 what,
+                noun,
                 total,
                 done: AtomicU64::new(0),
                 start: now,
@@ -51,6 +55,7 @@ impl Progress {
             Progress::Bar(bar) => bar.inc(1),
             Progress::Lines {
                 what,
+                noun,
                 total,
                 done,
                 start,
@@ -63,7 +68,7 @@ impl Progress {
                     let secs = start.elapsed().as_secs_f64();
                     let eta = secs / done as f64 * (total - done) as f64;
                     eprintln!(
-                        "{what}: {done}/{total} samples ({:.0}%), {secs:.1} s elapsed, ETA {eta:.0} s",
+                        "{what}: {done}/{total} {noun} ({:.0}%), {secs:.1} s elapsed, ETA {eta:.0} s",
                         100.0 * done as f64 / *total as f64
                     );
                 }

@@ -24,6 +24,7 @@ use crate::scene::{DatasetSpec, GeometryMode, SequenceSpec};
 use anyhow::{Result, bail};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
+use std::ops::Range;
 use std::sync::Arc;
 
 /// Draws the scene of sample `index` and builds its deformed meshes; fails on anything that
@@ -101,9 +102,25 @@ pub fn write_sample(
     shared: &SharedTraceMeshes,
     stage: &mut SampleStage,
 ) -> Result<u32> {
+    write_sample_frames(recipe, sample, shared, stage, None)
+}
+
+/// [`write_sample`] of the frames `frames` of a sequence alone (all of them for None, and
+/// always for a still): the files of those frames with the bytes the whole sequence gives
+/// them. The frames just outside the range are built too when the flow between frames needs
+/// them; the sensor series (one per sample) go with the range that holds frame 0.
+pub fn write_sample_frames(
+    recipe: &Recipe,
+    sample: &BuiltSample,
+    shared: &SharedTraceMeshes,
+    stage: &mut SampleStage,
+    frames: Option<Range<u32>>,
+) -> Result<u32> {
     let dataset = &recipe.dataset;
     // The sensors record the whole sequence: one series a sample, not one a frame.
-    write_sensor_files(dataset, sample, stage)?;
+    if frames.as_ref().is_none_or(|range| range.start == 0) {
+        write_sensor_files(dataset, sample, stage)?;
+    }
     let Some(sequence) = &dataset.sequence else {
         let still = Still {
             trace_mesh: shared.get(&sample.mesh, sample.structure_triangles()),
@@ -130,10 +147,21 @@ pub fn write_sample(
             trace_mesh,
         ))
     };
-    let frames = motion.frames();
-    let mut window = FrameWindow::new(build(0)?, dataset.outputs.wants("frame_flow"));
-    for k in 0..frames {
-        let next = if k + 1 < frames {
+    let total = motion.frames();
+    let range = frames.map_or(0..total, |r| r.start as usize..(r.end as usize).min(total));
+    if range.is_empty() {
+        return Ok(dataset.images_per_sample());
+    }
+    let keep_prev = dataset.outputs.wants("frame_flow");
+    // The frame before the range, for the flow back to it from the range's first frame.
+    let before = match range.start.checked_sub(1) {
+        Some(k) if keep_prev => Some(build(k)?),
+        _ => None,
+    };
+    let mut window = FrameWindow::new(before, build(range.start)?, keep_prev);
+    for k in range.clone() {
+        // The frame after the range is built too (for the flow to it), never written.
+        let next = if k + 1 < total && (keep_prev || k + 1 < range.end) {
             Some(build(k + 1)?)
         } else {
             None
@@ -179,9 +207,11 @@ struct FrameWindow {
 }
 
 impl FrameWindow {
-    fn new(first: SequenceFrame, keep_prev: bool) -> Self {
+    /// The window on `first`, `before` it (kept only when the flow between frames is asked
+    /// for).
+    fn new(before: Option<SequenceFrame>, first: SequenceFrame, keep_prev: bool) -> Self {
         FrameWindow {
-            prev: None,
+            prev: before.filter(|_| keep_prev),
             current: first,
             keep_prev,
         }

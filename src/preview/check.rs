@@ -221,6 +221,7 @@ fn estimate(recipe: &mut Recipe, threads: Option<usize>) -> Result<()> {
             out: scratch.0.clone(),
             threads: Some(threads),
             shard: Shard::WHOLE,
+            frames_per_unit: None,
             force: true,
             quiet: true,
         },
