@@ -2,7 +2,8 @@
 //! the member's stiffness.
 //!
 //! Owns: the damage records (cracks as polylines on the undeformed surface, map cracking,
-//! corrosion regions with section loss, spalls as cavities, dents), the reinforced-concrete
+//! corrosion regions with section loss, spalls as cavities, dents; and `shell`: dents and
+//! local buckles of cylindrical shells), the reinforced-concrete
 //! crack and curvature model (`concrete`, EN 1992-1-1 §7.3–7.4), the rules that place damage
 //! where the stresses or the exposure put it (`placement`), and the deflected axis of a member
 //! whose stiffness varies (`stiffness`). Works on plain numbers in the beam's own frame (axis
@@ -11,10 +12,15 @@
 
 mod concrete;
 mod placement;
+mod shell;
 mod stiffness;
 
 pub use concrete::{ConcreteSection, REBAR_E, Reinforcement, concrete_modulus, tensile_strength};
 pub use placement::{DamageLabels, DamageRequest, DamagedMember, ExposureRules, solve_damage};
+pub use shell::{
+    DimpleTolerance, ShellDamage, ShellDamageKind, ShellDamageLabels, ShellPoint, dimple_tolerance,
+    shell_damage,
+};
 pub use stiffness::SteppedBeam;
 
 use serde::Serialize;
