@@ -1,5 +1,5 @@
 //! Damage of a beam member as data, placed by a recipe or by the mechanics, and what it does to
-//! the member's stiffness.
+//! the member's stiffness; dents and local buckles of shells as data (`shell`).
 //!
 //! Owns: the damage records (cracks as polylines on the undeformed surface, map cracking,
 //! corrosion regions with section loss, spalls as cavities, dents; and `shell`: dents and
