@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{damage_view, read_json, render, transform, view_path};
+use common::{damage_view, read_json, render, view_path};
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// A 3 m × 8 m steel shell (8 mm wall) standing on z = 0, with a 62 mm dent of 0.6 m radius
@@ -89,18 +89,10 @@ fn a_silo_dent_is_recorded_meshed_to_its_surface_and_labelled() {
     assert_eq!(json["damage"]["classes"][6], "dent");
 
     let v = damage_view(&out);
-    let origin = transform(&v.c2w, [0.0; 3]);
     let (mut inside, mut centre, mut around) = (0, false, 0);
     for (i, rest) in v.rest.iter().enumerate() {
         let Some(rest) = rest else { continue };
-        let (row, col) = ((i / v.width) as f64, (i % v.width) as f64);
-        let cam = [
-            (col + 0.5 - v.k[0][2]) / v.k[0][0],
-            (row + 0.5 - v.k[1][2]) / v.k[1][1],
-            1.0,
-        ];
-        let p = transform(&v.c2w, cam);
-        let dir: [f64; 3] = std::array::from_fn(|k| p[k] - origin[k]);
+        let (origin, dir) = v.ray(i);
         // Every pixel's depth is where its ray meets the analytic surface, to the chord
         // tolerance over the cosine of the ray's angle to the surface's normal (≥ 0.7 in this
         // 60° view of a curved shell) and f32 rounding.

@@ -21,6 +21,11 @@ use std::f64::consts::TAU;
 /// neighbouring intervals within 25 % of each other.
 const GROWTH: f64 = 0.25;
 
+/// The most steps across a window's diameter, as the uniform rule caps its counts at 4096:
+/// an absurd pattern (a buckle wavelength of 1e-12 m) gives a bounded grid, which the sweep's
+/// triangle budget then refuses or meshes, instead of an endless march.
+const MAX_WINDOW_STEPS: f64 = 4096.0;
+
 /// A stretch of a coordinate (height or arc) that needs steps of at most `step` metres.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Window {
@@ -51,7 +56,9 @@ pub fn local_windows(
         };
         let (kz, ks) = p.curvatures(shell);
         let k = kz.max(ks) + gz.max(gs) + 1.0 / shell.radius;
-        let step = (4.0 * tolerance / k).sqrt();
+        let step = (4.0 * tolerance / k)
+            .sqrt()
+            .max(2.0 * radius / MAX_WINDOW_STEPS);
         heights.push(Window {
             centre: height,
             half: radius,
@@ -68,21 +75,7 @@ pub fn local_windows(
 
 /// The centre (angle, height) and radius of a local pattern; None for the global ones.
 pub fn local_extent(p: &ShellPattern) -> Option<(f64, f64, f64)> {
-    match *p {
-        ShellPattern::Dimple {
-            angle,
-            height,
-            radius,
-            ..
-        }
-        | ShellPattern::Buckle {
-            angle,
-            height,
-            radius,
-            ..
-        } => Some((angle, height, radius)),
-        _ => None,
-    }
+    p.local_patch()
 }
 
 /// Summed curvature bounds (height, circumference) of the global patterns.

@@ -99,34 +99,14 @@ pub fn dimple_tolerance(shell: &Shell, depth: f64) -> DimpleTolerance {
 /// The damage record of a local pattern on the shell part `member`; None for the global
 /// patterns (hoop expansion, ovalisation, elephant's foot are load states, not damage).
 pub fn shell_damage(shell: &Shell, pattern: &ShellPattern, member: &str) -> Option<ShellDamage> {
-    let (kind, amplitude, angle, height, radius, wavelength) = match *pattern {
-        ShellPattern::Dimple {
-            amplitude,
-            angle,
-            height,
-            radius,
-        } => (
-            ShellDamageKind::Dent,
-            amplitude,
-            angle,
-            height,
-            radius,
-            None,
-        ),
+    let (angle, height, radius) = pattern.local_patch()?;
+    let (kind, amplitude, wavelength) = match *pattern {
+        ShellPattern::Dimple { amplitude, .. } => (ShellDamageKind::Dent, amplitude, None),
         ShellPattern::Buckle {
             amplitude,
-            angle,
-            height,
-            radius,
             wavelength,
-        } => (
-            ShellDamageKind::Buckle,
-            amplitude,
-            angle,
-            height,
-            radius,
-            Some(wavelength),
-        ),
+            ..
+        } => (ShellDamageKind::Buckle, amplitude, Some(wavelength)),
         _ => return None,
     };
     Some(ShellDamage {
