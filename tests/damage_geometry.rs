@@ -60,18 +60,7 @@ fn seen(out: &Path) -> Seen {
         .map(|i| ["R", "G", "B"].map(|c| f64::from(n[c][i])))
         .collect();
     let origin = transform(&v.c2w, [0.0; 3]);
-    let rays = (0..v.depth.len())
-        .map(|i| {
-            let (row, col) = ((i / v.width) as f64, (i % v.width) as f64);
-            let cam = [
-                (col + 0.5 - v.k[0][2]) / v.k[0][0],
-                (row + 0.5 - v.k[1][2]) / v.k[1][1],
-                1.0,
-            ];
-            let p = transform(&v.c2w, cam);
-            std::array::from_fn(|a| p[a] - origin[a])
-        })
-        .collect();
+    let rays = (0..v.depth.len()).map(|i| v.ray(i).1).collect();
     Seen {
         depth: v.depth,
         class: v.class,

@@ -14,6 +14,7 @@ mod frame;
 mod ground;
 mod light;
 mod relief;
+mod shell_grid;
 mod supports;
 mod tessellation;
 

@@ -177,6 +177,26 @@ impl ShellPattern {
         }
     }
 
+    /// The centre (angle θ₀, height z₀) and radius R of a local pattern (dimple, buckle
+    /// patch); None for the patterns that span the whole shell.
+    pub fn local_patch(&self) -> Option<(f64, f64, f64)> {
+        match *self {
+            ShellPattern::Dimple {
+                angle,
+                height,
+                radius,
+                ..
+            }
+            | ShellPattern::Buckle {
+                angle,
+                height,
+                radius,
+                ..
+            } => Some((angle, height, radius)),
+            _ => None,
+        }
+    }
+
     /// The largest |w| the pattern reaches, metres.
     pub fn peak(&self) -> f64 {
         match *self {

@@ -8,15 +8,34 @@
 use crate::build::{BuiltSample, Relief, spall_bars};
 use crate::cameras::Camera;
 use crate::mechanics::Section;
-use crate::mechanics::damage::{Damage, DamageShape, Face, SurfacePoint};
-use crate::render::{
-    DamageClass, DamagedPiece, FaceSegment, Mark, MarkShape, PieceFace, SampleDamage,
+use crate::mechanics::damage::{
+    Damage, DamageShape, Face, ShellDamageKind, ShellDamageLabels, SurfacePoint, shell_damage,
 };
-use crate::scene::{BeamSpec, Structure};
+use crate::render::{
+    DamageClass, DamagedPiece, DamagedShell, FaceSegment, Mark, MarkShape, PieceFace, SampleDamage,
+    ShellMark,
+};
+use crate::scene::{AssemblySpec, BeamSpec, Structure};
 use glam::{DMat3, DVec2, DVec3};
 
 /// The part name of a beam's own triangles (the one its damage records name).
 const BEAM_PART: &str = "beam";
+
+/// The dents and local buckles of an assembly's shells as damage records, shape by shape and
+/// pattern by pattern; None when it has none.
+pub fn assembly_damage(assembly: &AssemblySpec) -> Option<ShellDamageLabels> {
+    let items: Vec<_> = assembly
+        .shapes
+        .iter()
+        .filter_map(|s| Some((s.shell()?, s)))
+        .flat_map(|(shell, s)| {
+            s.shell
+                .iter()
+                .filter_map(move |l| shell_damage(&shell, &l.pattern, &s.part))
+        })
+        .collect();
+    (!items.is_empty()).then_some(ShellDamageLabels { items })
+}
 
 /// The share of a pixel a crack must cover in some view for it to count as resolved.
 pub const RESOLVED_COVERAGE: f64 = 0.05;
@@ -29,7 +48,13 @@ pub fn sample_damage(sample: &BuiltSample) -> Option<SampleDamage> {
         None => Vec::new(),
     };
     pieces.extend(damaged_members(sample));
-    SampleDamage::new(pieces, &sample.owner, &sample.part, &sample.piece)
+    SampleDamage::new(
+        pieces,
+        damaged_shells(sample),
+        &sample.owner,
+        &sample.part,
+        &sample.piece,
+    )
 }
 
 /// The damaged members of every frame of `sample`: each member a prism in its own frame (x
@@ -75,6 +100,54 @@ fn damaged_members(sample: &BuiltSample) -> Vec<DamagedPiece> {
                     .enumerate()
                     .map(|(k, item)| mark(None, &member.section, md.first_item + k, item))
                     .collect(),
+            });
+        }
+    }
+    out
+}
+
+/// The dented or buckled shells of `sample`'s assemblies, their marks numbered as
+/// [`assembly_damage`] lists them.
+fn damaged_shells(sample: &BuiltSample) -> Vec<DamagedShell> {
+    let mut out = Vec::new();
+    for (i, structure) in sample.scene.structures.iter().enumerate() {
+        let Structure::Assembly(assembly) = structure else {
+            continue;
+        };
+        let mut instance = 0u16;
+        for shape in &assembly.shapes {
+            let Some(shell) = shape.shell() else {
+                continue;
+            };
+            let marks: Vec<ShellMark> = shape
+                .shell
+                .iter()
+                .filter_map(|l| shell_damage(&shell, &l.pattern, &shape.part))
+                .map(|d| {
+                    instance = instance.saturating_add(1);
+                    ShellMark {
+                        class: match d.kind {
+                            ShellDamageKind::Dent => DamageClass::Dent,
+                            ShellDamageKind::Buckle => DamageClass::Buckle,
+                        },
+                        instance,
+                        angle: d.position.angle,
+                        height: d.position.height,
+                        radius: d.radius,
+                    }
+                })
+                .collect();
+            let part = sample.parts.iter().position(|p| *p == shape.part);
+            let (Some(part), false) = (part, marks.is_empty()) else {
+                continue;
+            };
+            out.push(DamagedShell {
+                structure: i as u32,
+                part: part as u32,
+                to_local: shape.affine().inverse(),
+                radius: shell.radius,
+                wall: shell.wall,
+                marks,
             });
         }
     }

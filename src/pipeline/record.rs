@@ -452,7 +452,7 @@ pub struct CrackConvention {
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct DamageConvention {
     /// The damage type of each value of `damage_class` (8-bit): index = value, 0 "none".
-    pub classes: [&'static str; 7],
+    pub classes: [&'static str; 8],
     /// What `damage_instance` (16-bit) holds.
     pub instance: &'static str,
     /// What `crack_width` (float32 channel Y) holds.
@@ -522,6 +522,24 @@ pub struct StructureRecord<'a> {
     /// member end forces, peak stress and utilisation; absent for other structures.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub analysis: Option<&'a crate::mechanics::frame::FrameLabels>,
+    /// For an assembly whose shells carry dents or local buckles, those as damage records
+    /// (type, position, size, depth, severity, cause, dimple tolerance); absent otherwise.
+    #[serde(rename = "damage", skip_serializing_if = "Option::is_none")]
+    #[schemars(with = "Option<AnyDamage>")]
+    pub shell_damage: Option<crate::mechanics::damage::ShellDamageLabels>,
+}
+
+/// A structure's `damage`: a beam's (cracks, corrosion, spalls, dents, and what they did to
+/// its stiffness) or an assembly's shells' (dents and local buckles). Only describes the
+/// schema: the two records share the one key, so its schema must admit both.
+#[derive(schemars::JsonSchema)]
+#[serde(untagged)]
+#[allow(dead_code)]
+enum AnyDamage {
+    /// A beam's damage.
+    Beam(crate::mechanics::damage::DamageLabels),
+    /// The dents and local buckles of an assembly's shells.
+    Shells(crate::mechanics::damage::ShellDamageLabels),
 }
 
 /// What the mechanics of a beam found.
@@ -699,6 +717,10 @@ impl<'a> SampleRecord<'a> {
                         _ => None,
                     },
                     analysis: analysis.as_ref(),
+                    shell_damage: match structure {
+                        Structure::Assembly(a) => super::damage::assembly_damage(a),
+                        _ => None,
+                    },
                 },
             )
             .collect();

@@ -42,11 +42,13 @@ pub enum DamageClass {
     Spall = 5,
     /// A dent.
     Dent = 6,
+    /// A local buckle of a shell.
+    Buckle = 7,
 }
 
 impl DamageClass {
     /// The name of each class by value, as the view record and the damage records call them.
-    pub const NAMES: [&'static str; 7] = [
+    pub const NAMES: [&'static str; 8] = [
         "none",
         "flexural_crack",
         "shear_crack",
@@ -54,6 +56,7 @@ impl DamageClass {
         "corrosion",
         "spall",
         "dent",
+        "buckle",
     ];
 }
 
@@ -569,39 +572,123 @@ impl DamagedPiece {
     }
 }
 
+/// A dent or local buckle on a shell: a disc of `radius` metres (measured on the surface)
+/// about a point of the shell's undeformed outer surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShellMark {
+    /// Its class (`Dent` or `Buckle`).
+    pub class: DamageClass,
+    /// Its id in the instance layer: index + 1 in its structure's damage list.
+    pub instance: u16,
+    /// Angle of its centre about the shell's axis, radians.
+    pub angle: f64,
+    /// Height of its centre above the shell's base, metres.
+    pub height: f64,
+    /// Radius on the surface, metres.
+    pub radius: f64,
+}
+
+/// A damaged cylindrical shell: which triangles are its, its own frame (axis along z from
+/// its base), its outer radius and wall, and its marks. Dents and buckles are geometry (the
+/// shell's patterns displace its mesh); here a point of its undeformed outer surface within
+/// a mark's radius takes its label.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DamagedShell {
+    /// The structure index its triangles have (`owner`).
+    pub structure: u32,
+    /// The part index its triangles have.
+    pub part: u32,
+    /// From world coordinates of the undeformed structure to the shell's own frame.
+    pub to_local: glam::DAffine3,
+    /// Outer radius, metres.
+    pub radius: f64,
+    /// Wall thickness, metres (the inner surface, `radius − wall` from the axis, is not
+    /// labelled: an inspector sees the outside).
+    pub wall: f64,
+    /// Its dents and buckles.
+    pub marks: Vec<ShellMark>,
+}
+
+impl DamagedShell {
+    /// The label of the undeformed world point `rest`, if it lies on the outer surface within a
+    /// mark (surface distance: arc about the axis and height); the first mark wins.
+    pub fn at(&self, rest: DVec3) -> Option<DamageAt> {
+        let p = self.to_local.transform_point3(rest);
+        if p.x.hypot(p.y) < self.radius - 0.5 * self.wall {
+            return None;
+        }
+        let theta = p.y.atan2(p.x);
+        let mark = self.marks.iter().find(|m| {
+            let turn = (theta - m.angle + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                - std::f64::consts::PI;
+            (self.radius * turn).hypot(p.z - m.height) < m.radius
+        })?;
+        Some(DamageAt {
+            class: mark.class,
+            instance: mark.instance,
+            ..DamageAt::default()
+        })
+    }
+}
+
 /// The damaged pieces of a sample and, per triangle of its mesh, which piece it belongs to.
 pub struct SampleDamage {
     pieces: Vec<DamagedPiece>,
     /// Index into `pieces` of every triangle, `u32::MAX` for undamaged ones.
     piece_of: Vec<u32>,
+    /// The sample's dented or buckled shells.
+    shells: Vec<DamagedShell>,
+    /// Index into `shells` of every triangle, `u32::MAX` for others.
+    shell_of: Vec<u32>,
 }
 
 impl SampleDamage {
-    /// The damage of `pieces` on a mesh whose triangles have `owner` (structure), `part` and
-    /// `mesh_piece` indices; None when no piece has damage (then nothing changes).
+    /// The damage of `pieces` and `shells` on a mesh whose triangles have `owner`
+    /// (structure), `part` and `mesh_piece` indices; None when nothing has damage (then
+    /// nothing changes).
     pub fn new(
         pieces: Vec<DamagedPiece>,
+        shells: Vec<DamagedShell>,
         owner: &[u32],
         part: &[u32],
         mesh_piece: &[u32],
     ) -> Option<SampleDamage> {
-        if pieces.iter().all(|p| p.marks.is_empty()) {
+        if pieces.iter().all(|p| p.marks.is_empty()) && shells.iter().all(|s| s.marks.is_empty()) {
             return None;
         }
-        let piece_of = owner
-            .iter()
-            .zip(part)
+        let index_of = |found: Option<usize>| found.map_or(u32::MAX, |k| k as u32);
+        let triangles = owner.iter().zip(part);
+        let piece_of = triangles
+            .clone()
             .zip(mesh_piece)
             .map(|((&o, &p), &m)| {
-                pieces
-                    .iter()
-                    .position(|d| {
-                        d.structure == o && d.part == p && d.mesh_piece.is_none_or(|k| k == m)
-                    })
-                    .map_or(u32::MAX, |k| k as u32)
+                index_of(pieces.iter().position(|d| {
+                    d.structure == o && d.part == p && d.mesh_piece.is_none_or(|k| k == m)
+                }))
             })
             .collect();
-        Some(SampleDamage { pieces, piece_of })
+        let shell_of = triangles
+            .map(|(&o, &p)| index_of(shells.iter().position(|d| d.structure == o && d.part == p)))
+            .collect();
+        Some(SampleDamage {
+            pieces,
+            piece_of,
+            shells,
+            shell_of,
+        })
+    }
+
+    /// The shells of the same structure and part as triangle `tri` (a part may hold several
+    /// tubes): each tells whether a point is its own.
+    fn shells_of(&self, tri: u32) -> impl Iterator<Item = &DamagedShell> {
+        let first = self.shell_of.get(tri as usize).copied().unwrap_or(u32::MAX);
+        let key = self
+            .shells
+            .get(first as usize)
+            .map(|s| (s.structure, s.part));
+        self.shells
+            .iter()
+            .filter(move |s| key == Some((s.structure, s.part)))
     }
 
     /// The damaged pieces.
@@ -643,12 +730,22 @@ impl SampleDamage {
             .for_each(|(row, line)| {
                 for (col, value) in line.iter_mut().enumerate() {
                     let tri = g.triangle[row * width + col];
-                    if tri == NO_HIT || self.piece(tri).is_none() {
+                    if tri == NO_HIT {
+                        continue;
+                    }
+                    let on_shell = self.shells_of(tri).next().is_some();
+                    if self.piece(tri).is_none() && !on_shell {
                         continue;
                     }
                     let uv = (col as f64 + 0.5, row as f64 + 0.5);
                     let p = seen.centre_hit(camera, tri, uv, f64::from(g.depth[row * width + col]));
-                    if let Some(d) = self.at_point(seen, tri, p, uv) {
+                    let found = if on_shell {
+                        let rest = rest_point(seen, tri, p);
+                        self.shells_of(tri).find_map(|s| s.at(rest))
+                    } else {
+                        self.at_point(seen, tri, p, uv)
+                    };
+                    if let Some(d) = found {
                         *value = d;
                     }
                 }

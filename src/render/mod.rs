@@ -30,8 +30,8 @@ mod visibility;
 mod watertight;
 
 pub use damage::{
-    DamageAt, DamageClass, DamagedPiece, DamagedSurfaces, FaceSegment, Mark, MarkShape, PieceFace,
-    SampleDamage, SeenMesh,
+    DamageAt, DamageClass, DamagedPiece, DamagedShell, DamagedSurfaces, FaceSegment, Mark,
+    MarkShape, PieceFace, SampleDamage, SeenMesh, ShellMark,
 };
 pub use fields::{Deformed, OtherFrame, displacement, flow, frame_flow, normals, ray_distance};
 pub use light_cache::{CacheSettings, LightCache};

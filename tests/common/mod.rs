@@ -533,6 +533,22 @@ pub struct DamageView {
     pub rest: Vec<Option<[f64; 3]>>,
 }
 
+impl DamageView {
+    /// The camera centre and pixel `i`'s ray through its centre (camera z = 1, world
+    /// coordinates: the ray's parameter is the planar depth).
+    pub fn ray(&self, i: usize) -> ([f64; 3], [f64; 3]) {
+        let origin = transform(&self.c2w, [0.0; 3]);
+        let (row, col) = ((i / self.width) as f64, (i % self.width) as f64);
+        let cam = [
+            (col + 0.5 - self.k[0][2]) / self.k[0][0],
+            (row + 0.5 - self.k[1][2]) / self.k[1][1],
+            1.0,
+        ];
+        let p = transform(&self.c2w, cam);
+        (origin, std::array::from_fn(|a| p[a] - origin[a]))
+    }
+}
+
 /// Reads view 0 of sample 0 of `out` (depth, displacement, damage layers, RGB, camera).
 pub fn damage_view(out: &Path) -> DamageView {
     let file = |kind: &str| view_path(out, 0, 0, None, kind);

@@ -1,8 +1,9 @@
 //! Damage of a beam member as data, placed by a recipe or by the mechanics, and what it does to
-//! the member's stiffness.
+//! the member's stiffness; dents and local buckles of shells as data (`shell`).
 //!
 //! Owns: the damage records (cracks as polylines on the undeformed surface, map cracking,
-//! corrosion regions with section loss, spalls as cavities, dents), the reinforced-concrete
+//! corrosion regions with section loss, spalls as cavities, dents; and `shell`: dents and
+//! local buckles of cylindrical shells), the reinforced-concrete
 //! crack and curvature model (`concrete`, EN 1992-1-1 §7.3–7.4), the rules that place damage
 //! where the stresses or the exposure put it (`placement`), and the deflected axis of a member
 //! whose stiffness varies (`stiffness`). Works on plain numbers in the beam's own frame (axis
@@ -11,12 +12,17 @@
 
 mod concrete;
 mod placement;
+mod shell;
 mod stiffness;
 
 pub use concrete::{ConcreteSection, REBAR_E, Reinforcement, concrete_modulus, tensile_strength};
 pub use placement::{
     DamageLabels, DamageRequest, DamagedMember, ExposureRules, InternalForces, crack_width_mm,
     exposed_corrosion, section_loss_regions, solve_damage, stress_cracks,
+};
+pub use shell::{
+    DimpleTolerance, ShellDamage, ShellDamageKind, ShellDamageLabels, ShellPoint, dimple_tolerance,
+    shell_damage,
 };
 pub use stiffness::SteppedBeam;
 
