@@ -131,6 +131,11 @@ pub fn write_sample(
         ))
     };
     let frames = motion.frames();
+    // The point tracks' queries are chosen on frame 0: built again here (not kept from the
+    // window), so that any frame can find them on its own.
+    let first = (dataset.outputs.wants("point_tracks"))
+        .then(|| build(0))
+        .transpose()?;
     let mut window = FrameWindow::new(build(0)?, dataset.outputs.wants("frame_flow"));
     for k in 0..frames {
         let next = if k + 1 < frames {
@@ -159,7 +164,10 @@ pub fn write_sample(
         let still = Still {
             trace_mesh: window.current.trace_mesh.clone(),
             frame: Some(record),
-            neighbours: window.neighbours(next.as_ref()),
+            neighbours: FrameNeighbours {
+                first: first.as_ref(),
+                ..window.neighbours(next.as_ref())
+            },
             exposure: &exposure,
         };
         write_still(recipe, &window.current.sample, still, shared, stage)?;
@@ -196,6 +204,7 @@ impl FrameWindow {
         FrameNeighbours {
             prev: self.prev.as_ref(),
             next,
+            first: None,
         }
     }
 
