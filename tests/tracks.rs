@@ -2,12 +2,14 @@
 //! by the binary, each frame's tracks read from its `tracks.npy` and compared with the
 //! closed-form beam (`ModalBeam`): each query point of the first frame carried by the beam's
 //! kinematics and projected through each frame's written camera; with the mount shaking too.
-//! A still asking for tracks is refused at its `dataset(` call.
+//! A still asking for tracks is refused at its `dataset(` call. `shmgen eval` scores predicted
+//! tracks in TAP-Vid's layout: the truth itself scores 0 px and δ_avg 1, the truth moved by
+//! (1.5, 0) px an RMSE of 1.5 px, and malformed files are refused with what they hold.
 
 mod common;
 mod crossing;
 
-use common::{render, run, stderr, write};
+use common::{render, run, shmgen, stderr, write, write_npy};
 use crossing::{CROSSING_FRAMES, Crossing, crossing_recipe, frame_view};
 use std::path::Path;
 
@@ -146,4 +148,144 @@ fn point_tracks_are_refused_for_a_still_at_the_dataset_call() {
         "{text}"
     );
     assert!(text.contains("still.rhai:1:"), "{text}");
+}
+
+/// The truth of view 0 in TAP-Vid's layout: [N, T, 2] x, y, and [N, T] occluded.
+fn stacked_truth(out: &Path) -> (Vec<[f64; 2]>, Vec<bool>, usize) {
+    let frames: Vec<Vec<[f64; 3]>> = (0..CROSSING_FRAMES).map(|k| frame_tracks(out, k)).collect();
+    let points = frames[0].len();
+    let mut xy = Vec::new();
+    let mut occluded = Vec::new();
+    for n in 0..points {
+        for frame in &frames {
+            xy.push([frame[n][0], frame[n][1]]);
+            occluded.push(frame[n][2] != 1.0);
+        }
+    }
+    (xy, occluded, points)
+}
+
+/// Writes predicted tracks (moved by `shift`) and occlusion for view 0 under `predictions`.
+fn write_prediction(predictions: &Path, out: &Path, shift: [f64; 2]) -> usize {
+    let (xy, occluded, points) = stacked_truth(out);
+    let data: Vec<u8> = (xy.iter())
+        .flat_map(|p| [p[0] + shift[0], p[1] + shift[1]])
+        .flat_map(f64::to_le_bytes)
+        .collect();
+    let folder = predictions.join("0000");
+    let shape = [points, CROSSING_FRAMES, 2];
+    write_npy(&folder.join("000000_00.tracks.npy"), "<f8", &shape, &data);
+    let flags: Vec<u8> = occluded.iter().map(|&o| u8::from(o)).collect();
+    let flag_shape = [points, CROSSING_FRAMES];
+    write_npy(
+        &folder.join("000000_00.occluded.npy"),
+        "|b1",
+        &flag_shape,
+        &flags,
+    );
+    points
+}
+
+/// `shmgen eval OUT PREDICTIONS --json`: its exit status, stderr and JSON report's `tracks`.
+fn eval_tracks(out: &Path, predictions: &Path) -> (bool, String, serde_json::Value) {
+    let json = predictions.with_extension("json");
+    let _ = std::fs::remove_file(&json);
+    let output = shmgen(&[
+        "eval".as_ref(),
+        out.as_os_str(),
+        predictions.as_os_str(),
+        "--json".as_ref(),
+        json.as_os_str(),
+    ]);
+    let report = std::fs::read(&json)
+        .ok()
+        .map_or(serde_json::Value::Null, |b| {
+            serde_json::from_slice(&b).unwrap()
+        });
+    (
+        output.status.success(),
+        stderr(&output),
+        report["tracks"].clone(),
+    )
+}
+
+#[test]
+fn eval_scores_predicted_tracks_against_the_truth_and_refuses_malformed_ones() {
+    let stride = format!(", track_stride: {STRIDE}");
+    let (dir, out) = render(&crossing_recipe(&stride, TRACK_OUTPUTS), &[]);
+    let predictions = dir.path().join("predicted");
+    // The truth itself: no error, every point within every threshold, occlusion all right.
+    write_prediction(&predictions, &out, [0.0, 0.0]);
+    let (success, text, tracks) = eval_tracks(&out, &predictions);
+    assert!(success, "{text}");
+    assert_eq!(tracks["rmse"], 0.0, "{tracks}");
+    assert_eq!(tracks["max_error"], 0.0, "{tracks}");
+    assert_eq!(tracks["delta_avg"], 1.0, "{tracks}");
+    assert_eq!(tracks["occlusion_accuracy"], 1.0, "{tracks}");
+    assert_eq!(tracks["average_jaccard"], 1.0, "{tracks}");
+    assert_eq!(tracks["counts"]["images"], 1, "{tracks}");
+    // Moved by 1.5 px: RMSE 1.5 px exactly, outside the 1 px threshold only.
+    let points = write_prediction(&predictions, &out, [1.5, 0.0]);
+    let (success, text, tracks) = eval_tracks(&out, &predictions);
+    assert!(success, "{text}");
+    let rmse = tracks["rmse"].as_f64().unwrap();
+    assert!((rmse - 1.5).abs() < 1e-9, "{tracks}");
+    assert!(
+        (tracks["delta_avg"].as_f64().unwrap() - 0.8).abs() < 1e-12,
+        "{tracks}"
+    );
+    // Every pair after the query frame is scored.
+    let pairs = points * (CROSSING_FRAMES - 1);
+    assert_eq!(tracks["counts"]["pixels"], pairs as u64, "{tracks}");
+    // A prediction of the wrong shape is refused with its shape and the one expected.
+    let file = predictions.join("0000/000000_00.tracks.npy");
+    write_npy(&file, "<f8", &[points, 3, 2], &vec![0; points * 3 * 16]);
+    let (success, text, _) = eval_tracks(&out, &predictions);
+    assert!(!success);
+    let expected = format!(
+        "shape [{points}, 3, 2]; the truth has {points} query points over {CROSSING_FRAMES} frames: expected [{points}, {CROSSING_FRAMES}, 2]"
+    );
+    assert!(
+        text.contains("000000_00.tracks.npy") && text.contains(&expected),
+        "{text}"
+    );
+    // Integers, and a pickle, are refused with the dtype.
+    write_npy(
+        &file,
+        "<i8",
+        &[points, CROSSING_FRAMES, 2],
+        &vec![0; points * CROSSING_FRAMES * 16],
+    );
+    let (success, text, _) = eval_tracks(&out, &predictions);
+    assert!(
+        !success && text.contains("\"<i8\" is not float32 or float64"),
+        "{text}"
+    );
+    write_npy(&file, "|O", &[1], b"\x80\x04N.");
+    let (success, text, _) = eval_tracks(&out, &predictions);
+    assert!(!success && text.contains("\"|O\""), "{text}");
+    // Occlusion flags of the wrong shape too.
+    write_prediction(&predictions, &out, [0.0, 0.0]);
+    let flags = predictions.join("0000/000000_00.occluded.npy");
+    write_npy(&flags, "|b1", &[points], &vec![0; points]);
+    let (success, text, _) = eval_tracks(&out, &predictions);
+    let expected = format!("shape [{points}]; expected [{points}, {CROSSING_FRAMES}]");
+    assert!(!success && text.contains(&expected), "{text}");
+    // A link is not followed.
+    std::fs::remove_file(&file).unwrap();
+    std::os::unix::fs::symlink(&flags, &file).unwrap();
+    let (success, text, _) = eval_tracks(&out, &predictions);
+    assert!(!success && text.contains("000000_00.tracks.npy"), "{text}");
+    // A misnamed prediction (a frame's stem) is reported with the name eval reads.
+    std::fs::remove_file(&file).unwrap();
+    std::fs::remove_file(&flags).unwrap();
+    write_prediction(&predictions, &out, [0.0, 0.0]);
+    let stray = predictions.join("0000/000000_00_f0000.tracks_pred.npy");
+    write_npy(&stray, "<f8", &[1], &[0; 8]);
+    let (success, text, _) = eval_tracks(&out, &predictions);
+    assert!(success, "{text}");
+    assert!(
+        text.contains("tracks_pred.npy") && text.contains("000000_00"),
+        "{text}"
+    );
 }
