@@ -332,9 +332,8 @@ fn score(view: &str, truth: &Truth, prediction: &Prediction) -> TrackScore {
     let within = (scored > 0).then(|| within.map(share));
     let (occlusion_accuracy, average_jaccard) = match &prediction.occluded {
         Some(occluded) => {
-            let accuracy = pairs()
-                .filter(|&i| occluded[i] == !truth.visible[i])
-                .count();
+            // Right where the flag says occluded exactly where the truth is not visible.
+            let accuracy = pairs().filter(|&i| occluded[i] != truth.visible[i]).count();
             let all = pairs().count().max(1);
             let jaccard = THRESHOLDS.map(|threshold| {
                 let seen_within =
