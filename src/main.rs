@@ -171,7 +171,8 @@ enum Command {
         shards: Option<u64>,
     },
     /// Score predictions against a finished dataset: depth metrics (AbsRel, SqRel, RMSE,
-    /// RMSE log, δ), Chamfer distance and F-score of surfaces, flow and displacement EPE.
+    /// RMSE log, δ), Chamfer distance and F-score of surfaces, flow and displacement EPE,
+    /// sensor histories and point tracks (RMSE, TAP-Vid δ_avg, occlusion, average Jaccard).
     /// Exit code: 0 every prediction asked for was scored, 2 some were not (missing
     /// predictions, truth the dataset lacks, nothing to score: all listed), 1 an error.
     Eval {

@@ -12,7 +12,7 @@ mod common;
 
 use common::{
     blake3_hex, manifest_files, ok, quickstart, read_exr, read_png, read_png16, shmgen, stderr,
-    view_path,
+    view_path, write_npy,
 };
 
 /// `shmgen eval DATA PREDICTIONS --json … EXTRA`, which must score everything (exit 0): what
@@ -93,25 +93,6 @@ fn write_exr(path: &Path, w: usize, h: usize, channels: &[(&str, Vec<f32>)]) {
         .non_parallel()
         .to_file(path)
         .unwrap();
-}
-
-/// A `.npy` file (format 1.0, C order) laid out by hand from NumPy's NEP 1.
-fn write_npy(path: &Path, descr: &str, shape: &[usize], data: &[u8]) {
-    let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
-    let mut header = format!(
-        "{{'descr': '{descr}', 'fortran_order': False, 'shape': ({}{}), }}",
-        dims.join(", "),
-        if shape.len() == 1 { "," } else { "" }
-    );
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    bytes.extend_from_slice(header.as_bytes());
-    bytes.extend_from_slice(data);
-    write_file(path, &bytes);
 }
 
 fn write_png(path: &Path, w: usize, h: usize, depth: png::BitDepth, data: &[u8]) {

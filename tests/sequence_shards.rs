@@ -19,7 +19,7 @@ const CRASH_EXIT: i32 = 86;
 /// shaking mounts for 11 frames, with motion blur, the flow between frames and sensors.
 const RECIPE: &str = r#"dataset(#{
     name: "units", seed: 9, samples: 2, views: 2,
-    outputs: ["rgb", "depth", "mask", "displacement", "frame_flow", "mesh"],
+    outputs: ["rgb", "depth", "mask", "displacement", "frame_flow", "point_tracks", "mesh"],
     sequence: #{ duration: 0.35, fps: 30.0, motion_blur: 2,
         mount: #{ rotation: 2e-4, translation: 2e-4, band: 6.0 } },
     camera: #{ width: 40, height: 30, fov_y: deg(50),
@@ -237,7 +237,7 @@ fn frames_per_unit_is_refused_for_stills_and_zero_and_stills_shard_as_before() {
         setup.dir.path(),
         "still.rhai",
         RECIPE.replace("    sequence: #{ duration: 0.35, fps: 30.0, motion_blur: 2,\n        mount: #{ rotation: 2e-4, translation: 2e-4, band: 6.0 } },\n", "")
-            .replace(r#", "frame_flow""#, "")
+            .replace(r#", "frame_flow", "point_tracks""#, "")
             .replace(
                 r#"        b.sensor(#{ name: "mid", kind: "displacement", at: 1.0, rate: 60.0 });
 "#,

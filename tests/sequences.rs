@@ -5,11 +5,16 @@
 //! mid-sequence; bad values are refused at their line with their value.
 
 mod common;
+mod crossing;
 
 use common::{hashes, ok, read_json, render, run, stderr, write};
+use crossing::{CROSSING_FPS, CROSSING_FRAMES, Crossing, crossing_recipe, frame_view};
 use shmgen::mechanics::Support;
 use shmgen::mechanics::dynamics::{Axle, ModalBeam, TimeLoad};
 use std::path::Path;
+
+/// The layers the crossing's flow tests read.
+const FLOW_OUTPUTS: &str = r#""depth", "mask", "frame_flow", "mesh""#;
 
 /// A 2 m steel beam 0.1 × 0.2 m, simply supported, filmed side-on by one fixed camera.
 /// `sequence` goes into `dataset(...)` (empty for a still), `calls` onto the beam.
@@ -586,45 +591,6 @@ fn bad_flight_paths_are_refused_at_the_dataset_call_with_their_value() {
     }
 }
 
-/// A 2 m steel beam 0.1 × 0.2 m, simply supported, crossed at 8 m/s by one 3e5 N axle, filmed
-/// side-on from 0.6 m at 30 fps (8 frames over the crossing); `mount` shakes the camera.
-fn crossing_recipe(mount: &str) -> String {
-    format!(
-        r#"dataset(#{{
-    name: "flow", seed: 5, samples: 1, views: 1, outputs: ["depth", "mask", "frame_flow", "mesh"],
-    sequence: #{{ duration: 0.25, fps: {CROSSING_FPS} {mount} }},
-    camera: #{{ width: 160, height: 120, fov_y: deg(60),
-        fixed: [#{{ position: [1.0, -0.6, 0.12], target: [1.0, 0.0, 0.0] }}] }},
-    scene: |rng| {{
-        let b = beam(#{{ length: 2.0, width: 0.1, height: 0.2 }});
-        b.simply_supported();
-        b.theory("euler_bernoulli");
-        b.at(1.0, 0.0, 0.0);
-        b.vehicle([[0.0, {CROSSING_FORCE}]], {SPEED}, 0.0); b.damping(0.03); b.modes(6);
-        b
-    }},
-}});
-"#
-    )
-}
-
-const CROSSING_FPS: f64 = 30.0;
-const CROSSING_FORCE: f64 = 3e5;
-const CROSSING_FRAMES: usize = 8;
-
-/// Frame `frame` of view 0 of sample 0: its depth, mask and record.
-fn frame_view(out: &Path, frame: usize) -> common::View {
-    let path = |kind: &str| out.join(format!("samples/0000/000000_00_f{frame:04}.{kind}"));
-    let (width, height, _, mask) = common::read_png(&path("mask.png"));
-    common::View {
-        width,
-        height,
-        depth: common::read_exr(&path("depth.exr")),
-        mask,
-        json: read_json(&path("json")),
-    }
-}
-
 /// Frame `frame`'s flow to the next (`"next"`) or previous (`"prev"`) frame: (u, v) where
 /// valid, per pixel.
 fn frame_flow(out: &Path, frame: usize, side: &str) -> Vec<Option<[f64; 2]>> {
@@ -636,65 +602,6 @@ fn frame_flow(out: &Path, frame: usize, side: &str) -> Vec<Option<[f64; 2]>> {
             (valid[i] == 255).then(|| [f64::from(channels["R"][i]), f64::from(channels["G"][i])])
         })
         .collect()
-}
-
-/// The crossing's beam as `ModalBeam` (E = 210 GPa, steel), its load and its response at the
-/// frames' instants: the independent truth of the flow between frames.
-struct Crossing {
-    beam: ModalBeam,
-    loads: Vec<TimeLoad>,
-    response: shmgen::mechanics::dynamics::Response,
-}
-
-impl Crossing {
-    fn new() -> Self {
-        let (width, height, length): (f64, f64, f64) = (0.1, 0.2, 2.0);
-        let ei = 210e9 * width * height.powi(3) / 12.0;
-        let mass = 7850.0 * width * height;
-        let beam = ModalBeam::new(Support::SimplySupported, length, ei, mass, 0.03, 6).unwrap();
-        let loads = vec![TimeLoad::Vehicle {
-            axles: vec![Axle {
-                behind: 0.0,
-                force: CROSSING_FORCE,
-            }],
-            speed: SPEED,
-            enters: 0.0,
-        }];
-        let times: Vec<f64> = (0..CROSSING_FRAMES)
-            .map(|k| k as f64 / CROSSING_FPS)
-            .collect();
-        let response = beam.respond(&loads, 0.0, &times, 64);
-        Crossing {
-            beam,
-            loads,
-            response,
-        }
-    }
-
-    /// (deflection downward, slope) of the axis at `x` at frame `k`.
-    fn axis(&self, k: usize, x: f64) -> (f64, f64) {
-        let m = self
-            .response
-            .at(&self.beam, &self.loads, k, x.clamp(0.0, 2.0));
-        (m.deflection, m.slope)
-    }
-
-    /// Where world point `p`, seen on the beam at frame `k`, is at frame `other`: plane
-    /// sections rotating with the slope (a fibre `e` above the axis at x moves by (e·w′, 0,
-    /// −w), w downward), to first order in the slope (the neglected cos and axial-shortening
-    /// terms are below 2·10⁻⁵ m here, 0.007 px).
-    fn carried(&self, p: [f64; 3], k: usize, other: usize) -> [f64; 3] {
-        // The material point's axial coordinate x and height e above the axis, from where
-        // frame k has it: p = (x + e·w′(x), y, e − w(x)), solved by fixed point.
-        let (mut x, mut e) = (p[0], p[2]);
-        for _ in 0..8 {
-            let (w, slope) = self.axis(k, x);
-            e = p[2] + w;
-            x = p[0] - e * slope;
-        }
-        let (w, slope) = self.axis(other, x);
-        [x + e * slope, p[1], e - w]
-    }
 }
 
 /// Compares the flow of every frame to the next and the previous with the projection, through
@@ -757,7 +664,7 @@ fn check_frame_flows(out: &Path, crossing: &Crossing) -> (f64, f64, f64) {
 
 #[test]
 fn flow_between_frames_is_the_projected_difference_of_the_closed_form_displacements() {
-    let (_dir, out) = render(&crossing_recipe(""), &[]);
+    let (_dir, out) = render(&crossing_recipe("", FLOW_OUTPUTS), &[]);
     let crossing = Crossing::new();
     let (worst, largest, camera_part) = check_frame_flows(&out, &crossing);
     eprintln!(
@@ -818,7 +725,7 @@ fn exported_to_webdataset_as_arrays(out: &Path) {
 #[test]
 fn flow_between_frames_follows_each_frames_camera_when_the_mount_shakes() {
     let mount = ", mount: #{ rotation: 2e-3, translation: 1e-3, band: 5.0 }";
-    let (_dir, out) = render(&crossing_recipe(mount), &[]);
+    let (_dir, out) = render(&crossing_recipe(mount, FLOW_OUTPUTS), &[]);
     let crossing = Crossing::new();
     let (worst, largest, camera_part) = check_frame_flows(&out, &crossing);
     eprintln!(
@@ -866,8 +773,7 @@ fn displacement_sensors_agree_with_the_pixels_that_see_their_points() {
             )
         })
         .collect();
-    let recipe = crossing_recipe("")
-        .replace(r#""frame_flow", "mesh""#, r#""displacement""#)
+    let recipe = crossing_recipe("", r#""depth", "mask", "displacement""#)
         .replace("b.modes(6);", &format!("b.modes(6); {sensors}"));
     let (_dir, out) = render(&recipe, &[]);
     let csv = std::fs::read_to_string(out.join("samples/0000/000000.sensors_30hz.csv")).unwrap();

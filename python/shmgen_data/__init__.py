@@ -12,13 +12,15 @@
 >>> parts = data.split(by="sample", fraction=0.05)   # deterministic: the same on every machine
 >>> write_depth_prediction("out/predictions", view, predicted)  # where `shmgen eval` reads it
 >>> cloud = backproject(view, depth=predicted)                   # a prediction back to 3-D
+>>> tracks, occluded = data.point_tracks(0, view=0)  # a sequence's true tracks, TAP-Vid style
 
 Submodules: :mod:`shmgen_data.dataset` (datasets, samples, views), :mod:`shmgen_data.structures`
 (structures by name, augmentation records), :mod:`shmgen_data.camera`
 (cameras and OpenCV's lens model), :mod:`shmgen_data.geometry` (back-projection, fusion, of
 the dataset's depth or a predicted one), :mod:`shmgen_data.splits` (train/test splits by any
 key), :mod:`shmgen_data.predictions` (predictions where ``shmgen eval`` reads them, PLY files),
-:mod:`shmgen_data.io` (EXR, PNG and binary PLY readers), :mod:`shmgen_data.files` (a dataset's
+:mod:`shmgen_data.io` (EXR, PNG and binary PLY readers), :mod:`shmgen_data.tracks` (a
+sequence's point tracks), :mod:`shmgen_data.files` (a dataset's
 files opened as untrusted input: no links, bounded reads, :class:`Limits`),
 :mod:`shmgen_data.arrays` (a view as training arrays), :mod:`shmgen_data.webdataset` (shards
 of ``shmgen export --format webdataset`` in WebDataset pipelines) and :mod:`shmgen_data.torch`

@@ -38,6 +38,7 @@ from .camera import Camera
 from .files import DatasetError, DatasetFiles, Limits, check_relative, parse_hashes
 from .io import PNG_FORMATS, Ply, decode_exr, decode_png, parse_ply
 from .structures import Augmentation, Record, Structure, Structures
+from .tracks import assemble, decode_tracks
 
 if TYPE_CHECKING:
     from .splits import Split
@@ -474,6 +475,23 @@ class View:
         structure: Structure = self.structures[name]
         return structure.mask(self.instances)
 
+    @property
+    def tracks(self) -> NDArray[np.float64]:
+        """This frame's true point tracks (output ``point_tracks``; docs/sequences.md):
+        float64 ``(Q, 3)``, rows ``x, y, state`` (1 seen, 0 hidden or outside, -1 no image)
+        for the first frame's query points; :meth:`Sample.point_tracks` stacks the frames."""
+        path = self.files.get("tracks.npy")
+        if path is None:
+            raise MissingFileError(
+                f"view {self.stem} of {self.root} has no point tracks ({self.stem}.tracks.npy); "
+                f"add \"point_tracks\" to the recipe's outputs (sequences only)"
+            )
+        size = self._size(self._source.limits)
+        # A query per pixel at most, 24 bytes each, and NumPy's header.
+        bound = 4096 + 24 * size[0] * size[1]
+        data = self._source.read(_relative(self.root, path), bound, "point tracks (a query per pixel at most)")
+        return decode_tracks(data, str(path))
+
     def load(self, name: str) -> NDArray[Any]:
         """The per-pixel output ``name`` as an array (read once, then kept)."""
         if name not in self._images:
@@ -601,6 +619,17 @@ class Sample:
                 f"sample {self.index} of {self.root} has no {kind} file "
                 f"(it has {', '.join(sorted(self.files)) or 'none'}); add \"{output}\" to the recipe's outputs"
             ) from None
+
+    def point_tracks(self, view: int = 0, copy: int | None = None) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """The true point tracks of view ``view`` (augmented copy ``copy``, None for the clean
+        view) over the sequence, TAP-Vid style: ``tracks`` ``(N, T, 2)`` float64 (x, y in
+        pixels, (0.5, 0.5) the top-left pixel's centre) and ``occluded`` ``(N, T)`` bool, for
+        the N query points of the first frame over its T frames (docs/sequences.md)."""
+        frames = [v for v in self.views if v.view == view and v.copy == copy]
+        if not frames:
+            raise MissingFileError(f"sample {self.index} of {self.root} has no view {view} (copy {copy})")
+        shown = f"sample {self.index} of {self.root}, view {view}"
+        return assemble([f.tracks for f in frames], shown)
 
     def _ply(self, kind: str) -> tuple[Ply, NDArray[np.float64]]:
         """The sample's PLY file of ``kind``, read within ``Limits.mesh_bytes``, its
@@ -748,6 +777,10 @@ class Dataset(Sequence[View]):
         deterministically)."""
         from .splits import split
         return split(self, by, holdout=holdout, fraction=fraction, seed=seed)
+
+    def point_tracks(self, sample: int, view: int = 0, copy: int | None = None) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """The true point tracks of ``view`` of ``sample``: see :meth:`Sample.point_tracks`."""
+        return self.sample(sample).point_tracks(view, copy)
 
     def sample(self, index: int) -> Sample:
         """The sample with index ``index`` (its number, not its position)."""

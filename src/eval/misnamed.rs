@@ -116,6 +116,7 @@ fn expected_files(samples: &Path, dataset: &Dataset) -> Vec<PathBuf> {
         if let Some(first) = sample.views.first() {
             out.extend(surface_candidates(samples, first.folder(), sample.index));
         }
+        out.extend(super::tracks::candidates(samples, sample));
     }
     out
 }

@@ -1,6 +1,7 @@
 //! `shmgen eval`: metrics of predictions against a finished dataset — depth (Eigen et al.
 //! 2014, with optional per-image alignment), surfaces (Chamfer distance, F-score), flow and
-//! displacement (end-point error). Every formula, with its source, is in `docs/metrics.md`.
+//! displacement (end-point error), sensor histories and point tracks (TAP-Vid's metrics).
+//! Every formula, with its source, is in `docs/metrics.md`.
 //!
 //! Owns: finding and reading predictions (and reporting the misnamed ones), the metrics and
 //! the report. Must not touch: the dataset or the predictions (it only reads), rendering,
@@ -27,6 +28,7 @@ mod predictions;
 mod select;
 mod stats;
 mod surface;
+mod tracks;
 
 pub use depth::Align;
 pub use misnamed::{Misnamed, Suggestion};
@@ -128,6 +130,8 @@ pub struct Report {
     pub displacement: Option<EpeReport>,
     /// Sensor histories (`{sample:06}.sensors_{rate}hz.csv`), when any was predicted.
     pub histories: Option<history::HistoryReport>,
+    /// Point tracks (`{sample:06}_{view:02}.tracks.npy`), when any was predicted.
+    pub tracks: Option<tracks::TracksReport>,
     /// Files under PREDICTIONS that look like predictions but that no view or sample reads.
     pub misnamed_files: Misnamed,
     /// Each scored view's values, in dataset order.
@@ -422,6 +426,13 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
         .into_iter()
         .flatten()
         .collect::<Vec<_>>();
+    let track_scores = chosen_samples
+        .iter()
+        .map(|sample| tracks::score_sample(&dataset, &samples, sample))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>();
     let misnamed_files = misnamed::misnamed(predictions, &samples, &dataset)?;
 
     let (depth_counts, mut unscored) = tally("depth", &named(&views, &scores, |s| &s.depth));
@@ -441,13 +452,18 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
         histories.iter().map(|(n, o)| (n.clone(), o)).collect();
     let (history_counts, history_unscored) = tally("history", &history_items);
     unscored.extend(history_unscored);
+    let track_items: Vec<(String, &Outcome<tracks::TrackScore>)> =
+        track_scores.iter().map(|(n, o)| (n.clone(), o)).collect();
+    let (track_counts, track_unscored) = tally("tracks", &track_items);
+    unscored.extend(track_unscored);
     let surface = surface_report(&surfaces, &surface_counts);
 
     let anything_predicted = scores
         .iter()
         .any(|s| s.depth.predicted() || s.flow.predicted() || s.displacement.predicted())
         || surfaces.iter().any(Outcome::predicted)
-        || histories.iter().any(|(_, o)| o.predicted());
+        || histories.iter().any(|(_, o)| o.predicted())
+        || track_scores.iter().any(|(_, o)| o.predicted());
     if !anything_predicted {
         let expected = views.first().map_or(String::new(), |v| {
             format!(
@@ -499,6 +515,7 @@ pub fn evaluate(root: &Path, predictions: &Path, options: &EvalOptions) -> Resul
         flow,
         displacement,
         histories: history::report(&histories, history_counts),
+        tracks: tracks::report(&track_scores, track_counts),
         misnamed_files,
         images: image_results(&views, &scores, options.align),
         samples: chosen_samples
@@ -817,6 +834,9 @@ impl Report {
         }
         if let Some(h) = &self.histories {
             out += &h.text();
+        }
+        if let Some(t) = &self.tracks {
+            out += &t.text();
         }
         out
     }

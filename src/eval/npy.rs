@@ -1,5 +1,5 @@
-//! A reader of NumPy `.npy` arrays of float32 or float64, as the format is specified in
-//! NumPy's NEP 1 ("A simple file format for NumPy arrays"): the magic `\x93NUMPY`, a version
+//! A reader of NumPy `.npy` arrays of float32 or float64 (and, for flags, bool or uint8), as
+//! the format is specified in NumPy's NEP 1 ("A simple file format for NumPy arrays"): the magic `\x93NUMPY`, a version
 //! (1.0, 2.0 or 3.0), the header's length (2 bytes little-endian in 1.0, 4 in 2.0 and 3.0),
 //! and the header itself, a Python dict literal with `descr`, `fortran_order` and `shape`,
 //! followed by the data.
@@ -16,8 +16,18 @@ pub(super) struct Array {
     pub(super) values: Vec<f64>,
 }
 
-/// Parses a `.npy` file's bytes.
+/// Parses a `.npy` file's bytes (float32 or float64).
 pub(super) fn parse(bytes: &[u8]) -> Result<Array> {
+    parse_of(bytes, false)
+}
+
+/// Parses a `.npy` file of flags: bool or uint8 (as 0.0, 1.0, …), or float32 or float64.
+pub(super) fn parse_flags(bytes: &[u8]) -> Result<Array> {
+    parse_of(bytes, true)
+}
+
+/// Parses a `.npy` file's bytes; one-byte dtypes (bool, uint8) only with `flags`.
+fn parse_of(bytes: &[u8], flags: bool) -> Result<Array> {
     let Some(rest) = bytes.strip_prefix(b"\x93NUMPY") else {
         bail!("not a .npy file (no \\x93NUMPY magic)");
     };
@@ -37,6 +47,10 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Array> {
         "<f8" => (8, false),
         ">f4" => (4, true),
         ">f8" => (8, true),
+        "|b1" | "|u1" if flags => (1, false),
+        other if flags => bail!(
+            ".npy dtype {other:?} is not bool, uint8, float32 or float64 ('|b1', '|u1', '<f4', '<f8')"
+        ),
         other => bail!(".npy dtype {other:?} is not float32 or float64 ('<f4', '<f8')"),
     };
     let count = fields
@@ -57,6 +71,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Array> {
     let stored: Vec<f64> = data
         .chunks_exact(size)
         .map(|c| match (size, big_endian) {
+            (1, _) => f64::from(c[0]),
             (4, false) => f64::from(f32::from_le_bytes([c[0], c[1], c[2], c[3]])),
             (4, true) => f64::from(f32::from_be_bytes([c[0], c[1], c[2], c[3]])),
             (_, false) => f64::from_le_bytes(c.try_into().unwrap_or_default()),

@@ -3,7 +3,7 @@
 //! geometry). Each returns its files; adding an output is adding a writer here.
 
 use super::encode::{
-    FLOW_CHANNELS, SCALAR_CHANNELS, VECTOR_CHANNELS, depth_exr, grey16_png, id_png, mask_png,
+    FLOW_CHANNELS, SCALAR_CHANNELS, VECTOR_CHANNELS, depth_exr, grey16_png, id_png, mask_png, npy,
     rgb_png, vector_exr,
 };
 use super::meshes::{MeshLayer, PointLayer, mesh_glb, mesh_ply, points_ply};
@@ -51,6 +51,12 @@ pub trait ViewLayers {
     fn rest_depth(&self) -> &[f32];
     /// The damage each pixel's surface point lies on (see `DamageLayers`).
     fn damage(&self) -> DamageLayers;
+    /// In a sequence, the true point tracks at this frame: one row per query point of the
+    /// first frame (docs/sequences.md), `[x, y, state]`: the image position in pixels (pixel
+    /// centres at half-integers) and 1 where it is seen, 0 where it is hidden or outside the
+    /// frame (x, y its projection still), −1 where it has no image (behind the camera, or not
+    /// on this frame's structure; x = y = 0).
+    fn point_tracks(&self) -> Vec<[f64; 3]>;
 
     /// Share of the pixels that see a structure.
     fn coverage(&self) -> f64 {
@@ -134,7 +140,7 @@ impl Writer {
 }
 
 /// Every output shmgen can write, in the order a view's files are written.
-pub const WRITERS: [Writer; 16] = [
+pub const WRITERS: [Writer; 17] = [
     Writer {
         output: "rgb",
         files: &["rgb.png"],
@@ -272,6 +278,11 @@ pub const WRITERS: [Writer; 16] = [
         },
     },
     Writer {
+        output: "point_tracks",
+        files: &["tracks.npy"],
+        write: |v| Ok(vec![tracks_npy(&v.point_tracks())]),
+    },
+    Writer {
         output: "rest_rgb",
         files: &["rest_rgb.png"],
         write: |v| {
@@ -377,6 +388,16 @@ pub fn output_names() -> Vec<&'static str> {
     WRITERS.iter().map(|w| w.output).chain(per_sample).collect()
 }
 
+/// The point tracks of a frame as NumPy float64 `[queries, 3]`: x, y, state per row.
+fn tracks_npy(rows: &[[f64; 3]]) -> Vec<u8> {
+    let data: Vec<u8> = rows
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    npy("<f8", &[rows.len(), 3], &data)
+}
+
 /// The outputs written by default: the paper's image, depth and mask.
 pub const DEFAULT_OUTPUTS: [&str; 3] = ["rgb", "depth", "mask"];
 
@@ -452,6 +473,9 @@ mod tests {
                 crack_width_mm: vec![0.3, 0.0],
                 crack_coverage: vec![0.15, 0.0],
             }
+        }
+        fn point_tracks(&self) -> Vec<[f64; 3]> {
+            vec![[0.5, 0.5, 1.0], [3.25, -1.0, 0.0]]
         }
     }
 

@@ -423,6 +423,15 @@ impl ViewLayers for AugmentedView<'_> {
         }
     }
 
+    fn point_tracks(&self) -> Vec<[f64; 3]> {
+        if self.warp.is_none() {
+            return self.base.point_tracks();
+        }
+        // Refused with image-space warps too, as `flow`: no track rather than one measured
+        // in another frame.
+        Vec::new()
+    }
+
     fn rest_rgb(&self) -> &[u8] {
         self.rest_rgb
             .get_or_init(|| self.augmented_rgb(self.base.rest_rgb()))

@@ -121,6 +121,10 @@ pub struct ViewRecord<'a> {
     /// `flow_prev`, `flow_prev_valid`); only when the dataset writes them.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frame_flow: Option<VectorConvention>,
+    /// How to read the true point tracks of a sequence (`tracks`); only when the dataset
+    /// writes them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub point_tracks: Option<TracksConvention>,
     /// How to read the mask file.
     pub mask: MaskConvention,
     /// How to read the crack file.
@@ -408,6 +412,21 @@ pub struct VectorConvention {
     /// The value of every component where the pixel has no vector (no surface seen, or for flow
     /// an invalid pixel): 0.
     pub no_value: f64,
+}
+
+/// How to read a frame's point tracks: NumPy float64 `[queries, 3]`, a row per query point of
+/// the sequence's first frame, in the same order in every frame.
+#[derive(Serialize, schemars::JsonSchema)]
+pub struct TracksConvention {
+    /// What a row is.
+    pub meaning: &'static str,
+    /// The columns, in order.
+    pub columns: [&'static str; 3],
+    /// What the values of the `state` column mean.
+    pub states: BTreeMap<&'static str, &'static str>,
+    /// The query grid's stride, pixels: the queries are the first frame's structure pixels
+    /// at rows and columns stride/2 + n·stride, in row-major order.
+    pub stride: u32,
 }
 
 /// How to read a file of one distance per pixel (float32 OpenEXR, one channel, `Y`, which
@@ -840,6 +859,9 @@ impl<'a> SampleRecord<'a> {
                     channels: FLOW_CHANNELS.names.to_vec(),
                     no_value: 0.0,
                 }),
+            point_tracks: (recipe.dataset.sequence.as_ref())
+                .filter(|_| recipe.dataset.outputs.wants("point_tracks"))
+                .map(|sequence| tracks_convention(sequence.track_stride)),
             mask: MaskConvention {
                 structure: 255,
                 background: 0,
@@ -936,4 +958,24 @@ pub fn view_schema() -> Value {
 /// The JSON Schema (draft 2020-12) of `run.json`, generated from [`RunRecord`].
 pub fn run_schema() -> Value {
     serde_json::to_value(schemars::schema_for!(RunRecord<'static>)).expect("a schema is plain JSON")
+}
+
+/// The point tracks' convention, for a query grid of stride `stride`.
+fn tracks_convention(stride: u32) -> TracksConvention {
+    TracksConvention {
+        meaning: "where each query point (a structure pixel's centre on the first frame's image, on the stride grid) is in this frame's image: its material point carried with the structure and projected through this frame's camera (its mount shaken, its path flown as then); pixels, (0.5, 0.5) the centre of the top-left pixel",
+        columns: ["x", "y", "state"],
+        states: BTreeMap::from([
+            ("1", "seen at (x, y)"),
+            (
+                "0",
+                "hidden by a nearer surface, or outside the frame: (x, y) is its projection",
+            ),
+            (
+                "-1",
+                "no image: behind the camera, or not on this frame's structure; x = y = 0",
+            ),
+        ]),
+        stride,
+    }
 }

@@ -153,6 +153,11 @@ pub fn write_sample_frames(
         return Ok(dataset.images_per_sample());
     }
     let keep_prev = dataset.outputs.wants("frame_flow");
+    // The point tracks' queries are chosen on frame 0: built again here (not kept from the
+    // window), so that any frame, in any range, can find them on its own.
+    let first = (dataset.outputs.wants("point_tracks"))
+        .then(|| build(0))
+        .transpose()?;
     // The frame before the range, for the flow back to it from the range's first frame.
     let before = match range.start.checked_sub(1) {
         Some(k) if keep_prev => Some(build(k)?),
@@ -187,7 +192,10 @@ pub fn write_sample_frames(
         let still = Still {
             trace_mesh: window.current.trace_mesh.clone(),
             frame: Some(record),
-            neighbours: window.neighbours(next.as_ref()),
+            neighbours: FrameNeighbours {
+                first: first.as_ref(),
+                ..window.neighbours(next.as_ref())
+            },
             exposure: &exposure,
         };
         write_still(recipe, &window.current.sample, still, shared, stage)?;
@@ -226,6 +234,7 @@ impl FrameWindow {
         FrameNeighbours {
             prev: self.prev.as_ref(),
             next,
+            first: None,
         }
     }
 

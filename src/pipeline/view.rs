@@ -2,7 +2,8 @@
 //! the layers writers and previews ask for, each computed once and only when asked for. The
 //! unloaded structure (for the rest image, its depth and the flow) is traced through a second
 //! BVH, built once per sample when a view first needs it. In a sequence, a frame's renderer
-//! also holds the frames before and after it (`FrameNeighbours`), for the flow between frames.
+//! also holds the frames before and after it (`FrameNeighbours`), for the flow between frames,
+//! and the first frame, for the point tracks.
 
 use super::augmented::{Applied, copy_camera, draw_sensor, photometric};
 use super::damage::sample_damage;
@@ -16,9 +17,10 @@ use crate::output::{DamageLayers, Flow, FrameFlow, ViewLayers};
 use crate::render::{
     CacheSettings, DamagedSurfaces, Deformed, GBuffer, ImageVisibility, LightCache, NO_HIT,
     OtherFrame, SampleDamage, SampleSurfaces, SecondaryRays, SeenMesh, Shaded, Surfaces, TraceMesh,
-    Traced, ViewVisibility, displacement, flow, frame_flow, normals, ray_distance, shade,
+    Traced, TrackPoint, ViewVisibility, displacement, flow, frame_flow, normals, ray_distance,
+    shade, track_points, track_queries,
 };
-use crate::scene::{DatasetSpec, NormalsFrame, Shading};
+use crate::scene::{DEFAULT_TRACK_STRIDE, DatasetSpec, NormalsFrame, Shading};
 use crate::seeds::{self, Scope, Stream};
 use anyhow::{Result, anyhow};
 use serde::Serialize;
@@ -143,6 +145,15 @@ impl SequenceFrame {
     }
 }
 
+/// A track point as its file row: x, y, state (1 seen, 0 hidden or outside, −1 no image).
+fn track_row(point: &TrackPoint) -> [f64; 3] {
+    match *point {
+        TrackPoint::Visible([x, y]) => [x, y, 1.0],
+        TrackPoint::Occluded([x, y]) => [x, y, 0.0],
+        TrackPoint::Lost => [0.0, 0.0, -1.0],
+    }
+}
+
 /// The unloaded structure of `sample` ready for tracing: its mesh's triangles over the
 /// undeformed vertices.
 fn unloaded_twin(sample: &BuiltSample) -> Traced {
@@ -159,13 +170,15 @@ fn deformed<'a>(sample: &'a BuiltSample, traced: &'a TraceMesh) -> Deformed<'a> 
 }
 
 /// The frames before and after the one being rendered (None at the ends of a sequence, and
-/// for a still).
+/// for a still), and the first frame, where the point tracks' queries are chosen.
 #[derive(Clone, Copy, Default)]
 pub struct FrameNeighbours<'a> {
     /// The previous frame.
     pub prev: Option<&'a SequenceFrame>,
     /// The next frame.
     pub next: Option<&'a SequenceFrame>,
+    /// The first frame of the sequence (only when the point tracks are asked for).
+    pub first: Option<&'a SequenceFrame>,
 }
 
 /// Refuses a camera at or below the ground: it would see the ground's underside, or nothing
@@ -477,6 +490,27 @@ impl RenderedView<'_> {
         }
     }
 
+    /// Where the query points chosen on frame `first` are in this frame (none without one):
+    /// the queries found again from that frame's structure and this view's camera then.
+    fn tracks_from(&self, first: Option<&SequenceFrame>) -> Vec<TrackPoint> {
+        let Some(first) = first else {
+            return Vec::new();
+        };
+        let Some(first_camera) = self.camera_at(first) else {
+            return Vec::new();
+        };
+        let r = self.renderer;
+        let stride = (r.dataset.sequence.as_ref()).map_or(DEFAULT_TRACK_STRIDE, |s| s.track_stride);
+        let structure = first.sample.structure_triangles();
+        let queries = track_queries(&first.deformed(), &first_camera, structure, stride);
+        let here = OtherFrame {
+            deformed: r.deformed(),
+            rest: r.rest(),
+            camera: self.camera,
+        };
+        track_points(&queries, &here)
+    }
+
     /// What the structures alone are seen as: the trace without the ground (the mask's).
     fn structure(&self) -> &GBuffer {
         let sample = self.renderer.sample;
@@ -739,6 +773,13 @@ impl ViewLayers for RenderedView<'_> {
             next: self.flow_to(neighbours.next),
             prev: self.flow_to(neighbours.prev),
         }
+    }
+
+    fn point_tracks(&self) -> Vec<[f64; 3]> {
+        self.tracks_from(self.renderer.neighbours.first)
+            .iter()
+            .map(track_row)
+            .collect()
     }
 
     fn rest_rgb(&self) -> &[u8] {

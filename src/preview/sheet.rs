@@ -101,13 +101,15 @@ enum Layer {
     Flow,
     /// The flow from a frame of a sequence to the next.
     FrameFlow,
+    /// The pixels where a sequence's tracked points are seen in this frame.
+    PointTracks,
     Displacement,
     Damage,
 }
 
 /// Every column the sheet can show, in the sheet's order: the layer, its name in
 /// `dataset.outputs` and its title.
-const COLUMNS: [(Layer, &str, &str); 16] = [
+const COLUMNS: [(Layer, &str, &str); 17] = [
     (Layer::Rgb, "rgb", "RGB"),
     (Layer::RestRgb, "rest_rgb", "rest RGB"),
     (Layer::Depth, "depth", "depth"),
@@ -122,6 +124,7 @@ const COLUMNS: [(Layer, &str, &str); 16] = [
     (Layer::Normals, "normals", "normals"),
     (Layer::Flow, "flow", "flow"),
     (Layer::FrameFlow, "frame_flow", "flow to next frame"),
+    (Layer::PointTracks, "point_tracks", "tracked points"),
     (Layer::Displacement, "displacement", "displacement"),
     (Layer::Damage, "damage", "damage class"),
 ];
@@ -157,6 +160,7 @@ impl Layer {
             Layer::Erased => "nothing erased",
             Layer::Cracks => "no cracks",
             Layer::Flow | Layer::FrameFlow => "no flow",
+            Layer::PointTracks => "no point seen",
             _ => "empty",
         }
     }
@@ -182,12 +186,28 @@ impl Layer {
             Layer::Normals => Cell::Normals(view.normals()),
             Layer::Flow => Cell::Flow(view.flow()),
             Layer::FrameFlow => Cell::Flow(view.frame_flow().next),
+            Layer::PointTracks => Cell::Mask(seen_points(view)),
             Layer::Displacement => Cell::Displacement(
                 view.displacement(),
                 view.depth().iter().map(|&z| z > 0.0).collect(),
             ),
         }
     }
+}
+
+/// 255 at the pixels holding a tracked point seen in this frame, 0 elsewhere.
+fn seen_points(view: &dyn ViewLayers) -> Vec<u8> {
+    let (width, height) = view.size();
+    let mut mask = vec![0; width as usize * height as usize];
+    for [x, y, state] in view.point_tracks() {
+        let (col, row) = (x.floor(), y.floor());
+        let inside =
+            (0.0..f64::from(width)).contains(&col) && (0.0..f64::from(height)).contains(&row);
+        if state == 1.0 && inside {
+            mask[row as usize * width as usize + col as usize] = 255;
+        }
+    }
+    mask
 }
 
 /// The raw pixels of one cell; colours are chosen once the whole sheet's ranges are known.

@@ -321,7 +321,7 @@ fn check_flow_warps(outputs: &Outputs, augment: &AugmentSpec) -> OptResult<()> {
     let warps = augment.copies > 0
         && augment.mode == GeometryMode::Image
         && augment.operations.iter().any(Operation::is_geometric);
-    for flow in ["flow", "frame_flow"] {
+    for flow in ["flow", "frame_flow", "point_tracks"] {
         if warps && outputs.wants(flow) {
             return Err(format!(
                 "dataset.outputs has \"{flow}\" and dataset.augment warps the images (mode \"image\"): flow is not defined on a warped image; use mode \"exact\" (the camera moves and the view is rendered again, flow included) or leave \"{flow}\" out"
@@ -331,11 +331,19 @@ fn check_flow_warps(outputs: &Outputs, augment: &AugmentSpec) -> OptResult<()> {
     Ok(())
 }
 
-/// The flow between frames needs frames: a still asking for it is refused rather than given
-/// files no pixel of which is valid.
+/// The flow between frames and the point tracks need frames: a still asking for them is
+/// refused rather than given files no pixel or point of which is valid.
 fn check_frame_flow(outputs: &Outputs, sequence: bool) -> OptResult<()> {
-    if outputs.wants("frame_flow") && !sequence {
-        return Err("dataset.outputs has \"frame_flow\" (flow between consecutive frames) but the dataset has no dataset.sequence: declare one, or use \"flow\" (unloaded -> loaded image) for a still".into());
+    let needing_frames = [
+        ("frame_flow", "flow between consecutive frames"),
+        ("point_tracks", "points tracked from the first frame"),
+    ];
+    for (output, what) in needing_frames {
+        if outputs.wants(output) && !sequence {
+            return Err(format!(
+                "dataset.outputs has \"{output}\" ({what}) but the dataset has no dataset.sequence: declare one, or use \"flow\" (unloaded -> loaded image) for a still"
+            ));
+        }
     }
     Ok(())
 }

@@ -15,13 +15,13 @@ use super::result::{Fallible, fail};
 use crate::mechanics::dynamics::{Axle, TimeLoad};
 use crate::mechanics::frame::Lane;
 use crate::scene::{
-    BeamMotion, BeamSpec, CameraPath, DEFAULT_EXPOSURE_FRACTION, FrameSpec, MAX_MOTION_BLUR,
-    MountShake, SequenceSpec, SourceSite, Waypoint,
+    BeamMotion, BeamSpec, CameraPath, DEFAULT_EXPOSURE_FRACTION, DEFAULT_TRACK_STRIDE, FrameSpec,
+    MAX_MOTION_BLUR, MAX_TRACK_STRIDE, MountShake, SequenceSpec, SourceSite, Waypoint,
 };
 use rhai::{Array, Dynamic, Engine, NativeCallContext, Variant};
 
 /// `dataset.sequence`: `#{ duration, fps, exposure, motion_blur, mount: #{ rotation,
-/// translation, band } }`. Duration and fps are required; exposure defaults to half the frame
+/// translation, band }, paths, track_stride }`. Duration and fps are required; exposure defaults to half the frame
 /// interval; motion_blur (sub-instants averaged over the exposure) to 0, none.
 pub(super) fn sequence(options: Option<Options>, views: u32) -> OptResult<Option<SequenceSpec>> {
     let Some(mut o) = options else {
@@ -31,6 +31,12 @@ pub(super) fn sequence(options: Option<Options>, views: u32) -> OptResult<Option
     let fps = o.positive("fps", "frames per second")?;
     let exposure = o.number("exposure", DEFAULT_EXPOSURE_FRACTION / fps)?;
     let motion_blur = o.integer("motion_blur", 0, 0, i64::from(MAX_MOTION_BLUR))? as u32;
+    let track_stride = o.integer(
+        "track_stride",
+        i64::from(DEFAULT_TRACK_STRIDE),
+        1,
+        i64::from(MAX_TRACK_STRIDE),
+    )? as u32;
     let mount = match o.sub("mount")? {
         Some(mut m) => {
             let shake = MountShake {
@@ -55,6 +61,7 @@ pub(super) fn sequence(options: Option<Options>, views: u32) -> OptResult<Option
         motion_blur,
         mount,
         paths,
+        track_stride,
     };
     let path_problem = (spec.paths.iter().enumerate()).find_map(|(i, p)| p.problem(i, views));
     let twice = (spec.paths.iter().enumerate())

@@ -114,6 +114,43 @@ fn occlusion_tolerance(camera: &Camera) -> f64 {
     8.0 / f64::from(1u32 << 24) + 0.01 / k.fx.max(k.fy)
 }
 
+/// How a world point appears in a camera's image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Sighting {
+    /// Behind the camera (or on its plane): it has no image.
+    Behind,
+    /// Its image (u, v), in pixels through the lens, lies outside the frame.
+    Outside([f64; 2]),
+    /// Its image lies inside the frame, but a nearer surface of the scene hides it.
+    Hidden([f64; 2]),
+    /// Seen at (u, v).
+    Seen([f64; 2]),
+}
+
+/// How world point `moved` appears in the image of `camera` (through the lens, when it
+/// distorts), `scene` (traced from the camera towards it) deciding whether it is hidden.
+pub(super) fn sighting(camera: &Camera, scene: &TraceMesh, moved: DVec3) -> Sighting {
+    let k = camera.intrinsics;
+    let (width, height) = (f64::from(k.width), f64::from(k.height));
+    let moved = camera.world_to_camera(moved);
+    if !(moved.z > 0.0) {
+        return Sighting::Behind;
+    }
+    let (u, v) = k.project(moved);
+    if !((0.0..width).contains(&u) && (0.0..height).contains(&v)) {
+        return Sighting::Outside([u, v]);
+    }
+    let tolerance = occlusion_tolerance(camera);
+    let hidden = scene
+        .first_hit(camera, moved / moved.z)
+        .is_some_and(|(z, _)| f64::from(z) < moved.z * (1.0 - tolerance));
+    if hidden {
+        Sighting::Hidden([u, v])
+    } else {
+        Sighting::Seen([u, v])
+    }
+}
+
 /// Where world point `moved` lands in the image of `camera`, minus pixel (row, col)'s centre,
 /// in pixels (through the lens, when it distorts): None when it lies behind the camera or
 /// outside the frame, or when `scene` (traced from the camera towards it) hides it.
@@ -123,22 +160,11 @@ fn landing(
     moved: DVec3,
     (row, col): (u32, u32),
 ) -> Option<[f32; 2]> {
-    let k = camera.intrinsics;
-    let (width, height) = (f64::from(k.width), f64::from(k.height));
-    let moved = camera.world_to_camera(moved);
-    if !(moved.z > 0.0) {
+    let Sighting::Seen([u, v]) = sighting(camera, scene, moved) else {
         return None;
-    }
-    let (u, v) = k.project(moved);
-    if !((0.0..width).contains(&u) && (0.0..height).contains(&v)) {
-        return None;
-    }
-    let tolerance = occlusion_tolerance(camera);
-    let hidden = scene
-        .first_hit(camera, moved / moved.z)
-        .is_some_and(|(z, _)| f64::from(z) < moved.z * (1.0 - tolerance));
+    };
     let (u0, v0) = (f64::from(col) + 0.5, f64::from(row) + 0.5);
-    (!hidden).then_some([(u - u0) as f32, (v - v0) as f32])
+    Some([(u - u0) as f32, (v - v0) as f32])
 }
 
 /// Optical flow on the unloaded image: for each pixel of `rest_g` (the unloaded structure
@@ -196,6 +222,46 @@ fn triangle_shape(mesh: &Mesh, tri: u32, positions: &[DVec3]) -> Option<(DVec3, 
     Some((normal, size))
 }
 
+/// A material point of a structure, as another frame finds it: its unloaded position, the
+/// unit normal of its unloaded face and that face's triangle's longest edge (the scale of the
+/// search's tolerances).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct MaterialPoint {
+    pub(super) at: DVec3,
+    pub(super) normal: DVec3,
+    pub(super) size: f64,
+}
+
+/// The material point pixel (row, col) of `camera` sees on the loaded structure `this`, where
+/// the pixel's centre ray meets triangle `tri` at planar depth `depth`; None on a degenerate
+/// triangle.
+pub(super) fn material_point(
+    this: &Deformed,
+    camera: &Camera,
+    (row, col): (u32, u32),
+    tri: u32,
+    depth: f64,
+) -> Option<MaterialPoint> {
+    let view = camera.intrinsics.ray_through_pixel(row, col);
+    let (p, _, _) = hit_geometry(camera, this.traced, tri, view, depth);
+    let at = carried(this.mesh, tri, p, this.rest);
+    let (normal, size) = triangle_shape(this.mesh, tri, this.rest)?;
+    Some(MaterialPoint { at, normal, size })
+}
+
+/// Where `point` is in frame `other` (world, its loaded structure): found on that frame's
+/// unloaded mesh by its unloaded position, carried by its weights to the loaded one. None where
+/// no face of that frame holds it.
+pub(super) fn carried_into(other: &OtherFrame, point: &MaterialPoint) -> Option<DVec3> {
+    let (found, on_plane) = located(other.rest, point.at, point.normal, point.size)?;
+    Some(carried(
+        &other.rest.mesh,
+        found,
+        on_plane,
+        &other.deformed.mesh.positions,
+    ))
+}
+
 /// Optical flow from this frame of a sequence to `other` (the next or the previous): for each
 /// pixel of `g` (this frame's loaded structure `this` traced through `camera`), the material
 /// point it sees is found on the other frame's unloaded structure by its unloaded position,
@@ -210,19 +276,9 @@ pub fn frame_flow(
     this: &Deformed,
     other: &OtherFrame,
 ) -> Vec<Option<[f32; 2]>> {
-    let k = camera.intrinsics;
     per_hit(g, |row, col, tri, depth| {
-        let view = k.ray_through_pixel(row, col);
-        let (p, _, _) = hit_geometry(camera, this.traced, tri, view, depth);
-        let at = carried(this.mesh, tri, p, this.rest);
-        let (normal, size) = triangle_shape(this.mesh, tri, this.rest)?;
-        let (found, point) = located(other.rest, at, normal, size)?;
-        let moved = carried(
-            &other.rest.mesh,
-            found,
-            point,
-            &other.deformed.mesh.positions,
-        );
+        let point = material_point(this, camera, (row, col), tri, depth)?;
+        let moved = carried_into(other, &point)?;
         landing(&other.camera, other.deformed.traced, moved, (row, col))
     })
 }

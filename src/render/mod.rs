@@ -6,7 +6,8 @@
 //! rasterising the centre rays of a pinhole view (the same first hits, far cheaper; see
 //! docs/rendering.md), the per-pixel geometric buffers (planar depth, hit triangle) and the
 //! fields that follow the same centre ray (normals, distance along the ray, displacement
-//! from the unloaded structure, optical flow from its image), texture lookup on
+//! from the unloaded structure, optical flow from its image, and between the frames of a
+//! sequence, with the true point tracks through one), texture lookup on
 //! the undeformed surface (through `materials`), shading into RGB with sun, sky, studio lights
 //! and shadows (soft over the sun's disk), sky occlusion and a ground's bounce (`daylight`),
 //! traced per pixel or read from a per-sample lighting cache (`light_cache`),
@@ -26,6 +27,7 @@ mod shared_meshes;
 mod surfaces;
 mod tiles;
 mod trace;
+mod tracks;
 mod visibility;
 mod watertight;
 
@@ -39,4 +41,5 @@ pub use shade::{Shaded, Surfaces, shade};
 pub use shared_meshes::SharedTraceMeshes;
 pub use surfaces::SampleSurfaces;
 pub use trace::{GBuffer, NO_HIT, PixelSet, TraceMesh, Traced};
+pub use tracks::{TrackPoint, TrackQuery, query_grid, track_points, track_queries};
 pub use visibility::{ImageVisibility, SecondaryRays, ViewVisibility, Visibility};

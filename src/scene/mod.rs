@@ -30,8 +30,9 @@ pub use light::{
 };
 pub use sensors::{SensorQuantity, SensorSpec, modal_beam, record_frame_sensors, record_sensors};
 pub use sequence::{
-    BeamMotion, CameraPath, DEFAULT_DAMPING, DEFAULT_EXPOSURE_FRACTION, DEFAULT_MODES, MAX_FRAMES,
-    MAX_MOTION_BLUR, MountShake, STEEL_DENSITY, SequenceSpec, Waypoint,
+    BeamMotion, CameraPath, DEFAULT_DAMPING, DEFAULT_EXPOSURE_FRACTION, DEFAULT_MODES,
+    DEFAULT_TRACK_STRIDE, MAX_FRAMES, MAX_MOTION_BLUR, MAX_TRACK_STRIDE, MountShake, STEEL_DENSITY,
+    SequenceSpec, Waypoint,
 };
 
 use crate::cameras::CameraRig;

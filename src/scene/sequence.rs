@@ -42,6 +42,13 @@ pub struct SequenceSpec {
     /// Views that fly along a path instead of standing where the rig drew them (drones).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub paths: Vec<CameraPath>,
+    /// The `point_tracks` output's query grid: the structure pixels of the first frame whose
+    /// rows and columns are stride/2 + n·stride (default 16).
+    #[serde(
+        default = "default_track_stride",
+        skip_serializing_if = "is_default_track_stride"
+    )]
+    pub track_stride: u32,
 }
 
 /// A view's camera flying over the sequence: its centre of projection moves through the
@@ -234,6 +241,20 @@ fn is_zero(n: &u32) -> bool {
     *n == 0
 }
 
+/// The default stride of the point tracks' query grid, pixels: 3,600 queries on a 960² image.
+pub const DEFAULT_TRACK_STRIDE: u32 = 16;
+
+/// The largest stride of the point tracks' query grid, pixels.
+pub const MAX_TRACK_STRIDE: u32 = 4096;
+
+fn default_track_stride() -> u32 {
+    DEFAULT_TRACK_STRIDE
+}
+
+fn is_default_track_stride(n: &u32) -> bool {
+    *n == DEFAULT_TRACK_STRIDE
+}
+
 /// Most sub-instants a frame's motion blur may average.
 pub const MAX_MOTION_BLUR: u32 = 64;
 
@@ -325,6 +346,7 @@ mod tests {
             motion_blur: 0,
             mount: None,
             paths: Vec::new(),
+            track_stride: DEFAULT_TRACK_STRIDE,
         }
     }
 
