@@ -15,6 +15,7 @@
 use super::Counts;
 use super::outcome::{Outcome, Tallied};
 use super::predictions::mirrored;
+use super::stats;
 use crate::dataset::files::{Bound, open_regular, read_bounded};
 use crate::dataset::{Dataset, Sample, kind_of};
 use anyhow::{Result, bail};
@@ -229,12 +230,8 @@ pub(super) fn report(
 
 /// The means of `scores` (one sensor's, over files), summed in dataset order.
 fn summary(sensor: &str, scores: &[&ColumnScore]) -> SensorSummary {
-    let mean = |values: Vec<f64>| {
-        (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
-    };
-    let all = |f: fn(&ColumnScore) -> f64| mean(scores.iter().map(|c| f(c)).collect());
-    let some =
-        |f: fn(&ColumnScore) -> Option<f64>| mean(scores.iter().filter_map(|c| f(c)).collect());
+    let all = |f: fn(&ColumnScore) -> f64| stats::mean(scores.iter().map(|c| f(c)));
+    let some = |f: fn(&ColumnScore) -> Option<f64>| stats::mean(scores.iter().filter_map(|c| f(c)));
     SensorSummary {
         sensor: sensor.to_string(),
         files: scores.len(),

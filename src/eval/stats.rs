@@ -1,4 +1,4 @@
-//! The two statistics every metric here needs: the median (NumPy's: the mean of the two
+//! The statistics every metric here needs: the median (NumPy's: the mean of the two
 //! middle values of an even count) and the mean over images of per-image values.
 
 /// The median of `values` (reordered); None for none.
@@ -17,6 +17,12 @@ pub(super) fn median(values: &mut [f64]) -> Option<f64> {
         .copied()
         .fold(f64::NEG_INFINITY, f64::max);
     Some((lower + upper) / 2.0)
+}
+
+/// The mean of `values`, summed in their order; None for none.
+pub(super) fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let (sum, n) = values.fold((0.0, 0usize), |(sum, n), v| (sum + v, n + 1));
+    (n > 0).then(|| sum / n as f64)
 }
 
 /// Per-image values summed in image order, so the mean has the same bits however the images

@@ -19,6 +19,7 @@ use super::history::identify_frequency;
 use super::npy;
 use super::outcome::{Outcome, Tallied};
 use super::predictions::mirrored;
+use super::stats;
 use crate::dataset::files::{Bound, open_regular, read_bounded};
 use crate::dataset::{Dataset, Sample, View};
 use anyhow::{Context, Result, bail};
@@ -121,10 +122,7 @@ pub(super) fn report(
     let views: Vec<TrackScore> = (outcomes.iter())
         .filter_map(|(_, o)| o.scored().cloned())
         .collect();
-    let mean = |f: fn(&TrackScore) -> Option<f64>| {
-        let values: Vec<f64> = views.iter().filter_map(f).collect();
-        (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
-    };
+    let mean = |f: fn(&TrackScore) -> Option<f64>| stats::mean(views.iter().filter_map(f));
     Some(TracksReport {
         counts,
         rmse: mean(|s| s.rmse),
